@@ -1,0 +1,27 @@
+"""Smooth dielectric interface (glass): reflects with probability F (unpolarised Fresnel), refracts
+otherwise; refracted radiance is scaled by (eta_from / eta_to)². A delta BSDF.
+
+```xml
+<bsdf type="dielectric">
+    <float name="intIOR" value="1.5046"/>     <!-- inside, default 1.5046 (BK7) -->
+    <float name="extIOR" value="1.000277"/>   <!-- outside, default 1.000277 (air) -->
+</bsdf>
+```
+Bsdf row: params = (intIOR, extIOR, 0, 0).
+"""
+from ..device.layout import ENUMS
+from ..scene.registry import register
+from .bsdf import Bsdf
+from .ior import read_iors
+
+
+@register("bsdf", "dielectric")
+class Dielectric(Bsdf):
+    bsdf_type = ENUMS["BSDF_DIELECTRIC"]
+    is_delta = True
+
+    def __init__(self, props, children, spec):
+        self.int_ior, self.ext_ior = read_iors(props)
+
+    def fill(self, row):
+        row["params"][:2] = (self.int_ior, self.ext_ior)

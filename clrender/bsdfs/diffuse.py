@@ -1,0 +1,34 @@
+"""Lambertian reflection: f = albedo / pi above the surface; cosine-weighted sampling.
+
+```xml
+<bsdf type="diffuse">
+    <color name="albedo" value="0.5, 0.5, 0.5"/>   <!-- default 0.5 -->
+</bsdf>
+```
+"""
+import numpy as np
+
+from ..device.layout import ENUMS
+from ..errors import SceneError
+from ..scene.registry import register
+from .bsdf import Bsdf
+
+
+@register("bsdf", "diffuse")
+class Diffuse(Bsdf):
+    bsdf_type = ENUMS["BSDF_DIFFUSE"]
+
+    def __init__(self, props, children, spec):
+        self.albedo = np.asarray(props.get_color("albedo", np.full(3, 0.5)), np.float64)
+        if np.any(self.albedo < 0) or not np.all(np.isfinite(self.albedo)):
+            raise SceneError(f"albedo must be non-negative, got {self.albedo.tolist()}", props.location("albedo"))
+
+    @classmethod
+    def default(cls):
+        obj = cls.__new__(cls)
+        obj.albedo = np.full(3, 0.5)
+        obj.spec = None
+        return obj
+
+    def fill(self, row):
+        row["color"][:3] = self.albedo

@@ -1,0 +1,170 @@
+"""OpenCL platform/device listing and choice.
+
+A device is chosen by a SPEC: an index into ``list_devices()`` ("0"), ``cpu`` or ``gpu`` (the first of that
+kind), or a case-insensitive substring of "platform / device" names. The default is a PoCL CPU device that
+can actually compile kernels (newest PoCL first), falling back to any such CPU device, then the first device.
+
+Why "can actually compile": PoCL asks its LLVM for the host CPU's name and passes it to clang. PoCL 3.0 (the
+pocl-binary-distribution wheel, LLVM 14) does not know CPUs newer than its LLVM (e.g. AMD Zen 5, family 1Ah),
+gets "generic", and clang rejects that: every build fails with "unknown target CPU 'generic'". PoCL >= 3.1
+(e.g. Debian/Ubuntu's pocl-opencl-icd) reads POCL_LLVM_CPU_NAME, which we set for such CPUs.
+"""
+from __future__ import annotations
+
+import functools
+import os
+
+from ..errors import DeviceError
+
+
+def _host_cpu_override() -> str | None:
+    """An LLVM CPU name for hosts that LLVM <= 15 cannot name (see the module docstring), else None."""
+    try:
+        with open("/proc/cpuinfo") as f:
+            text = f.read(8192)
+    except OSError:
+        return None
+    info = {}
+    for line in text.splitlines():
+        if ":" in line:
+            k, v = line.split(":", 1)
+            info.setdefault(k.strip(), v.strip())
+        if not line.strip() and info:
+            break
+    try:
+        family = int(info.get("cpu family", "0"))
+    except ValueError:
+        return None
+    if info.get("vendor_id") == "AuthenticAMD" and family >= 0x1A:
+        flags = set(info.get("flags", "").split())
+        if "avx512f" in flags:
+            return "x86-64-v4"
+        return "x86-64-v3" if "avx2" in flags else "x86-64"
+    return None
+
+
+def _cl():
+    # Importing pyopencl lazily keeps `clrender --help` fast and lets us word a missing driver clearly.
+    # PoCL reads its environment when it initialises, so this must happen before the first platform query.
+    os.environ.setdefault("POCL_CACHE_DIR", os.path.join(os.path.expanduser("~"), ".cache", "clrender", "pocl"))
+    if "POCL_LLVM_CPU_NAME" not in os.environ:
+        cpu = _host_cpu_override()
+        if cpu:
+            os.environ["POCL_LLVM_CPU_NAME"] = cpu
+    import pyopencl as cl
+
+    return cl
+
+
+def list_devices():
+    """All OpenCL devices as (platform, device) pairs, in a stable order."""
+    cl = _cl()
+    try:
+        platforms = cl.get_platforms()
+    except cl.LogicError as exc:  # no ICD / no platform at all
+        raise DeviceError(f"no OpenCL platform found ({exc}); install pocl-binary-distribution") from exc
+    out = []
+    for p in platforms:
+        try:
+            devs = p.get_devices()
+        except cl.Error:
+            continue
+        out.extend((p, d) for d in devs)
+    return out
+
+
+def describe(platform, device) -> str:
+    return f"{platform.name.strip()} / {device.name.strip()}"
+
+
+_PROBE_SRC = "__kernel void clrender_probe(__global float* a) { a[get_global_id(0)] = 1.0f; }"
+
+
+@functools.lru_cache(maxsize=None)
+def _build_check(device_key) -> str | None:
+    """None if the device compiles a trivial kernel, else the compiler's complaint."""
+    cl = _cl()
+    for p, d in list_devices():
+        if (p.name, d.name, d.int_ptr) == device_key:
+            try:
+                cl.Program(cl.Context([d]), _PROBE_SRC).build()
+                return None
+            except cl.Error as exc:
+                lines = [ln.strip() for ln in str(exc).splitlines() if "error" in ln.lower()]
+                return lines[-1] if lines else str(exc).strip().splitlines()[0]
+    return "device vanished"
+
+
+def build_check(platform, device) -> str | None:
+    return _build_check((platform.name, device.name, device.int_ptr))
+
+
+_UNKNOWN_CPU_HINT = (
+    "PoCL cannot compile for this CPU (its LLVM does not know it). Install a newer PoCL, e.g. "
+    "`sudo apt-get install pocl-opencl-icd` (Debian/Ubuntu, PoCL >= 3.1); clrender finds it and sets "
+    "POCL_LLVM_CPU_NAME for you. See `clrender devices`.")
+
+
+def _pocl_version(platform) -> tuple:
+    import re
+
+    m = re.search(r"PoCL (\d+)\.(\d+)", platform.version)
+    return (int(m.group(1)), int(m.group(2))) if m else (0, 0)
+
+
+def choose_device(spec: str | int | None = None):
+    """Return (platform, device) for a device SPEC (see module docstring)."""
+    cl = _cl()
+    devices = list_devices()
+    if not devices:
+        raise DeviceError("no OpenCL device found; install pocl-binary-distribution for a CPU device")
+    if spec is None or spec == "":
+        spec = os.environ.get("CLRENDER_DEVICE", "")
+    if spec is None or spec == "":
+        pocl = [(p, d) for p, d in devices
+                if "portable computing language" in p.name.lower() and d.type & cl.device_type.CPU]
+        pocl.sort(key=lambda pd: _pocl_version(pd[0]), reverse=True)
+        others = [(p, d) for p, d in devices if d.type & cl.device_type.CPU and (p, d) not in pocl]
+        problems = []
+        for p, d in pocl + others:
+            why = build_check(p, d)
+            if why is None:
+                return p, d
+            problems.append(f"{describe(p, d)}: {why}")
+        if any("unknown target cpu" in w.lower() for w in problems):
+            raise DeviceError("no CPU OpenCL device can compile kernels here (" + "; ".join(problems) + "). "
+                              + _UNKNOWN_CPU_HINT)
+        return devices[0]
+    s = str(spec).strip()
+    if s.isdigit():
+        i = int(s)
+        if i >= len(devices):
+            raise DeviceError(f"device index {i} out of range: {len(devices)} device(s); see `clrender devices`")
+        return devices[i]
+    if s.lower() in ("cpu", "gpu"):
+        want = cl.device_type.CPU if s.lower() == "cpu" else cl.device_type.GPU
+        for p, d in devices:
+            if d.type & want:
+                return p, d
+        raise DeviceError(f"no {s.upper()} OpenCL device found; see `clrender devices`")
+    for p, d in devices:
+        if s.lower() in describe(p, d).lower():
+            return p, d
+    names = ", ".join(f"[{i}] {describe(p, d)}" for i, (p, d) in enumerate(devices))
+    raise DeviceError(f"no OpenCL device matches '{s}'; available: {names}")
+
+
+@functools.lru_cache(maxsize=None)
+def _context_for(device_key):
+    cl = _cl()
+    for p, d in list_devices():
+        if (p.name, d.name, d.int_ptr) == device_key:
+            ctx = cl.Context([d])
+            return ctx, cl.CommandQueue(ctx)
+    raise DeviceError("device vanished")
+
+
+def get_context(spec: str | int | None = None):
+    """A cached (context, queue) for a device SPEC; one per device per process."""
+    p, d = choose_device(spec)
+    return _context_for((p.name, d.name, d.int_ptr))

@@ -1,0 +1,139 @@
+"""The one source of truth for every struct shared by the host and the kernels.
+
+Each struct is declared once here as a list of (field, C type[, count]). From that we derive both the numpy
+dtype (explicit offsets, C alignment: a float4/uint4 is 16-byte aligned) used to pack tables on the host, and
+the C ``typedef struct`` text that ``program.build_program`` prepends to every kernel source. Only 4-byte
+scalars and 16-byte vectors are allowed: ``float3`` is 16 bytes on the device and 12 in numpy, so it never
+appears in a buffer. ``tests/test_layout.py`` compiles a probe kernel and compares sizeof/offsetof.
+"""
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+_SCALARS = {"float": ("<f4", 4, 4), "uint": ("<u4", 4, 4), "int": ("<i4", 4, 4)}
+_VECTORS = {"float4": ("<f4", 16, 16), "uint4": ("<u4", 16, 16)}
+
+NONE = 0xFFFFFFFF  # "no index" in uint fields (no emitter, no texture, ...)
+
+STRUCTS: dict[str, list[tuple]] = {
+    # Perspective camera + reconstruction filter (filter importance sampling, see filters/).
+    "Camera": [
+        ("to_world", "float4", 4),   # columns of the camera-to-world matrix: x axis, y axis, z axis, origin
+        ("tan_half_fov", "float"),   # tan(fov/2), horizontal
+        ("inv_aspect", "float"),     # height / width
+        ("near_clip", "float"),
+        ("far_clip", "float"),
+        ("width", "uint"),
+        ("height", "uint"),
+        ("filter_type", "uint"),
+        ("filter_bins", "uint"),     # size of the filter's 1-D sampling table
+        ("filter_radius", "float"),
+        ("filter_p0", "float"),      # gaussian: stddev; mitchell: B
+        ("filter_p1", "float"),      # mitchell: C
+        ("filter_p2", "float"),      # gaussian: exp(-r²/2σ²), subtracted so the weight reaches 0 at the radius
+    ],
+    # Scene-wide numbers and the integrator's parameters.
+    "SceneInfo": [
+        ("n_prims", "uint"),
+        ("n_tris", "uint"),
+        ("n_spheres", "uint"),
+        ("n_emitters", "uint"),
+        ("bounds_center", "float4"),  # xyz: centre of the scene's bounding sphere, w: its radius
+        ("iparams", "float4", 2),     # integrator-specific (av: length; simple: position, energy; ...)
+        ("max_depth", "uint"),        # path length limit (0xFFFFFFFF: none)
+        ("rr_depth", "uint"),         # Russian roulette starts at this depth
+        ("env_emitter", "uint"),      # index of the environment emitter hit by escaping rays, or NONE
+        ("flags", "uint"),
+    ],
+    # One row per shape (a mesh or an analytic sphere).
+    "Shape": [
+        ("bsdf", "uint"),
+        ("emitter", "uint"),          # NONE if the shape does not emit
+        ("flags", "uint"),            # SHAPE_* bits
+        ("first", "uint"),            # meshes: first triangle; spheres: sphere index
+        ("count", "uint"),            # meshes: triangle count; spheres: 1
+        ("pad", "uint", 3),
+    ],
+    # One row per BSDF; the meaning of the float4 lanes is the plugin's (see kernels/bsdfs/*.h).
+    "Bsdf": [
+        ("type", "uint"),
+        ("texture", "uint"),          # TEXTURE_* kind replacing `color`, or 0
+        ("pad", "uint", 2),
+        ("color", "float4"),          # albedo / kd
+        ("params", "float4"),
+        ("tex", "float4", 2),         # texture parameters
+    ],
+    # One row per emitter; lanes as documented in kernels/emitters/*.h.
+    "Emitter": [
+        ("type", "uint"),
+        ("shape", "uint"),            # area: the emitting shape
+        ("cdf_offset", "uint"),       # area: offset of its triangle-area CDF in the emitter_cdf table
+        ("count", "uint"),            # area: triangle count
+        ("radiance", "float4"),       # radiance / power / irradiance (rgb); w: plugin-specific
+        ("params", "float4", 4),
+    ],
+}
+
+
+# Type tags and flag bits, shared the same way (emitted as #defines).
+ENUMS: dict[str, int] = {
+    "FILTER_BOX": 0, "FILTER_TENT": 1, "FILTER_GAUSSIAN": 2, "FILTER_MITCHELL": 3,
+    "SHAPE_HAS_NORMALS": 1, "SHAPE_HAS_UVS": 2, "SHAPE_SPHERE": 4,
+    "BSDF_DIFFUSE": 0, "BSDF_MIRROR": 1, "BSDF_DIELECTRIC": 2, "BSDF_MICROFACET": 3,
+    "TEXTURE_NONE": 0, "TEXTURE_CHECKERBOARD": 1,
+    "EMITTER_AREA": 0, "EMITTER_POINT": 1, "EMITTER_DISTANTDISK": 2, "EMITTER_DISTANT": 3,
+    "EMITTER_CONSTANT": 4,
+}
+
+
+def _layout(fields):
+    names, formats, offsets, c_lines = [], [], [], []
+    off = 0
+    align = 4
+    for f in fields:
+        name, ctype = f[0], f[1]
+        count = f[2] if len(f) > 2 else 1
+        if ctype in _SCALARS:
+            fmt, size, al = _SCALARS[ctype]
+            np_fmt = fmt if count == 1 else (fmt, (count,))
+        elif ctype in _VECTORS:
+            fmt, size, al = _VECTORS[ctype]
+            np_fmt = (fmt, (4,)) if count == 1 else (fmt, (count, 4))
+        else:
+            raise ValueError(f"type {ctype} not allowed in a shared struct")
+        off = (off + al - 1) // al * al
+        align = max(align, al)
+        names.append(name)
+        formats.append(np_fmt)
+        offsets.append(off)
+        c_lines.append(f"    {ctype} {name}{f'[{count}]' if count > 1 else ''};")
+        off += size * count
+    itemsize = (off + align - 1) // align * align
+    return names, formats, offsets, itemsize, c_lines
+
+
+@functools.lru_cache(maxsize=None)
+def dtype(struct: str) -> np.dtype:
+    names, formats, offsets, itemsize, _ = _layout(STRUCTS[struct])
+    return np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": itemsize})
+
+
+def zeros(struct: str, n: int = 1) -> np.ndarray:
+    return np.zeros(n, dtype(struct))
+
+
+@functools.lru_cache(maxsize=None)
+def c_header() -> str:
+    out = ["#ifndef CLRENDER_TYPES_GEN", "#define CLRENDER_TYPES_GEN",
+           "/* generated from clrender/device/layout.py: do not edit */"]
+    for name, fields in STRUCTS.items():
+        *_, lines = _layout(fields)
+        out.append("typedef struct {")
+        out.extend(lines)
+        out.append(f"}} {name};")
+    out.append(f"#define NONE 0x{NONE:08X}u")
+    out.extend(f"#define {k} {v}u" for k, v in ENUMS.items())
+    out.append("#endif")
+    return "\n".join(out) + "\n"

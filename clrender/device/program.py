@@ -1,0 +1,71 @@
+"""Building OpenCL programs from the kernels shipped in ``clrender.kernels``.
+
+Every program is built from a source string plus include paths (our ``kernels/`` folder and pyopencl's
+Random123 headers) and ``-D`` defines. The generated struct header from ``layout.py`` is prepended so the
+kernels and the host share one definition of every table row. Built programs are cached per context,
+source and options; PoCL's own disk cache (``POCL_CACHE_DIR``) makes a warm build take tens of ms.
+"""
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+
+from ..errors import DeviceError
+
+
+@functools.lru_cache(maxsize=None)
+def kernels_dir() -> Path:
+    """The folder holding render.cl and its headers (installed package data, or the source tree)."""
+    try:
+        from importlib.resources import files
+
+        p = Path(str(files("clrender.kernels")))
+        if (p / "render.cl").is_file():
+            return p
+    except (ModuleNotFoundError, TypeError):
+        pass
+    # Running from a source checkout (clrender/ beside kernels/), e.g. `python -m pytest` in the repo.
+    p = Path(__file__).resolve().parents[2] / "kernels"
+    if (p / "render.cl").is_file():
+        return p
+    raise DeviceError("cannot find clrender's OpenCL kernels (clrender.kernels package data is missing)")
+
+
+def pyopencl_include_dir() -> Path:
+    import pyopencl
+
+    return Path(pyopencl.__file__).parent / "cl"
+
+
+def build_options(defines: dict | None = None, fast_math: bool = False) -> list[str]:
+    opts = ["-I", str(kernels_dir()), "-I", str(pyopencl_include_dir()), "-cl-std=CL1.2"]
+    if fast_math:
+        opts.append("-cl-fast-relaxed-math")
+    for k, v in sorted((defines or {}).items()):
+        opts.append(f"-D{k}" if v is None else f"-D{k}={v}")
+    return opts
+
+
+_PROGRAMS: dict = {}
+
+
+def build_program(ctx, source: str, defines: dict | None = None, fast_math: bool = False,
+                  with_types: bool = True):
+    """Build (and cache) a program; ``source`` may ``#include`` any header under kernels/."""
+    import pyopencl as cl
+
+    if with_types:
+        from .layout import c_header
+
+        source = c_header() + "\n" + source
+    opts = build_options(defines, fast_math)
+    key = (ctx.int_ptr, source, tuple(opts))
+    prg = _PROGRAMS.get(key)
+    if prg is not None:
+        return prg
+    try:
+        prg = cl.Program(ctx, source).build(options=opts)
+    except cl.RuntimeError as exc:
+        raise DeviceError(f"OpenCL program failed to build:\n{exc}") from exc
+    _PROGRAMS[key] = prg
+    return prg

@@ -1,0 +1,108 @@
+"""The film: per-pixel sums downloaded from the device, their image, and writing it (EXR + PNG, atomically).
+
+Per pixel we hold sum(w L), sum(w), sum((w L)^2) and the sample count, so the film knows its own noise:
+`variance()` is the variance of each pixel's mean, used by z-tests and for merging partial renders.
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+
+@dataclass
+class Film:
+    width: int
+    height: int
+    sum_wl: np.ndarray        # (H, W, 3) float64
+    sum_w: np.ndarray         # (H, W)
+    sum_wl2: np.ndarray       # (H, W, 3)
+    count: np.ndarray         # (H, W) samples that were accumulated
+    dropped: np.ndarray       # (H, W) samples dropped for NaN/Inf
+    metadata: dict = field(default_factory=dict)
+
+    @classmethod
+    def from_accumulators(cls, width, height, acc0, acc1, bad, metadata=None):
+        n = width * height
+        a0 = acc0[:n].astype(np.float64).reshape(height, width, 4)
+        a1 = acc1[:n].astype(np.float64).reshape(height, width, 4)
+        return cls(width, height, a0[..., :3], a0[..., 3], a1[..., :3], a1[..., 3],
+                   bad[:n].reshape(height, width).astype(np.int64), dict(metadata or {}))
+
+    @property
+    def image(self) -> np.ndarray:
+        """(H, W, 3) float32 linear radiance: sum(w L) / sum(w); 0 where no weight arrived."""
+        w = self.sum_w[..., None]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            img = np.where(w != 0, self.sum_wl / np.where(w != 0, w, 1), 0.0)
+        return img.astype(np.float32)
+
+    def variance(self) -> np.ndarray:
+        """Variance of each pixel's estimate (H, W, 3), treating sum(wL)/n as the mean of n samples
+        (exact for filters with constant weight, a close approximation otherwise)."""
+        n = np.maximum(self.count, 1)[..., None]
+        mean = self.sum_wl / n
+        var = np.maximum(self.sum_wl2 / n - mean * mean, 0.0)
+        scale = np.where(self.sum_w[..., None] != 0, n / np.where(self.sum_w[..., None] != 0,
+                                                                    self.sum_w[..., None], 1), 0.0)
+        return var / np.maximum(n - 1, 1) * scale * scale
+
+    @property
+    def spp(self) -> int:
+        return int(self.metadata.get("spp", int(self.count.max()) if self.count.size else 0))
+
+    # -- output -------------------------------------------------------------------------------------------
+    def write_exr(self, path) -> Path:
+        import OpenEXR
+
+        header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+        for k, v in self.metadata.items():
+            header[f"clrender.{k}"] = str(v)
+        # OpenEXR 3.x writes non-contiguous arrays wrongly without an error: always hand it a fresh copy.
+        img = np.ascontiguousarray(self.image, dtype=np.float32)
+        return _atomic_write(Path(path), lambda tmp: OpenEXR.File(header, {"RGB": img}).write(str(tmp)))
+
+    def write_png(self, path) -> Path:
+        from PIL import Image
+
+        rgb = to_srgb8(self.image)
+        return _atomic_write(Path(path), lambda tmp: Image.fromarray(rgb, "RGB").save(str(tmp), format="PNG"))
+
+
+def to_srgb8(img: np.ndarray) -> np.ndarray:
+    x = np.clip(np.nan_to_num(img.astype(np.float64), nan=0.0, posinf=1.0, neginf=0.0), 0.0, 1.0)
+    srgb = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+    return np.clip(np.round(srgb * 255.0), 0, 255).astype(np.uint8)
+
+
+def read_exr(path) -> tuple[np.ndarray, dict]:
+    """(H, W, 3) float32 and the header of an EXR written by clrender (or any RGB EXR)."""
+    import OpenEXR
+
+    with OpenEXR.File(str(path)) as f:
+        ch = f.channels()
+        if "RGB" in ch:
+            img = ch["RGB"].pixels
+        else:
+            img = np.stack([ch[c].pixels for c in "RGB"], axis=-1)
+        return np.array(img, np.float32), dict(f.header())
+
+
+def _atomic_write(path: Path, write) -> Path:
+    """Write through a temporary file in the same folder, then rename: readers never see half a file."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=str(path.parent))
+    os.close(fd)
+    try:
+        write(Path(tmp))
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+    return path

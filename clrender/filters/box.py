@@ -1,0 +1,25 @@
+"""Box filter.
+
+```xml
+<rfilter type="box">
+    <float name="radius" value="0.5"/>   <!-- default 0.5 (one pixel) -->
+</rfilter>
+```
+"""
+import numpy as np
+
+from ..device.layout import ENUMS
+from ..scene.registry import register
+from .filter import Filter
+from .validate import positive_radius
+
+
+@register("rfilter", "box")
+class BoxFilter(Filter):
+    filter_type = ENUMS["FILTER_BOX"]
+
+    def __init__(self, props, children, spec):
+        self.radius = positive_radius(props, 0.5)
+
+    def eval(self, x):
+        return (np.abs(x) <= self.radius).astype(np.float64)

@@ -1,0 +1,20 @@
+"""XML file -> Scene object (parse, then instantiate the plugins)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from .errors import SceneError, SourceLocation
+from .scene.registry import create
+from .scene.xmlparser import parse_file
+
+
+def load_scene(path, **defines):
+    """Load a Nori XML scene; `defines` replace `$name` in attribute values (like `-D name=value`)."""
+    from . import plugins  # noqa: F401  (registers every plugin)
+
+    path = Path(path)
+    spec = parse_file(str(path), {k: str(v) for k, v in defines.items()})
+    if spec.tag != "scene":
+        raise SceneError(f"expected a <scene> file, found <{spec.tag}> (use `clrender test` for test files)",
+                         SourceLocation(str(path), spec.location.line, spec.location.col))
+    return create(spec)

@@ -1,0 +1,179 @@
+"""Scene objects -> SceneBuffers: the flat numpy tables the kernels read (see kernels/scene.h).
+
+This is the only place where Python objects become device data. Shapes are numbered in document order;
+BSDFs are shared by identity; area emitters point at their shape and own a slice of the triangle-area CDF
+table; the BVH is built over all triangles and spheres together.
+"""
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .accel.bvh import build_bvh
+from .accel.primitives import pack_primitives, primitive_bounds
+from .device import layout
+from .device.layout import ENUMS, NONE
+
+log = logging.getLogger("clrender")
+
+
+@dataclass
+class SceneBuffers:
+    nodes: np.ndarray
+    prims: np.ndarray
+    positions: np.ndarray
+    normals: np.ndarray
+    uvs: np.ndarray
+    tri_index: np.ndarray
+    spheres: np.ndarray
+    sphere_shape: np.ndarray
+    shapes: np.ndarray
+    bsdfs: np.ndarray
+    emitters: np.ndarray
+    emitter_cdf: np.ndarray
+    info: np.ndarray
+    camera: np.ndarray
+    filter_cdf: np.ndarray
+    stats: dict = field(default_factory=dict)
+
+    #: order of the SCENE_ARGS kernel arguments
+    SCENE_ARGS = ("nodes", "prims", "positions", "normals", "uvs", "tri_index", "spheres", "sphere_shape",
+                  "shapes", "bsdfs", "emitters", "emitter_cdf", "info")
+
+    def scene_arrays(self):
+        return [getattr(self, n) for n in self.SCENE_ARGS]
+
+    @property
+    def nbytes(self) -> int:
+        return sum(a.nbytes for a in self.scene_arrays())
+
+
+class PackContext:
+    """Handed to emitter plugins while packing so they can add rows to shared tables."""
+
+    def __init__(self):
+        self.cdf_chunks: list[np.ndarray] = []
+        self.cdf_size = 0
+
+    def add_cdf(self, values: np.ndarray) -> int:
+        off = self.cdf_size
+        values = np.asarray(values, np.float32)
+        self.cdf_chunks.append(values)
+        self.cdf_size += len(values)
+        return off
+
+
+def _nonempty(a: np.ndarray, dtype=None, shape=None) -> np.ndarray:
+    """OpenCL has no zero-sized buffers: give empty tables one zero row."""
+    if len(a):
+        return np.ascontiguousarray(a)
+    return np.zeros(shape if shape is not None else (1,) + a.shape[1:], dtype or a.dtype)
+
+
+def pack_scene(scene) -> SceneBuffers:
+    t0 = time.perf_counter()
+    shapes = scene.shapes
+    bsdf_index: dict[int, int] = {}
+    bsdf_rows = []
+    shape_rows = layout.zeros("Shape", len(shapes))
+    pos_chunks, nrm_chunks, uv_chunks, idx_chunks, tri_chunks = [], [], [], [], []
+    spheres, sphere_shape = [], []
+    n_vert = 0
+    n_tri = 0
+    for i, sh in enumerate(shapes):
+        key = id(sh.bsdf)
+        if key not in bsdf_index:
+            bsdf_index[key] = len(bsdf_rows)
+            bsdf_rows.append(sh.bsdf.pack())
+        row = shape_rows[i]
+        row["bsdf"] = bsdf_index[key]
+        row["emitter"] = NONE
+        if sh.is_sphere:
+            row["flags"] = ENUMS["SHAPE_SPHERE"]
+            row["first"], row["count"] = len(spheres), 1
+            spheres.append([*sh.center, sh.radius])
+            sphere_shape.append(i)
+            continue
+        m = sh.mesh
+        nv, nf = len(m.positions), len(m.faces)
+        flags = 0
+        p4 = np.zeros((nv, 4), np.float32)
+        p4[:, :3] = m.positions
+        pos_chunks.append(p4)
+        n4 = np.zeros((nv, 4), np.float32)
+        if m.normals is not None:
+            flags |= ENUMS["SHAPE_HAS_NORMALS"]
+            n4[:, :3] = m.normals
+        nrm_chunks.append(n4)
+        if m.uvs is not None:
+            flags |= ENUMS["SHAPE_HAS_UVS"]
+            uv_chunks.append(np.asarray(m.uvs, np.float32))
+        else:
+            uv_chunks.append(np.zeros((nv, 2), np.float32))
+        idx = np.empty((nf, 4), np.uint32)
+        idx[:, :3] = m.faces + n_vert
+        idx[:, 3] = i
+        idx_chunks.append(idx)
+        tri_chunks.append(m.positions[m.faces])  # (nf, 3, 3)
+        row["flags"] = flags
+        row["first"], row["count"] = n_tri, nf
+        n_vert += nv
+        n_tri += nf
+
+    positions = np.concatenate(pos_chunks) if pos_chunks else np.zeros((0, 4), np.float32)
+    normals = np.concatenate(nrm_chunks) if nrm_chunks else np.zeros((0, 4), np.float32)
+    uvs = np.concatenate(uv_chunks) if uv_chunks else np.zeros((0, 2), np.float32)
+    tri_index = np.concatenate(idx_chunks) if idx_chunks else np.zeros((0, 4), np.uint32)
+    tris = np.concatenate(tri_chunks).astype(np.float32) if tri_chunks else np.zeros((0, 3, 3), np.float32)
+    sph = np.asarray(spheres, np.float32).reshape(-1, 4)
+
+    # Emitters: area emitters in shape order, then the scene-level ones in document order.
+    ctx = PackContext()
+    emitter_rows = []
+    for i, sh in enumerate(shapes):
+        if sh.emitter is not None:
+            shape_rows[i]["emitter"] = len(emitter_rows)
+            emitter_rows.append(sh.emitter.pack(ctx, shape_index=i, shape=sh, shape_row=shape_rows[i]))
+    for em in scene.emitters:
+        emitter_rows.append(em.pack(ctx, shape_index=NONE, shape=None, shape_row=None))
+
+    t_bvh = time.perf_counter()
+    lo, hi = primitive_bounds(tris[:, 0], tris[:, 1], tris[:, 2], sph)
+    bvh = build_bvh(lo, hi)
+    prims = pack_primitives(tris[:, 0], tris[:, 1], tris[:, 2], sph, bvh.order)
+    t_bvh = time.perf_counter() - t_bvh
+
+    info = layout.zeros("SceneInfo")
+    info["n_prims"] = len(lo)
+    info["n_tris"] = len(tris)
+    info["n_spheres"] = len(sph)
+    info["n_emitters"] = len(emitter_rows)
+    if len(lo):
+        bmin, bmax = lo.min(axis=0), hi.max(axis=0)
+        c = (bmin + bmax) / 2
+        info["bounds_center"][0] = [*c, max(float(np.linalg.norm(bmax - c)), 1e-6)]
+    else:
+        info["bounds_center"][0] = [0, 0, 0, 1]
+    integ = scene.integrator
+    info["iparams"][0] = integ.iparams()
+    info["max_depth"] = integ.max_depth
+    info["rr_depth"] = integ.rr_depth
+    info["env_emitter"] = NONE
+    camera, filter_cdf = scene.camera.pack()
+    emitters = np.array(emitter_rows, layout.dtype("Emitter")) if emitter_rows else layout.zeros("Emitter")
+    cdf = np.concatenate(ctx.cdf_chunks) if ctx.cdf_chunks else np.zeros(1, np.float32)
+    stats = {
+        "triangles": int(len(tris)), "spheres": int(len(sph)), "shapes": len(shapes),
+        "emitters": len(emitter_rows), "bvh_nodes": int(bvh.node_count), "bvh_depth": int(bvh.depth),
+        "bvh_build_seconds": float(t_bvh), "pack_seconds": float(time.perf_counter() - t0),
+    }
+    return SceneBuffers(
+        nodes=_nonempty(bvh.nodes), prims=_nonempty(prims), positions=_nonempty(positions),
+        normals=_nonempty(normals), uvs=_nonempty(uvs), tri_index=_nonempty(tri_index),
+        spheres=_nonempty(sph), sphere_shape=_nonempty(np.asarray(sphere_shape, np.uint32)),
+        shapes=_nonempty(shape_rows), bsdfs=np.array(bsdf_rows, layout.dtype("Bsdf")) if bsdf_rows
+        else layout.zeros("Bsdf"), emitters=emitters, emitter_cdf=cdf, info=info, camera=camera,
+        filter_cdf=filter_cdf, stats=stats)

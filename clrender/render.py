@@ -1,0 +1,184 @@
+"""The pass loop: upload the packed scene, launch render passes, watch time and Ctrl-C, build the Film.
+
+A pass adds `spp` samples to every pixel (the image is cut into fixed-size launches so each launch stays
+short). Samples are numbered globally, so the image is the same however the work is split into passes.
+Ctrl-C sets a flag that is checked between launches: the pass in flight finishes, the partial image keeps
+its true sample count; a second Ctrl-C aborts at once.
+"""
+from __future__ import annotations
+
+import signal
+import threading
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import __version__
+from .device.context import describe, get_context
+from .device.program import build_program
+from .film import Film
+from .pack import pack_scene
+
+LOCAL_SIZE = 64              # one fixed launch shape: every new shape costs PoCL a fresh compile
+MAX_LAUNCH_PIXELS = 1 << 16  # pixels per launch; a pass over a larger image is several launches
+TARGET_LAUNCH_SECONDS = 0.2  # keeps progress, Ctrl-C and time limits responsive
+
+
+class Interrupted(Exception):
+    """Raised when the user pressed Ctrl-C twice."""
+
+
+@dataclass
+class RenderStats:
+    seconds: float = 0.0
+    samples: int = 0
+    passes: int = 0
+    launches: int = 0
+    build_seconds: float = 0.0
+    upload_seconds: float = 0.0
+    interrupted: bool = False
+    dropped: int = 0
+
+
+class _SigintFlag:
+    """First Ctrl-C: ask the loop to stop after the pass in flight. Second: abort."""
+
+    def __init__(self):
+        self.requested = False
+        self._old = None
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            self._old = signal.signal(signal.SIGINT, self._handle)
+        return self
+
+    def _handle(self, signum, frame):
+        if self.requested:
+            raise Interrupted("aborted by a second Ctrl-C")
+        self.requested = True
+
+    def __exit__(self, *exc):
+        if self._old is not None:
+            signal.signal(signal.SIGINT, self._old)
+        return False
+
+
+class Renderer:
+    """A scene uploaded to one device, with its program built; `render()` may be called repeatedly."""
+
+    def __init__(self, scene, device=None, fast_math: bool = False, buffers=None):
+        import pyopencl as cl
+
+        self.scene = scene
+        self.ctx, self.queue = get_context(device)
+        dev = self.ctx.devices[0]
+        self.device_name = f"{dev.platform.name.strip()} / {dev.name.strip()}"
+        self.buffers = buffers if buffers is not None else pack_scene(scene)
+        t0 = time.perf_counter()
+        self.program = build_program(self.ctx, '#include "render.cl"\n',
+                                     defines={"INTEGRATOR": scene.integrator.kernel}, fast_math=fast_math)
+        self.kernel = cl.Kernel(self.program, "render_pass")
+        self.build_seconds = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        mf = cl.mem_flags
+        ro = mf.READ_ONLY | mf.COPY_HOST_PTR
+        b = self.buffers
+        self._scene_bufs = [cl.Buffer(self.ctx, ro, hostbuf=np.ascontiguousarray(a)) for a in b.scene_arrays()]
+        self._camera = cl.Buffer(self.ctx, ro, hostbuf=b.camera)
+        self._filter = cl.Buffer(self.ctx, ro, hostbuf=b.filter_cdf)
+        self.width, self.height = scene.width, scene.height
+        self.n_pixels = self.width * self.height
+        self.launch_pixels = min(self.n_pixels, MAX_LAUNCH_PIXELS)
+        self.global_size = -(-self.launch_pixels // LOCAL_SIZE) * LOCAL_SIZE
+        self.upload_seconds = time.perf_counter() - t0
+
+    def render(self, spp: int | None = None, seed: int = 0, time_limit: float | None = None,
+               progress: bool = False, on_pass=None, start_sample: int = 0) -> Film:
+        """Render `spp` samples per pixel (default: the scene's sampler), numbered from `start_sample`."""
+        import pyopencl as cl
+
+        spp = int(spp if spp is not None else self.scene.sample_count)
+        if spp < 1:
+            raise ValueError("spp must be at least 1")
+        n = self.n_pixels
+        acc0 = np.zeros((n, 4), np.float32)
+        acc1 = np.zeros((n, 4), np.float32)
+        bad = np.zeros(n, np.uint32)
+        mf = cl.mem_flags
+        d_acc0 = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=acc0)
+        d_acc1 = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=acc1)
+        d_bad = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=bad)
+        k = self.kernel
+        args = self._scene_bufs + [self._camera, self._filter, d_acc0, d_acc1, d_bad]
+        for i, a in enumerate(args):
+            k.set_arg(i, a)
+        nargs = len(args)
+        stats = RenderStats(build_seconds=self.build_seconds, upload_seconds=self.upload_seconds)
+        bar = None
+        if progress:
+            from tqdm import tqdm
+
+            bar = tqdm(total=spp, unit="spp", desc="rendering", dynamic_ncols=True, leave=True)
+        done = 0
+        per_pass = 1
+        t_start = time.perf_counter()
+        with _SigintFlag() as flag:
+            try:
+                while done < spp:
+                    batch = min(per_pass, spp - done)
+                    t0 = time.perf_counter()
+                    for off in range(0, n, self.launch_pixels):
+                        cnt = min(self.launch_pixels, n - off)
+                        k.set_arg(nargs + 0, np.uint32(off))
+                        k.set_arg(nargs + 1, np.uint32(cnt))
+                        k.set_arg(nargs + 2, np.uint32(start_sample + done))
+                        k.set_arg(nargs + 3, np.uint32(batch))
+                        k.set_arg(nargs + 4, np.uint32(seed & 0xFFFFFFFF))
+                        cl.enqueue_nd_range_kernel(self.queue, k, (self.global_size,), (LOCAL_SIZE,))
+                        stats.launches += 1
+                    self.queue.finish()
+                    dt = time.perf_counter() - t0
+                    done += batch
+                    stats.passes += 1
+                    if bar is not None:
+                        bar.update(batch)
+                    if on_pass is not None:
+                        on_pass(done)
+                    if flag.requested:
+                        stats.interrupted = True
+                        break
+                    launches = -(-n // self.launch_pixels)
+                    per_launch = dt / max(launches, 1) / batch  # seconds per sample per launch
+                    per_pass = max(1, int(TARGET_LAUNCH_SECONDS / max(per_launch, 1e-9)))
+                    if time_limit is not None:
+                        elapsed = time.perf_counter() - t_start
+                        remaining = time_limit - elapsed
+                        per_sample = dt / batch
+                        if remaining < per_sample:
+                            break
+                        per_pass = max(1, min(per_pass, int(remaining / per_sample)))
+            finally:
+                if bar is not None:
+                    bar.close()
+        stats.seconds = time.perf_counter() - t_start
+        cl.enqueue_copy(self.queue, acc0, d_acc0)
+        cl.enqueue_copy(self.queue, acc1, d_acc1)
+        cl.enqueue_copy(self.queue, bad, d_bad)
+        self.queue.finish()
+        stats.samples = done * n
+        stats.dropped = int(bad.sum())
+        meta = {
+            "spp": done, "seed": seed, "render_seconds": round(stats.seconds, 4), "device": self.device_name,
+            "integrator": self.scene.integrator.kernel, "version": __version__,
+            "interrupted": stats.interrupted, "dropped_samples": stats.dropped, "start_sample": start_sample,
+        }
+        film = Film.from_accumulators(self.width, self.height, acc0, acc1, bad, meta)
+        film.stats = stats
+        return film
+
+
+def render(scene, spp: int | None = None, seed: int = 0, device=None, time_limit: float | None = None,
+           progress: bool = False) -> Film:
+    """Render a loaded scene; returns the Film (``film.image`` is the (H, W, 3) float32 image)."""
+    return Renderer(scene, device=device).render(spp=spp, seed=seed, time_limit=time_limit, progress=progress)

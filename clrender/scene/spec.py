@@ -1,0 +1,46 @@
+"""The parsed, not yet instantiated form of one scene object (an element like ``<bsdf type=...>``)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Iterator
+
+from ..errors import SourceLocation
+from .properties import PropertyList
+
+OBJECT_TAGS = ("scene", "mesh", "bsdf", "emitter", "camera", "integrator", "sampler", "rfilter",
+               "test", "texture", "medium", "phase")
+
+
+@dataclass(eq=False)
+class PluginSpec:
+    """One object element: its tag, ``type`` (``"scene"`` for ``<scene>``), optional ``name``,
+    properties, nested objects in document order, and where its start tag is."""
+
+    tag: str
+    type: str
+    name: str | None
+    props: PropertyList
+    children: list["PluginSpec"] = field(default_factory=list)
+    location: SourceLocation | None = None
+
+    def describe(self) -> str:
+        """How errors refer to this object, e.g. ``<bsdf type="diffuse">``."""
+        return describe(self.tag, self.type)
+
+    def children_with_tag(self, tag: str) -> list["PluginSpec"]:
+        return [c for c in self.children if c.tag == tag]
+
+    def walk(self) -> Iterator["PluginSpec"]:
+        """This spec and all its descendants, depth first in document order."""
+        yield self
+        for c in self.children:
+            yield from c.walk()
+
+    def __repr__(self) -> str:
+        name = f" name={self.name!r}" if self.name is not None else ""
+        return (f"PluginSpec(<{self.tag} type={self.type!r}{name}> at {self.location}, "
+                f"{len(self.props)} props, {len(self.children)} children)")
+
+
+def describe(tag: str, type_name: str) -> str:
+    return "<scene>" if tag == "scene" else f'<{tag} type="{type_name}">'

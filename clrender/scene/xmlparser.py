@@ -1,0 +1,403 @@
+"""Reader for Nori's XML scene format, producing a :class:`PluginSpec` tree.
+
+The work is done in two passes. Pass one runs expat and builds a bare element tree in which every
+element remembers the byte offset of its start tag (ElementTree forgets positions). Pass two checks
+the structure strictly (known tags only, exact attribute sets, no stray text), substitutes ``$name``
+defines in attribute values, and parses every property value eagerly, so that every mistake is
+reported as ``file:line:col: message`` at the place it was written.
+
+Line and column numbers are computed from byte offsets into the file bytes we handed to expat; the
+XML declaration is blanked out (not removed) when whitespace precedes it, so offsets stay those of
+the original file.
+"""
+from __future__ import annotations
+
+import bisect
+import codecs
+import os
+import re
+from dataclasses import dataclass, field
+from typing import Mapping
+from xml.parsers import expat
+
+import numpy as np
+
+from ..errors import SceneError, SourceLocation
+from .properties import PROPERTY_TAGS, PropertyList
+from .spec import OBJECT_TAGS, PluginSpec, describe
+from .transform import Transform
+
+__all__ = ["parse_file", "parse_string", "OBJECT_TAGS", "PROPERTY_TAGS", "OP_TAGS"]
+
+OP_TAGS = ("translate", "scale", "rotate", "lookat", "matrix")
+ROOT_TAGS = ("scene", "test")
+TEST_TYPES = ("ttest", "chi2test")
+
+_OP_ATTRS = {
+    "translate": ("value",),
+    "scale": ("value",),
+    "matrix": ("value",),
+    "rotate": ("axis", "angle"),
+    "lookat": ("origin", "target", "up"),
+}
+_XML_WS = b" \t\r\n"
+_VAR = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
+_NUM_SPLIT = re.compile(r"[\s,]+")
+_INT = re.compile(r"[+-]?[0-9]+")
+_ATTR = re.compile(rb"""([^\s=/<>"']+)\s*=\s*("[^"]*"|'[^']*')""")
+_DECL_ENCODING = re.compile(rb"""encoding\s*=\s*["']([A-Za-z0-9._-]+)["']""")
+
+
+def _tags(names) -> str:
+    return ", ".join(f"<{n}>" for n in names)
+
+
+def _quoted(names) -> str:
+    if not names:
+        return "no attributes"
+    return ", ".join(f"'{n}'" for n in names)
+
+
+# --------------------------------------------------------------------------------------------------
+# Pass one: bytes -> located element tree
+# --------------------------------------------------------------------------------------------------
+class _Source:
+    """The bytes given to expat, with offset -> (line, column) mapping."""
+
+    def __init__(self, data: bytes, filename: str, encoding: str | None):
+        self.data = data
+        self.filename = filename
+        self.encoding = encoding or "utf-8"
+        self._newlines = [m.start() for m in re.finditer(b"\n", data)]
+
+    def loc(self, offset: int) -> SourceLocation:
+        offset = max(0, min(offset, len(self.data)))
+        line = bisect.bisect_left(self._newlines, offset)  # newlines strictly before offset
+        start = self._newlines[line - 1] + 1 if line else 0
+        prefix = self.data[start:offset]
+        try:
+            col = len(prefix.decode(self.encoding, errors="replace"))
+        except LookupError:
+            col = len(prefix)
+        return SourceLocation(self.filename, line + 1, col + 1)
+
+
+@dataclass(eq=False)
+class _Elem:
+    tag: str
+    attrs: dict[str, str]
+    offset: int
+    loc: SourceLocation
+    children: list["_Elem"] = field(default_factory=list)
+
+
+def _prepare(data: bytes) -> tuple[bytes, str | None, bool]:
+    """Make leading whitespace before ``<?xml`` acceptable to expat without moving any byte.
+
+    Returns (data, declared encoding, whether the declaration was blanked out).
+    """
+    start = len(codecs.BOM_UTF8) if data.startswith(codecs.BOM_UTF8) else 0
+    body = data[start:]
+    stripped = body.lstrip(_XML_WS)
+    encoding = None
+    if stripped.startswith(b"<?xml"):
+        end = stripped.find(b"?>")
+        if end >= 0:
+            decl = stripped[: end + 2]
+            m = _DECL_ENCODING.search(decl)
+            encoding = m.group(1).decode("ascii") if m else None
+            if len(stripped) != len(body):
+                pos = start + len(body) - len(stripped)
+                blank = bytes(b if b in b"\r\n" else 0x20 for b in decl)
+                return data[:pos] + blank + data[pos + len(decl):], encoding, True
+    return data, encoding, False
+
+
+def _read_tree(src: _Source, expat_encoding: str | None) -> _Elem:
+    parser = expat.ParserCreate(expat_encoding)
+    stack: list[_Elem] = []
+    roots: list[_Elem] = []
+
+    def start(tag, attrs):
+        off = parser.CurrentByteIndex
+        el = _Elem(tag, attrs, off, src.loc(off))
+        (stack[-1].children if stack else roots).append(el)
+        stack.append(el)
+
+    def end(tag):
+        stack.pop()
+
+    def chars(text):
+        stripped = text.strip(" \t\r\n")
+        if not stripped:
+            return
+        off = parser.CurrentByteIndex
+        # Point at the first non-blank byte; expat's offset is where this text run begins.
+        while 0 <= off < len(src.data) and src.data[off] in _XML_WS:
+            off += 1
+        shown = stripped if len(stripped) <= 30 else stripped[:27] + "..."
+        raise SceneError(f"unexpected text {shown!r} inside <{stack[-1].tag}>; only elements, "
+                         f"comments and whitespace may appear here", src.loc(off))
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = end
+    parser.CharacterDataHandler = chars
+    try:
+        parser.Parse(src.data, True)
+    except expat.ExpatError as e:
+        off = parser.ErrorByteIndex
+        if off is not None and off >= 0:
+            loc = src.loc(off)
+        else:
+            loc = SourceLocation(src.filename, e.lineno, e.offset + 1)
+        raise SceneError(f"malformed XML: {expat.ErrorString(e.code)}", loc) from None
+    return roots[0]
+
+
+# --------------------------------------------------------------------------------------------------
+# Pass two: element tree -> PluginSpec
+# --------------------------------------------------------------------------------------------------
+class _Builder:
+    def __init__(self, src: _Source, defines: Mapping[str, str] | None, base_dir: str):
+        self.src = src
+        self.user_defines = {str(k): str(v) for k, v in (defines or {}).items()}
+        self.defines: dict[str, str] = dict(self.user_defines)
+        self.base_dir = base_dir
+
+    # --- locations ------------------------------------------------------------------------------
+    def attr_loc(self, el: _Elem, name: str, *, at_value: bool = True) -> SourceLocation:
+        """Where attribute ``name`` (its value, or its name) is written in ``el``'s start tag."""
+        data = self.src.data
+        end, quote = el.offset, None
+        while end < len(data):
+            c = data[end]
+            if quote is not None:
+                if c == quote:
+                    quote = None
+            elif c in (0x22, 0x27):
+                quote = c
+            elif c == 0x3E:
+                break
+            end += 1
+        want = name.encode(self.src.encoding, errors="replace")
+        for m in _ATTR.finditer(data, el.offset, end):
+            if m.group(1) == want:
+                return self.src.loc(m.start(2) + 1 if at_value else m.start(1))
+        return el.loc
+
+    # --- attributes -----------------------------------------------------------------------------
+    def attrs(self, el: _Elem, expected: tuple[str, ...], *, substitute: bool = True) -> dict[str, str]:
+        """Check that ``el`` has exactly the attributes ``expected`` and return their values."""
+        for name in el.attrs:
+            if name not in expected:
+                raise SceneError(f"unexpected attribute '{name}' in <{el.tag}>; it takes "
+                                 f"{_quoted(expected)}", self.attr_loc(el, name, at_value=False))
+        for name in expected:
+            if name not in el.attrs:
+                raise SceneError(f"<{el.tag}> is missing the required attribute '{name}' "
+                                 f"(it takes {_quoted(expected)})", el.loc)
+        if not substitute:
+            return {n: el.attrs[n] for n in expected}
+        return {n: self.substitute(el, n) for n in expected}
+
+    def substitute(self, el: _Elem, name: str) -> str:
+        value = el.attrs[name]
+        if "$" not in value:
+            return value
+
+        def replace(m: re.Match) -> str:
+            var = m.group(1)
+            if var not in self.defines:
+                raise SceneError(
+                    f"undefined variable '${var}' in attribute {name}=\"{value}\" of <{el.tag}>; "
+                    f"pass -D {var}=value (or add <default name=\"{var}\" value=\"...\"/> to the file)",
+                    self.attr_loc(el, name))
+            return self.defines[var]
+
+        return _VAR.sub(replace, value)
+
+    # --- values ---------------------------------------------------------------------------------
+    def numbers(self, el: _Elem, attr: str, text: str, counts: tuple[int, ...] | None = None) -> np.ndarray:
+        tokens = [t for t in _NUM_SPLIT.split(text.strip()) if t]
+        if not tokens:
+            raise SceneError(f"attribute {attr}=\"{text}\" of <{el.tag}> is empty; expected numbers "
+                             f"separated by commas and/or spaces", self.attr_loc(el, attr))
+        values = []
+        for t in tokens:
+            try:
+                values.append(float(t))
+            except ValueError:
+                raise SceneError(f"bad number '{t}' in attribute {attr}=\"{text}\" of <{el.tag}>; "
+                                 f"expected numbers separated by commas and/or spaces",
+                                 self.attr_loc(el, attr)) from None
+        if counts is not None and len(values) not in counts:
+            want = " or ".join(str(c) for c in counts)
+            raise SceneError(f"attribute {attr}=\"{text}\" of <{el.tag}> needs {want} "
+                             f"number{'s' if counts != (1,) else ''}, got {len(values)}",
+                             self.attr_loc(el, attr))
+        return np.array(values, dtype=np.float64)
+
+    def one_float(self, el: _Elem, attr: str, text: str) -> float:
+        return float(self.numbers(el, attr, text, (1,))[0])
+
+    def value_of(self, el: _Elem, tag: str, text: str):
+        if tag == "boolean":
+            low = text.strip().lower()
+            if low not in ("true", "false"):
+                raise SceneError(f"bad boolean value=\"{text}\" in <boolean>; expected true or false",
+                                 self.attr_loc(el, "value"))
+            return low == "true"
+        if tag == "integer":
+            if not _INT.fullmatch(text.strip()):
+                raise SceneError(f"bad integer value=\"{text}\" in <integer>; expected a whole number",
+                                 self.attr_loc(el, "value"))
+            return int(text.strip())
+        if tag == "float":
+            return self.one_float(el, "value", text)
+        if tag == "string":
+            return text
+        # point / vector / color: the getter checks the count, since it depends on the use (3 or 2).
+        return self.numbers(el, "value", text)
+
+    # --- structure ------------------------------------------------------------------------------
+    def build_root(self, el: _Elem) -> PluginSpec:
+        if el.tag not in ROOT_TAGS:
+            raise SceneError(f"the root element must be <scene> or <test type=\"ttest|chi2test\">, "
+                             f"not <{el.tag}>", el.loc)
+        file_defaults: dict[str, tuple[str, SourceLocation]] = {}
+        for c in el.children:
+            if c.tag != "default":
+                continue
+            # Default values are taken literally: they are the base layer of substitution.
+            a = self.attrs(c, ("name", "value"), substitute=False)
+            if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", a["name"]):
+                raise SceneError(f"<default> name '{a['name']}' is not a valid variable name",
+                                 self.attr_loc(c, "name"))
+            if a["name"] in file_defaults:
+                first = file_defaults[a["name"]][1]
+                raise SceneError(f"<default> '{a['name']}' given twice (first at line {first.line})", c.loc)
+            if c.children:
+                raise SceneError(f"<{c.children[0].tag}> cannot be nested in <default>", c.children[0].loc)
+            file_defaults[a["name"]] = (a["value"], c.loc)
+        self.defines = {k: v for k, (v, _) in file_defaults.items()}
+        self.defines.update(self.user_defines)
+        return self.build_object(el, is_root=True)
+
+    def build_object(self, el: _Elem, is_root: bool = False) -> PluginSpec:
+        if el.tag == "scene":
+            self.attrs(el, ())
+            type_name, name = "scene", None
+        elif el.tag == "texture":
+            a = self.attrs(el, ("type", "name"))
+            type_name, name = a["type"], a["name"]
+        else:
+            type_name, name = self.attrs(el, ("type",))["type"], None
+        if is_root and el.tag == "test" and type_name not in TEST_TYPES:
+            raise SceneError(f"unknown test type '{type_name}'; known: {', '.join(TEST_TYPES)}",
+                             self.attr_loc(el, "type"))
+        props = PropertyList(describe(el.tag, type_name), el.loc)
+        spec = PluginSpec(el.tag, type_name, name, props, [], el.loc)
+        for c in el.children:
+            if c.tag in OBJECT_TAGS:
+                spec.children.append(self.build_object(c))
+            elif c.tag in PROPERTY_TAGS:
+                self.build_property(c, props)
+            elif c.tag == "default":
+                if not is_root:
+                    raise SceneError("<default> is only allowed directly inside the root element", c.loc)
+            elif c.tag in OP_TAGS:
+                raise SceneError(f"<{c.tag}> is a transform op and is only allowed inside <transform>",
+                                 c.loc)
+            else:
+                extra = ", or <default>" if is_root else ""
+                raise SceneError(f"unknown tag <{c.tag}> in <{el.tag}>; expected an object "
+                                 f"({_tags(OBJECT_TAGS)}) or a property ({_tags(PROPERTY_TAGS)}){extra}",
+                                 c.loc)
+        return spec
+
+    def no_children(self, el: _Elem) -> None:
+        if el.children:
+            c = el.children[0]
+            raise SceneError(f"<{c.tag}> cannot be nested in <{el.tag}>, which takes no nested elements",
+                             c.loc)
+
+    def build_property(self, el: _Elem, props: PropertyList) -> None:
+        if el.tag == "transform":
+            name = self.attrs(el, ("name",))["name"]
+            props.add(name, "transform", self.build_transform(el), el.loc)
+            return
+        a = self.attrs(el, ("name", "value"))
+        name, text = a["name"], a["value"]
+        value = self.value_of(el, el.tag, text)
+        if el.tag == "string" and name == "filename":
+            value = os.path.normpath(os.path.join(self.base_dir, value))
+        self.no_children(el)
+        props.add(name, el.tag, value, el.loc, raw=text)
+
+    def build_transform(self, el: _Elem) -> Transform:
+        result = Transform()
+        for op in el.children:
+            if op.tag not in OP_TAGS:
+                known = "" if op.tag in OBJECT_TAGS or op.tag in PROPERTY_TAGS else "unknown tag "
+                raise SceneError(f"{known}<{op.tag}> is not allowed in <transform>; expected one of "
+                                 f"{_tags(OP_TAGS)}", op.loc)
+            a = self.attrs(op, _OP_ATTRS[op.tag])
+            if op.tag == "translate":
+                step = Transform.translate(self.numbers(op, "value", a["value"], (3,)))
+            elif op.tag == "scale":
+                step = self.checked(op, Transform.scale, self.numbers(op, "value", a["value"], (3, 1)))
+            elif op.tag == "matrix":
+                step = self.checked(op, Transform.from_rows, self.numbers(op, "value", a["value"], (16,)))
+            elif op.tag == "rotate":
+                axis = self.numbers(op, "axis", a["axis"], (3,))
+                angle = self.one_float(op, "angle", a["angle"])
+                step = self.checked(op, Transform.rotate, axis, angle)
+            else:
+                vs = [self.numbers(op, k, a[k], (3,)) for k in ("origin", "target", "up")]
+                step = self.checked(op, Transform.lookat, *vs)
+            self.no_children(op)
+            result = step @ result  # Nori: each op is left-multiplied onto what came before
+        return result
+
+    @staticmethod
+    def checked(op: _Elem, fn, *args) -> Transform:
+        try:
+            return fn(*args)
+        except ValueError as e:
+            raise SceneError(f"<{op.tag}>: {e}", op.loc) from None
+
+
+# --------------------------------------------------------------------------------------------------
+# Public entry points
+# --------------------------------------------------------------------------------------------------
+def _parse_bytes(data: bytes, filename: str, defines, base_dir: str, force_encoding: str | None) -> PluginSpec:
+    data, declared, blanked = _prepare(data)
+    encoding = force_encoding or declared
+    src = _Source(data, filename, encoding)
+    root = _read_tree(src, encoding if (force_encoding or blanked) else None)
+    return _Builder(src, defines, base_dir).build_root(root)
+
+
+def parse_file(path, defines: Mapping[str, str] | None = None) -> PluginSpec:
+    """Parse a Nori XML file. ``defines`` fill ``$name`` in attribute values (overriding <default>)."""
+    path = os.fspath(path)
+    try:
+        with open(path, "rb") as f:
+            data = f.read()
+    except OSError as e:
+        raise SceneError(f"cannot read scene file '{path}': {e.strerror or e}") from None
+    return _parse_bytes(data, path, defines, os.path.dirname(os.path.abspath(path)), None)
+
+
+def parse_string(text: str | bytes, filename: str = "<string>", defines: Mapping[str, str] | None = None,
+                 base_dir: str | None = None) -> PluginSpec:
+    """Parse XML text. Relative filenames resolve against ``base_dir``, else the folder of
+    ``filename`` if that names a real path, else the current directory."""
+    if base_dir is None:
+        if filename.startswith("<"):
+            base_dir = os.getcwd()
+        else:
+            base_dir = os.path.dirname(os.path.abspath(filename))
+    if isinstance(text, str):
+        return _parse_bytes(text.encode("utf-8"), filename, defines, base_dir, "UTF-8")
+    return _parse_bytes(text, filename, defines, base_dir, None)

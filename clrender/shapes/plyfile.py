@@ -1,0 +1,188 @@
+"""Stanford PLY loading (ASCII and binary) into `MeshData`.
+
+The file format itself is decoded by trimesh's PLY reader; we take its raw element arrays (not the
+Trimesh object, which would reorder quads and may recompute normals) and apply our own semantics:
+vertex normals `nx ny nz` are kept exactly as stored, uvs come from `u v`, `s t` or `texture_u
+texture_v`, and polygons are fan-triangulated (0,1,2), (0,2,3), ... in file order, like OBJ faces.
+
+trimesh 5.2 cannot read *binary* files whose face lists have different lengths (it assumes every list
+has the length of the first one); those files are read by a small reader of our own instead.
+"""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from clrender.errors import SceneError, SourceLocation
+from clrender.shapes.meshdata import MeshData
+
+__all__ = ["load_ply"]
+
+_UV_NAMES = (("u", "v"), ("s", "t"), ("texture_u", "texture_v"), ("texture_s", "texture_t"))
+_INDEX_NAMES = ("vertex_indices", "vertex_index")
+
+
+def load_ply(path, location: SourceLocation | None = None) -> MeshData:
+    """Load a PLY mesh (object space). Errors name the PLY file, or `location` if it cannot be read."""
+    path = os.fspath(path)
+    try:
+        with open(path, "rb") as f:
+            data = f.read()
+    except OSError as e:
+        raise SceneError(f"cannot read PLY file '{path}': {e.strerror or e}", location) from None
+    here = SourceLocation(path)
+    if not data.startswith(b"ply"):
+        raise SceneError("not a PLY file (expected 'ply' on the first line)", here)
+
+    try:
+        vertex, polygons = _read_with_trimesh(data)
+    except _VariableLists:
+        vertex, polygons = _read_binary_variable(data, here)
+    except SceneError:
+        raise
+    except Exception as e:  # trimesh raises assorted types for malformed files
+        raise SceneError(f"cannot parse PLY file: {e}", here) from None
+
+    names = set(_field_names(vertex))
+    if not {"x", "y", "z"} <= names:
+        raise SceneError("PLY vertex element lacks x/y/z properties", here)
+    positions = np.column_stack([np.asarray(vertex[k], np.float64) for k in "xyz"])
+    normals = None
+    if {"nx", "ny", "nz"} <= names:
+        normals = np.column_stack([np.asarray(vertex[k], np.float64) for k in ("nx", "ny", "nz")])
+    uvs = None
+    for a, b in _UV_NAMES:
+        if a in names and b in names:
+            uvs = np.column_stack([np.asarray(vertex[a], np.float64), np.asarray(vertex[b], np.float64)])
+            break
+
+    faces = _fan(polygons, here)
+    if faces.shape[0] == 0:
+        raise SceneError("PLY file contains no faces", here)
+    if faces.min() < 0 or faces.max() >= positions.shape[0]:
+        raise SceneError(f"PLY face index out of range (the file has {positions.shape[0]} vertices)", here)
+    return MeshData(positions=positions, normals=normals, uvs=uvs, faces=faces)
+
+
+class _VariableLists(Exception):
+    pass
+
+
+def _field_names(element) -> list[str]:
+    if isinstance(element, dict):
+        return list(element.keys())
+    return list(element.dtype.names or ())
+
+
+def _read_with_trimesh(data: bytes):
+    """(vertex fields, list of polygon index arrays or an (F, k) array) from trimesh's raw elements."""
+    import io
+
+    from trimesh.exchange import ply as tply
+
+    try:
+        kwargs = tply.load_ply(io.BytesIO(data), fix_texture=False, skip_materials=True)
+    except ValueError as e:
+        # trimesh checks the byte count implied by the first list's length; a mismatch in a binary file
+        # usually means face lists of different lengths (see the module docstring).
+        if "unexpected length" in str(e) and b"format ascii" not in data[:200]:
+            raise _VariableLists from None
+        raise
+    elements = kwargs["metadata"]["_ply_raw"]
+    if "vertex" not in elements or elements["vertex"].get("data") is None:
+        raise ValueError("no vertex element")
+    vertex = elements["vertex"]["data"]
+    face = elements.get("face", {}).get("data")
+    if face is None:
+        return vertex, np.zeros((0, 3), np.int64)
+    for name in _INDEX_NAMES:
+        if name in _field_names(face):
+            lists = face[name]
+            break
+    else:
+        raise ValueError("face element has no vertex_indices list")
+    if isinstance(face, np.ndarray):
+        lists = lists["f1"]  # binary: ('f0' = list length, 'f1' = the indices)
+    return vertex, lists
+
+
+def _fan(polygons, here: SourceLocation) -> np.ndarray:
+    arr = np.asarray(polygons) if not isinstance(polygons, list) else None
+    if arr is not None and arr.dtype != object and arr.ndim == 2:
+        k = arr.shape[1]
+        if k < 3:
+            raise SceneError(f"PLY face has {k} vertices (expected at least 3)", here)
+        j = np.arange(1, k - 1)
+        tri = np.stack([np.broadcast_to(arr[:, :1], (arr.shape[0], k - 2)), arr[:, j], arr[:, j + 1]],
+                       axis=2)
+        return tri.reshape(-1, 3).astype(np.int64)
+    out = []
+    for poly in polygons:
+        poly = np.asarray(poly, np.int64).reshape(-1)
+        if poly.size < 3:
+            raise SceneError(f"PLY face has {poly.size} vertices (expected at least 3)", here)
+        j = np.arange(1, poly.size - 1)
+        out.append(np.stack([np.full(j.size, poly[0]), poly[j], poly[j + 1]], axis=1))
+    return np.concatenate(out) if out else np.zeros((0, 3), np.int64)
+
+
+_PLY_TYPES = {
+    "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1",
+    "short": "i2", "int16": "i2", "ushort": "u2", "uint16": "u2",
+    "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
+    "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
+}
+
+
+def _read_binary_variable(data: bytes, here: SourceLocation):
+    """Binary PLY whose list properties vary in length: walk the elements record by record."""
+    end = data.find(b"end_header")
+    if end < 0:
+        raise SceneError("PLY header has no end_header", here)
+    body_start = data.index(b"\n", end) + 1
+    endian = "<"
+    elements: list[tuple[str, int, list]] = []
+    for raw in data[:end].decode("ascii", "replace").splitlines():
+        tok = raw.split()
+        if not tok:
+            continue
+        if tok[0] == "format":
+            endian = ">" if "big" in tok[1] else "<"
+        elif tok[0] == "element":
+            elements.append((tok[1], int(tok[2]), []))
+        elif tok[0] == "property" and elements:
+            if tok[1] == "list":
+                elements[-1][2].append((tok[4], _PLY_TYPES[tok[2]], _PLY_TYPES[tok[3]]))
+            else:
+                elements[-1][2].append((tok[2], _PLY_TYPES[tok[1]], None))
+    buf = memoryview(data)
+    off = body_start
+    vertex = None
+    polygons: list = []
+    for name, count, props in elements:
+        if all(p[2] is None for p in props):
+            dt = np.dtype([(p[0], endian + p[1]) for p in props])
+            rec = np.frombuffer(buf, dtype=dt, count=count, offset=off)
+            off += dt.itemsize * count
+            if name == "vertex":
+                vertex = rec
+            continue
+        lists: dict[str, list] = {p[0]: [] for p in props if p[2] is not None}
+        for _ in range(count):
+            for pname, t1, t2 in props:
+                if t2 is None:
+                    off += np.dtype(t1).itemsize
+                    continue
+                n = int(np.frombuffer(buf, endian + t1, 1, off)[0])
+                off += np.dtype(t1).itemsize
+                lists[pname].append(np.frombuffer(buf, endian + t2, n, off))
+                off += np.dtype(t2).itemsize * n
+        if name == "face":
+            for iname in _INDEX_NAMES:
+                if iname in lists:
+                    polygons = lists[iname]
+                    break
+    if vertex is None:
+        raise SceneError("PLY file has no vertex element", here)
+    return vertex, polygons

@@ -1,0 +1,29 @@
+"""Shared by the mesh plugins: load, bake into world space, drop degenerate triangles."""
+from __future__ import annotations
+
+import logging
+
+from ..errors import SceneError
+from ..scene.transform import Transform
+from .shape import Shape
+
+log = logging.getLogger("clrender")
+
+
+class TriangleMesh(Shape):
+    is_sphere = False
+
+    def _load(self, props, children, spec, loader):
+        filename = props.get_string("filename")
+        to_world: Transform = props.get_transform("toWorld")
+        mesh = loader(filename, props.location("filename"))
+        mesh = mesh.transformed(to_world.matrix)
+        mesh, dropped = mesh.drop_degenerate()
+        if dropped:
+            log.warning("%s: dropped %d degenerate triangle(s) of %s", spec.location, dropped, filename)
+        if len(mesh.faces) == 0:
+            raise SceneError(f"mesh '{filename}' has no non-degenerate triangles", spec.location)
+        self.mesh = mesh
+        self.filename = filename
+        self.dropped = dropped
+        self._attach(children, spec)

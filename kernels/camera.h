@@ -1,0 +1,29 @@
+/* Nori's perspective camera (as its perspective.cpp computes it): looks down +z in camera space, horizontal
+   field of view, pixel (0,0) at the top left, camera +x towards the image's right and +y up. Nori's lookat
+   puts camera +x on the viewer's left, so Nori scenes put <scale value="-1,1,1"/> before <lookat> to get an
+   unmirrored image; we honour whatever the scene says, literally. */
+#ifndef CLRENDER_CAMERA_H
+#define CLRENDER_CAMERA_H
+#include "math.h"
+
+typedef struct { float3 o; float3 d; float tmin; float tmax; } Ray;
+
+/* (sx, sy): position on the film in pixels (0..width, 0..height). */
+INLINE Ray camera_ray(__global const Camera* cam, float sx, float sy) {
+    float nx = sx / (float)cam->width, ny = sy / (float)cam->height;
+    float t = cam->tan_half_fov;
+    float3 dc = (float3)((2.0f * nx - 1.0f) * t, (1.0f - 2.0f * ny) * t * cam->inv_aspect, 1.0f);
+    float inv_len = 1.0f / len3(dc);
+    dc *= inv_len;
+    float3 X = cam->to_world[0].xyz, Y = cam->to_world[1].xyz, Z = cam->to_world[2].xyz;
+    float3 dw = X * dc.x + Y * dc.y + Z * dc.z;
+    float scale = len3(dw); /* a scaled toWorld stretches distances: keep the clip planes where Nori has them */
+    Ray r;
+    r.o = cam->to_world[3].xyz;
+    r.d = dw * (1.0f / scale);
+    r.tmin = cam->near_clip / dc.z * scale;
+    r.tmax = cam->far_clip / dc.z * scale;
+    return r;
+}
+
+#endif

@@ -1,0 +1,64 @@
+/* Reconstruction filters, applied by filter importance sampling: each camera sample is placed at an offset
+   (dx, dy) from its pixel's centre drawn from a tabulated density p(x)p(y) ~ |f(x)||f(y)|, and carries the
+   weight f(dx)f(dy) / (p(dx)p(dy)). The film divides sum(w L) by sum(w), so a pixel converges to
+   integral f L / integral f: the same limit as Nori's splatting of uniformly placed samples, except near the
+   image border, where Nori's samples stop at the border and ours keep to the filter's footprint. */
+#ifndef CLRENDER_FILTER_H
+#define CLRENDER_FILTER_H
+#include "math.h"
+
+INLINE float filter_eval_1d(__global const Camera* cam, float x) {
+    float r = cam->filter_radius;
+    float ax = fabs(x);
+    if (ax > r) return 0.0f;
+    switch (cam->filter_type) {
+    case FILTER_BOX: return 1.0f;
+    case FILTER_TENT: return maxf(0.0f, 1.0f - ax / r);
+    case FILTER_GAUSSIAN: {
+        float s = cam->filter_p0;
+        return maxf(0.0f, exp(-x * x / (2.0f * s * s)) - cam->filter_p2);
+    }
+    case FILTER_MITCHELL: {
+        float B = cam->filter_p0, C = cam->filter_p1;
+        float t = 2.0f * ax / r; /* Mitchell-Netravali is defined on [-2, 2] */
+        float t2 = t * t, t3 = t2 * t;
+        if (t < 1.0f)
+            return ((12.0f - 9.0f * B - 6.0f * C) * t3 + (-18.0f + 12.0f * B + 6.0f * C) * t2 + (6.0f - 2.0f * B)) * (1.0f / 6.0f);
+        if (t < 2.0f)
+            return ((-B - 6.0f * C) * t3 + (6.0f * B + 30.0f * C) * t2 + (-12.0f * B - 48.0f * C) * t + (8.0f * B + 24.0f * C)) * (1.0f / 6.0f);
+        return 0.0f;
+    }
+    }
+    return 0.0f;
+}
+
+/* Draw x in [-r, r] from the piecewise-constant table (cdf has bins+1 entries, cdf[0]=0, cdf[bins]=1).
+   Returns x; *pdf receives its density. */
+INLINE float filter_sample_1d(__global const Camera* cam, __global const float* cdf, float u, float* pdf) {
+    uint n = cam->filter_bins;
+    uint lo = 0u, hi = n; /* find the bin i with cdf[i] <= u < cdf[i+1] */
+    while (hi - lo > 1u) {
+        uint mid = (lo + hi) >> 1;
+        if (cdf[mid] <= u) lo = mid; else hi = mid;
+    }
+    float c0 = cdf[lo], c1 = cdf[lo + 1u];
+    float pm = c1 - c0;
+    float frac = pm > 0.0f ? (u - c0) / pm : 0.5f;
+    frac = clampf(frac, 0.0f, 0.99999994f);
+    float r = cam->filter_radius;
+    float width = 2.0f * r / (float)n;
+    *pdf = pm / width;
+    return -r + ((float)lo + frac) * width;
+}
+
+/* An offset from the pixel centre and the sample's filter weight. */
+INLINE float2 filter_sample(__global const Camera* cam, __global const float* cdf, float2 u, float* weight) {
+    float px, py;
+    float dx = filter_sample_1d(cam, cdf, u.x, &px);
+    float dy = filter_sample_1d(cam, cdf, u.y, &py);
+    float w = (filter_eval_1d(cam, dx) / px) * (filter_eval_1d(cam, dy) / py);
+    *weight = (px > 0.0f && py > 0.0f) ? w : 0.0f;
+    return (float2)(dx, dy);
+}
+
+#endif

@@ -1,0 +1,45 @@
+/* Kernel entry points. The integrator is chosen at build time: the host passes -DINTEGRATOR=<name> and we
+   include kernels/integrators/<name>.h, which defines Li(scene, ray, sampler). */
+#include "math.h"
+#include "rng.h"
+#include "camera.h"
+#include "filter.h"
+#include "scene.h"
+
+#define STR_(x) #x
+#define STR(x) STR_(x)
+#define INTEGRATOR_HEADER(name) STR(integrators/name.h)
+#include INTEGRATOR_HEADER(INTEGRATOR)
+
+/* One pass: `spp` samples for each of `pixel_count` pixels starting at `pixel_offset`. Each work-item owns
+   one pixel, so accumulation needs no atomics. Per pixel: acc0 = (sum wL, sum w), acc1 = (sum (wL)^2, n),
+   bad = samples dropped for being NaN/Inf. */
+__kernel void render_pass(SCENE_ARGS, __global const Camera* cam, __global const float* filter_cdf,
+                          __global float4* acc0, __global float4* acc1, __global uint* bad,
+                          uint pixel_offset, uint pixel_count, uint sample_offset, uint spp, uint seed) {
+    uint gid = get_global_id(0);
+    if (gid >= pixel_count) return;
+    SCENE_INIT(sd);
+    uint pix = pixel_offset + gid;
+    uint px = pix % cam->width, py = pix / cam->width;
+    float3 swl = (float3)(0.0f), swl2 = (float3)(0.0f);
+    float sw = 0.0f;
+    uint nbad = 0u;
+    for (uint s = 0u; s < spp; ++s) {
+        Sampler smp;
+        sampler_init(&smp, seed, pix, sample_offset + s);
+        float w;
+        float2 off = filter_sample(cam, filter_cdf, next2d(&smp), &w);
+        Ray ray = camera_ray(cam, (float)px + 0.5f + off.x, (float)py + 0.5f + off.y);
+        float3 L = Li(&sd, ray, &smp);
+        if (!all_finite(L) || !isfinite(w)) { nbad += 1u; continue; }
+        float3 wl = L * w;
+        swl += wl;
+        swl2 += wl * wl;
+        sw += w;
+    }
+    float4 a0 = acc0[pix], a1 = acc1[pix];
+    acc0[pix] = (float4)(a0.xyz + swl, a0.w + sw);
+    acc1[pix] = (float4)(a1.xyz + swl2, a1.w + (float)(spp - nbad));
+    bad[pix] += nbad;
+}

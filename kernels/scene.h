@@ -1,0 +1,108 @@
+/* The scene as the kernels see it: the packed tables (see clrender/pack.py), ray queries against the BVH,
+   and the surface record of a hit. */
+#ifndef CLRENDER_SCENE_H
+#define CLRENDER_SCENE_H
+#include "math.h"
+#include "frame.h"
+#include "camera.h"
+#include "bvh.h"
+
+typedef struct {
+    __global const float4* nodes;
+    __global const float4* prims;
+    __global const float4* positions;   /* per vertex, xyz */
+    __global const float4* normals;     /* per vertex, xyz (meshes with SHAPE_HAS_NORMALS) */
+    __global const float2* uvs;         /* per vertex (meshes with SHAPE_HAS_UVS) */
+    __global const uint4* tri_index;    /* i0, i1, i2, shape */
+    __global const float4* spheres;     /* centre xyz, radius */
+    __global const uint* sphere_shape;
+    __global const Shape* shapes;
+    __global const Bsdf* bsdfs;
+    __global const Emitter* emitters;
+    __global const float* emitter_cdf;  /* area emitters' triangle CDFs, back to back */
+    __global const SceneInfo* info;
+} SceneData;
+
+/* The kernel-argument list of a scene, and the code that gathers it into a SceneData. Every kernel entry
+   point that needs the scene takes SCENE_ARGS first, so the host sets them the same way everywhere. */
+#define SCENE_ARGS \
+    __global const float4* s_nodes, __global const float4* s_prims, __global const float4* s_positions, \
+    __global const float4* s_normals, __global const float2* s_uvs, __global const uint4* s_tri_index, \
+    __global const float4* s_spheres, __global const uint* s_sphere_shape, __global const Shape* s_shapes, \
+    __global const Bsdf* s_bsdfs, __global const Emitter* s_emitters, __global const float* s_emitter_cdf, \
+    __global const SceneInfo* s_info
+#define SCENE_INIT(sd) \
+    SceneData sd; \
+    sd.nodes = s_nodes; sd.prims = s_prims; sd.positions = s_positions; sd.normals = s_normals; \
+    sd.uvs = s_uvs; sd.tri_index = s_tri_index; sd.spheres = s_spheres; sd.sphere_shape = s_sphere_shape; \
+    sd.shapes = s_shapes; sd.bsdfs = s_bsdfs; sd.emitters = s_emitters; sd.emitter_cdf = s_emitter_cdf; \
+    sd.info = s_info
+
+typedef struct {
+    float3 p;        /* hit point */
+    float3 ng;       /* geometric normal (triangle winding / sphere outward) */
+    Frame sh;        /* shading frame, z = interpolated shading normal */
+    float2 uv;
+    float t;
+    uint shape;
+    uint tri;        /* triangle id, or NONE for spheres */
+} Intersection;
+
+#define SPHERE_FLAG 0x80000000u
+
+INLINE bool scene_intersect(const SceneData* sd, const Ray* r, Intersection* its) {
+    Hit h;
+    if (!bvh_closest_hit(sd->nodes, sd->prims, r->o, r->d, r->tmin, r->tmax, &h)) return false;
+    its->t = h.t;
+    if (h.prim & SPHERE_FLAG) {
+        uint j = h.prim & ~SPHERE_FLAG;
+        float4 s = sd->spheres[j];
+        float3 p = r->o + r->d * h.t;
+        float3 n = normalize3(p - s.xyz);
+        its->p = s.xyz + n * s.w; /* re-project: the hit point lies on the sphere to float precision */
+        its->ng = n;
+        its->sh = frame_from_normal(n);
+        float u = atan2(n.y, n.x) * INV_TWOPI;
+        its->uv = (float2)(u < 0.0f ? u + 1.0f : u, acos(clampf(n.z, -1.0f, 1.0f)) * INV_PI);
+        its->shape = sd->sphere_shape[j];
+        its->tri = NONE;
+        return true;
+    }
+    uint4 idx = sd->tri_index[h.prim];
+    float b0 = 1.0f - h.u - h.v;
+    float3 p0 = sd->positions[idx.x].xyz, p1 = sd->positions[idx.y].xyz, p2 = sd->positions[idx.z].xyz;
+    its->p = p0 * b0 + p1 * h.u + p2 * h.v;
+    float3 ng = normalize3(cross3(p1 - p0, p2 - p0));
+    its->ng = ng;
+    uint flags = sd->shapes[idx.w].flags;
+    float3 ns = ng;
+    if (flags & SHAPE_HAS_NORMALS) {
+        float3 n = sd->normals[idx.x].xyz * b0 + sd->normals[idx.y].xyz * h.u + sd->normals[idx.z].xyz * h.v;
+        float l2 = dot3(n, n);
+        if (l2 > 0.0f) ns = n * (1.0f / sqrt(l2));
+    }
+    its->sh = frame_from_normal(ns);
+    if (flags & SHAPE_HAS_UVS)
+        its->uv = sd->uvs[idx.x] * b0 + sd->uvs[idx.y] * h.u + sd->uvs[idx.z] * h.v;
+    else
+        its->uv = (float2)(h.u, h.v);
+    its->shape = idx.w;
+    its->tri = h.prim;
+    return true;
+}
+
+INLINE bool scene_occluded(const SceneData* sd, float3 o, float3 d, float tmin, float tmax) {
+    return bvh_any_hit(sd->nodes, sd->prims, o, d, tmin, tmax);
+}
+
+/* A ray leaving p along d, offset so it does not re-hit its own surface. */
+INLINE Ray spawn_ray(float3 p, float3 d) {
+    Ray r;
+    r.o = p;
+    r.d = d;
+    r.tmin = ray_eps(p);
+    r.tmax = INFINITY;
+    return r;
+}
+
+#endif

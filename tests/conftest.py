@@ -1,0 +1,25 @@
+import os
+from pathlib import Path
+
+import pytest
+
+# Keep PoCL's kernel cache inside the work tree (CI, and so tests never touch ~/.cache).
+os.environ.setdefault("POCL_CACHE_DIR", str(Path(__file__).resolve().parents[1] / ".pocl-cache"))
+
+
+@pytest.fixture(scope="session")
+def cl_env():
+    """(context, queue) on the default device (PoCL CPU)."""
+    from clrender.device.context import get_context
+
+    return get_context(None)
+
+
+@pytest.fixture(scope="session")
+def ctx(cl_env):
+    return cl_env[0]
+
+
+@pytest.fixture(scope="session")
+def queue(cl_env):
+    return cl_env[1]
