@@ -18,7 +18,7 @@ def load_scene(path, **defines):
 
 def render(scene, spp=None, seed=0, device=None, time_limit=None, progress=False):
     """Render a loaded scene on an OpenCL device and return its Film."""
-    from .render import render as _render
+    from .renderer import render as _render
 
     return _render(scene, spp=spp, seed=seed, device=device, time_limit=time_limit, progress=progress)
 

@@ -23,7 +23,7 @@ def _defines(items):
 def cmd_render(args) -> int:
     from .film import Film  # noqa: F401
     from .loader import load_scene
-    from .render import Interrupted, Renderer
+    from .renderer import Interrupted, Renderer
 
     t0 = time.perf_counter()
     scene = load_scene(args.scene, **_defines(args.define))

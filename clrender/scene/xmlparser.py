@@ -216,23 +216,29 @@ class _Builder:
 
         return _VAR.sub(replace, value)
 
+    @staticmethod
+    def _describe(el) -> str:
+        name = el.attrs.get("name")
+        return f'<{el.tag} name="{name}">' if name else f"<{el.tag}>"
+
     # --- values ---------------------------------------------------------------------------------
     def numbers(self, el: _Elem, attr: str, text: str, counts: tuple[int, ...] | None = None) -> np.ndarray:
+        tag = self._describe(el)
         tokens = [t for t in _NUM_SPLIT.split(text.strip()) if t]
         if not tokens:
-            raise SceneError(f"attribute {attr}=\"{text}\" of <{el.tag}> is empty; expected numbers "
+            raise SceneError(f"attribute {attr}=\"{text}\" of {tag} is empty; expected numbers "
                              f"separated by commas and/or spaces", self.attr_loc(el, attr))
         values = []
         for t in tokens:
             try:
                 values.append(float(t))
             except ValueError:
-                raise SceneError(f"bad number '{t}' in attribute {attr}=\"{text}\" of <{el.tag}>; "
+                raise SceneError(f"bad number '{t}' in attribute {attr}=\"{text}\" of {tag}; "
                                  f"expected numbers separated by commas and/or spaces",
                                  self.attr_loc(el, attr)) from None
         if counts is not None and len(values) not in counts:
             want = " or ".join(str(c) for c in counts)
-            raise SceneError(f"attribute {attr}=\"{text}\" of <{el.tag}> needs {want} "
+            raise SceneError(f"attribute {attr}=\"{text}\" of {tag} needs {want} "
                              f"number{'s' if counts != (1,) else ''}, got {len(values)}",
                              self.attr_loc(el, attr))
         return np.array(values, dtype=np.float64)

@@ -1,0 +1,428 @@
+"""BVH build invariants on the host, and kernels/bvh.h traversal against a float64 brute-force reference."""
+import numpy as np
+import pytest
+
+from clrender.accel.bvh import LEAF_FLAG, build_bvh
+from clrender.accel.primitives import SPHERE_FLAG, pack_primitives, primitive_bounds
+
+LOCAL = 64
+
+TRACE_SRC = r"""
+#include "bvh.h"
+/* org.w = tmin, dir.w = tmax. out = (t, u, v, found); prim = id word or ~0; any = any-hit flag. */
+__kernel void trace(__global const float4* nodes, __global const float4* prims, __global const float4* org,
+                    __global const float4* dir, uint n, __global float4* out, __global uint* prim,
+                    __global int* any) {
+    uint i = get_global_id(0);
+    if (i >= n) return;   /* the global size is padded to a multiple of the local size */
+    float4 o = org[i], d = dir[i];
+    Hit h;
+    bool f = bvh_closest_hit(nodes, prims, o.xyz, d.xyz, o.w, d.w, &h);
+    out[i] = f ? (float4)(h.t, h.u, h.v, 1.0f) : (float4)(0.0f);
+    prim[i] = f ? h.prim : 0xffffffffu;
+    any[i] = bvh_any_hit(nodes, prims, o.xyz, d.xyz, o.w, d.w) ? 1 : 0;
+}
+"""
+
+
+# ---------------------------------------------------------------------------------------------- scenes
+def random_soup(rng, n, spread=1.0, size=0.3):
+    c = rng.uniform(-spread, spread, (n, 1, 3))
+    v = c + rng.normal(0, size, (n, 3, 3))
+    return v[:, 0], v[:, 1], v[:, 2]
+
+
+def random_spheres(rng, n, spread=1.0):
+    s = np.empty((n, 4))
+    s[:, :3] = rng.uniform(-spread, spread, (n, 3))
+    s[:, 3] = rng.uniform(0.05, 0.4, n)
+    return s
+
+
+def icosphere(level, radius=1.0):
+    t = (1 + 5 ** 0.5) / 2
+    verts = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
+             (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    faces = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
+             (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11),
+             (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    v = np.array(verts, float)
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    tri = v[np.array(faces)]                                    # (F, 3, 3)
+    for _ in range(level):
+        a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+        ab, bc, ca = [(x + y) / np.linalg.norm(x + y, axis=1, keepdims=True) for x, y in ((a, b), (b, c), (c, a))]
+        tri = np.concatenate([np.stack(f, 1) for f in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
+    tri = tri * radius
+    return tri[:, 0], tri[:, 1], tri[:, 2]
+
+
+def random_rays(rng, n, spread=1.5, zero_components=False):
+    o = rng.uniform(-spread, spread, (n, 3))
+    d = rng.normal(size=(n, 3)) * rng.uniform(0.1, 10.0, (n, 1))     # deliberately not normalised
+    if zero_components:
+        # Axis-aligned rays: one or two exact zeros (including -0.0) per direction.
+        k = rng.integers(1, 3, n)
+        for i in range(n):
+            ax = rng.choice(3, k[i], replace=False)
+            d[i, ax] = rng.choice([0.0, -0.0], k[i])
+    tmin = np.where(rng.random(n) < 0.5, 0.0, rng.uniform(0, 0.5, n))
+    tmax = np.where(rng.random(n) < 0.5, np.inf, rng.uniform(0.1, 3.0, n))
+    return o, d, tmin, tmax
+
+
+# ------------------------------------------------------------------------------------------- reference
+def reference(prims, o, d, tmin, tmax):
+    """Brute-force closest hit in float64 over the packed primitive table (any order).
+
+    Returns (t, id word, u, v, ambiguous, tie): ambiguous rays are those whose answer float32 rounding may
+    legitimately change (grazing an edge or sphere silhouette, a hit at tmin/tmax, an ill-conditioned hit);
+    tie marks rays whose two nearest hits are too close to tell which primitive is first.
+    """
+    P = prims.reshape(-1, 3, 4).astype(np.float64)
+    ids = prims.reshape(-1, 3, 4)[:, 0, 3].view(np.uint32)
+    sph = (ids & SPHERE_FLAG) != 0
+    o, d = o.astype(np.float32).astype(np.float64), d.astype(np.float32).astype(np.float64)
+    tmin, tmax = tmin.astype(np.float32).astype(np.float64), tmax.astype(np.float32).astype(np.float64)
+    tri_i, sph_i = np.nonzero(~sph)[0], np.nonzero(sph)[0]
+    with np.errstate(all="ignore"):   # degenerate pairs give inf/nan on purpose; the masks drop them
+        return _reference(P, ids, tri_i, sph_i, o, d, tmin, tmax)
+
+
+def _reference(P, ids, tri_i, sph_i, o, d, tmin, tmax):
+    R = len(o)
+    best_t = np.full(R, np.inf)
+    best_id = np.full(R, 0xFFFFFFFF, np.uint32)
+    best_u = np.zeros(R)
+    best_v = np.zeros(R)
+    flag_t = np.full(R, np.inf)          # smallest t among pairs whose outcome is uncertain
+    second_t = np.full(R, np.inf)        # for ties: the second-best accepted t
+    R = len(o)
+    chunk = max(1, 400_000 // max(1, len(P)))
+    for r0 in range(0, R, chunk):
+        sl = slice(r0, min(R, r0 + chunk))
+        oo, dd = o[sl, None, :], d[sl, None, :]
+        lo_t, hi_t = tmin[sl, None], tmax[sl, None]
+        tol = lambda t: 1e-4 * np.maximum(1.0, np.abs(t))  # noqa: E731
+        cand_t, cand_u, cand_v, cand_id, cand_flag = [], [], [], [], []
+        if len(tri_i):
+            v0, e1, e2 = P[tri_i, 0, :3][None], P[tri_i, 1, :3][None], P[tri_i, 2, :3][None]
+            p = np.cross(dd, e2)
+            det = np.sum(e1 * p, -1)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                inv = 1.0 / det
+                s = oo - v0
+                u = np.sum(s * p, -1) * inv
+                q = np.cross(s, e1)
+                v = np.sum(dd * q, -1) * inv
+                t = np.sum(e2 * q, -1) * inv
+            margin = np.minimum(np.minimum(u, v), 1 - u - v)
+            ok = (det != 0) & (margin >= 0) & (t > lo_t) & (t < hi_t)
+            scale = np.linalg.norm(dd, axis=-1) * np.linalg.norm(e1, axis=-1) * np.linalg.norm(e2, axis=-1)
+            near = (det != 0) & (margin > -1e-4) & (t > lo_t - tol(lo_t)) & (t < hi_t + tol(t))
+            shaky = near & ((margin < 1e-4) | (np.abs(t - lo_t) < tol(lo_t)) | (np.abs(t - hi_t) < tol(t))
+                            | (np.abs(det) < 1e-4 * scale))
+            cand_t.append(np.where(ok, t, np.inf)); cand_u.append(u); cand_v.append(v)
+            cand_id.append(np.broadcast_to(ids[tri_i][None], t.shape)); cand_flag.append(np.where(shaky, t, np.inf))
+        if len(sph_i):
+            c, r = P[sph_i, 0, :3][None], P[sph_i, 1, 0][None]
+            f = oo - c
+            a = np.sum(dd * dd, -1)
+            b = np.sum(f * dd, -1)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                l2 = np.sum((f - (b / a)[..., None] * dd) ** 2, -1)
+                disc = a * (r * r - l2)
+                sq = np.sqrt(np.maximum(disc, 0))
+                t0, t1 = (-b - sq) / a, (-b + sq) / a
+            hit = disc >= 0
+            ok0 = hit & (t0 > lo_t) & (t0 < hi_t)
+            ok1 = hit & (t1 > lo_t) & (t1 < hi_t)
+            t = np.where(ok0, t0, np.where(ok1, t1, np.inf))
+            graze = np.abs(r * r - l2) < 1e-4 * r * r
+            bound = hit & ((np.abs(t0 - lo_t) < tol(lo_t)) | (np.abs(t1 - lo_t) < tol(lo_t))
+                           | (np.abs(t0 - hi_t) < tol(t0)) | (np.abs(t1 - hi_t) < tol(t1)))
+            fl = np.where(bound, np.minimum(np.abs(t0), np.abs(t1)), np.inf)
+            fl = np.where(graze, np.where(np.isfinite(-b / a), np.abs(-b / a), np.inf), fl)
+            cand_t.append(t); cand_u.append(np.zeros_like(t)); cand_v.append(np.zeros_like(t))
+            cand_id.append(np.broadcast_to(ids[sph_i][None], t.shape)); cand_flag.append(fl)
+        if not cand_t:
+            continue
+        T = np.concatenate(cand_t, 1)
+        U, V = np.concatenate(cand_u, 1), np.concatenate(cand_v, 1)
+        I, FL = np.concatenate(cand_id, 1), np.concatenate(cand_flag, 1)
+        k = np.argmin(T, axis=1)
+        rows = np.arange(T.shape[0])
+        best_t[sl], best_id[sl] = T[rows, k], I[rows, k]
+        best_u[sl], best_v[sl] = U[rows, k], V[rows, k]
+        T2 = T.copy()
+        T2[rows, k] = np.inf
+        second_t[sl] = T2.min(axis=1)
+        flag_t[sl] = FL.min(axis=1)
+    best_id[~np.isfinite(best_t)] = 0xFFFFFFFF
+    amb = np.isfinite(flag_t) & (flag_t <= np.where(np.isfinite(best_t),
+                                                    best_t + 1e-3 * np.maximum(1, np.abs(best_t)), np.inf))
+    with np.errstate(invalid="ignore"):
+        tie = second_t - best_t <= 1e-4 * np.maximum(1, np.abs(best_t))
+    return best_t, best_id, best_u, best_v, amb, tie
+
+
+# ---------------------------------------------------------------------------------------------- device
+@pytest.fixture(scope="module")
+def trace_kernel(ctx):
+    import pyopencl as cl
+
+    from clrender.device.program import build_program
+
+    prg = build_program(ctx, TRACE_SRC, with_types=False)
+    return cl.Kernel(prg, "trace")
+
+
+def device_trace(ctx, queue, kernel, bvh, prims, o, d, tmin, tmax):
+    import pyopencl as cl
+
+    R = len(o)
+    G = max(LOCAL, -(-R // LOCAL) * LOCAL)
+    org = np.zeros((G, 4), np.float32)
+    dir_ = np.zeros((G, 4), np.float32)
+    org[:R, :3], org[:R, 3] = o, tmin
+    dir_[:R, :3], dir_[:R, 3] = d, tmax
+    if len(prims) == 0:
+        prims = np.zeros((3, 4), np.float32)    # OpenCL has no zero-size buffers
+    mf = cl.mem_flags
+    buf = lambda a: cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(a))  # noqa
+    out = np.zeros((G, 4), np.float32)
+    prim = np.zeros(G, np.uint32)
+    any_ = np.zeros(G, np.int32)
+    b_out = cl.Buffer(ctx, mf.WRITE_ONLY, out.nbytes)
+    b_prim = cl.Buffer(ctx, mf.WRITE_ONLY, prim.nbytes)
+    b_any = cl.Buffer(ctx, mf.WRITE_ONLY, any_.nbytes)
+    kernel(queue, (G,), (LOCAL,), buf(bvh.nodes), buf(prims), buf(org), buf(dir_), np.uint32(R),
+           b_out, b_prim, b_any)
+    cl.enqueue_copy(queue, out, b_out)
+    cl.enqueue_copy(queue, prim, b_prim)
+    cl.enqueue_copy(queue, any_, b_any)
+    return out[:R], prim[:R], any_[:R]
+
+
+def build_scene(v0, v1, v2, spheres, **kw):
+    lo, hi = primitive_bounds(v0, v1, v2, spheres)
+    bvh = build_bvh(lo, hi, **kw)
+    return bvh, pack_primitives(v0, v1, v2, spheres, bvh.order)
+
+
+def check_trace(ctx, queue, kernel, v0, v1, v2, spheres, o, d, tmin, tmax, max_ambiguous=0.02, **kw):
+    bvh, prims = build_scene(v0, v1, v2, spheres, **kw)
+    check_invariants(bvh, *primitive_bounds(v0, v1, v2, spheres), kw.get("max_leaf_size", 4))
+    out, prim, any_ = device_trace(ctx, queue, kernel, bvh, prims, o, d, tmin, tmax)
+    ref_prims = pack_primitives(v0, v1, v2, spheres, np.arange(bvh.order.size))
+    t, pid, u, v, amb, tie = reference(ref_prims, o, d, tmin, tmax)
+    found = out[:, 3] > 0
+    ref_found = np.isfinite(t)
+    assert amb.mean() <= max_ambiguous, f"too many ambiguous rays ({amb.mean():.3f}); test scene is badly chosen"
+    ok = ~amb
+    bad = ok & (found != ref_found)
+    assert not bad.any(), f"{bad.sum()} rays disagree on hit/miss, e.g. ray {np.nonzero(bad)[0][:5]}"
+    both = ok & found
+    tol = 1e-4 * np.maximum(1.0, np.abs(t[both]))
+    err = np.abs(out[both, 0] - t[both])
+    assert (err <= tol).all(), f"t differs by up to {err.max()}"
+    same = both & ~tie
+    assert np.array_equal(prim[same], pid[same]), f"{(prim[same] != pid[same]).sum()} rays hit the wrong primitive"
+    trih = same & ((pid & SPHERE_FLAG) == 0)
+    assert np.allclose(out[trih, 1], u[trih], atol=1e-3) and np.allclose(out[trih, 2], v[trih], atol=1e-3)
+    assert np.array_equal(any_[ok].astype(bool), ref_found[ok]), "any-hit disagrees with closest-hit presence"
+    # Whatever the ambiguity, the kernel must agree with itself.
+    assert np.array_equal(any_.astype(bool), found) or (any_.astype(bool) != found)[~amb].sum() == 0
+    return found, ref_found
+
+
+# -------------------------------------------------------------------------------------- host invariants
+def check_invariants(bvh, lo, hi, max_leaf):
+    N = len(lo)
+    assert np.array_equal(np.sort(bvh.order), np.arange(N)), "order is not a permutation"
+    nodes = bvh.nodes.reshape(-1, 4, 4)
+    assert len(nodes) == bvh.node_count
+    w = nodes.view(np.uint32)[:, :, 3]
+    slo = nodes[:, [0, 2], :3]                                    # (K, 2, 3)
+    shi = nodes[:, [1, 3], :3]
+    ref, cnt = w[:, [0, 2]], w[:, [1, 3]]
+    leaf = (ref & LEAF_FLAG) != 0
+    inner = ~leaf
+    assert (cnt[inner] == 0).all()
+    kids = ref[inner].astype(np.int64)
+    assert ((kids > 0) & (kids < bvh.node_count)).all()
+    # Every non-root node is referenced exactly once: the references form a tree.
+    assert np.array_equal(np.sort(kids), np.arange(1, bvh.node_count))
+    first = (ref[leaf] & ~np.uint32(LEAF_FLAG)).astype(np.int64)
+    count = cnt[leaf].astype(np.int64)
+    assert (count <= max_leaf).all(), f"leaf of {count.max()} > {max_leaf}"
+    # Leaf ranges tile [0, N) exactly once.
+    cover = np.zeros(N + 1, np.int64)
+    np.add.at(cover, first[count > 0], 1)
+    np.add.at(cover, (first + count)[count > 0], -1)
+    assert (np.cumsum(cover)[:N] == 1).all(), "leaf ranges do not cover every primitive exactly once"
+    # Leaf boxes hold their primitives; interior boxes hold both boxes of the child node.
+    pl, ph = lo[bvh.order], hi[bvh.order]
+    leaf_slot = np.repeat(np.arange(leaf.sum()), count)
+    pos = np.repeat(first, count) + (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count))
+    assert (slo[leaf][leaf_slot] <= pl[pos]).all() and (shi[leaf][leaf_slot] >= ph[pos]).all()
+    clo, chi = slo[kids].min(axis=1), shi[kids].max(axis=1)
+    assert (slo[inner] <= clo).all() and (shi[inner] >= chi).all(), "a child box sticks out of its parent's slot"
+    assert bvh.depth <= 64
+
+
+@pytest.mark.parametrize("n", [0, 1, 2, 3, 5, 33, 100, 2000])
+@pytest.mark.parametrize("max_leaf", [1, 4, 8])
+def test_build_invariants_random(n, max_leaf):
+    rng = np.random.default_rng(n * 10 + max_leaf)
+    lo, hi = primitive_bounds(*random_soup(rng, n), random_spheres(rng, n // 3))
+    bvh = build_bvh(lo, hi, max_leaf_size=max_leaf)
+    check_invariants(bvh, lo, hi, max_leaf)
+
+
+@pytest.mark.parametrize("n_bins", [2, 16, 32])
+def test_build_invariants_clustered(n_bins):
+    # Clusters of very different sizes, exact duplicates and far outliers exercise uneven binned splits.
+    rng = np.random.default_rng(n_bins)
+    parts = [random_soup(rng, 500, 1.0, 0.01), random_soup(rng, 300, 1e-4, 1e-5), random_soup(rng, 5, 1e4, 1.0)]
+    v = [np.concatenate([p[i] for p in parts] + [np.tile(parts[0][i][:1], (200, 1))]) for i in range(3)]
+    lo, hi = primitive_bounds(*v, None)
+    bvh = build_bvh(lo, hi, n_bins=n_bins)
+    check_invariants(bvh, lo, hi, 4)
+
+
+def test_identical_pile_terminates_with_bounded_leaves():
+    v0, v1, v2 = np.zeros((1000, 3)), np.tile([[1.0, 0, 0]], (1000, 1)), np.tile([[0, 1.0, 0]], (1000, 1))
+    lo, hi = primitive_bounds(v0, v1, v2, None)
+    bvh = build_bvh(lo, hi, max_leaf_size=4)
+    check_invariants(bvh, lo, hi, 4)
+    assert bvh.depth <= 12
+
+
+def test_sah_beats_a_median_split_tree():
+    # A sanity check of quality: on clustered input SAH must do better than a leaf-everything tree.
+    rng = np.random.default_rng(5)
+    lo, hi = primitive_bounds(*random_soup(rng, 3000, 1.0, 0.02), None)
+    bvh = build_bvh(lo, hi)
+    assert bvh.sah_cost < 0.05 * 3000 and bvh.sah_cost > 1
+
+
+def test_primitive_packing():
+    rng = np.random.default_rng(0)
+    v0, v1, v2 = random_soup(rng, 3)
+    sp = random_spheres(rng, 2)
+    order = np.array([4, 0, 3, 2, 1])
+    p = pack_primitives(v0, v1, v2, sp, order).reshape(5, 3, 4)
+    ids = p[:, 0, 3].view(np.uint32)
+    assert list(ids) == [1 | 0x80000000, 0, 0x80000000, 2, 1]
+    assert np.allclose(p[1, 1, :3], (v1[0].astype(np.float32) - v0[0].astype(np.float32)))
+    assert np.allclose(p[0, 0, :3], sp[1, :3]) and np.isclose(p[0, 1, 0], sp[1, 3])
+    lo, hi = primitive_bounds(v0, v1, v2, sp)
+    assert (lo[3] < sp[0, :3] - sp[0, 3] + 1e-6).all() and (hi[3] >= (sp[0, :3] + sp[0, 3]).astype(np.float32)).all()
+
+
+# ---------------------------------------------------------------------------------------------- traversal
+@pytest.mark.parametrize("n", [1, 2, 100, 5000])
+def test_triangle_soup(ctx, queue, trace_kernel, n):
+    rng = np.random.default_rng(100 + n)
+    tris = random_soup(rng, n, size=0.3 if n < 1000 else 0.05)
+    o, d, tmin, tmax = rays = random_rays(rng, 2000)
+    # Aim half the rays at points on the triangles so that tiny scenes get hits too.
+    k = rng.integers(0, n, 1000)
+    b = rng.dirichlet([1, 1, 1], 1000)
+    target = b[:, :1] * tris[0][k] + b[:, 1:2] * tris[1][k] + b[:, 2:] * tris[2][k]
+    d[:1000] = (target - o[:1000]) * rng.uniform(0.2, 5, (1000, 1))
+    found, _ = check_trace(ctx, queue, trace_kernel, *tris, None, *rays)
+    assert found.sum() > 300
+
+
+def test_soup_with_spheres(ctx, queue, trace_kernel):
+    rng = np.random.default_rng(7)
+    found, _ = check_trace(ctx, queue, trace_kernel, *random_soup(rng, 300, size=0.1), random_spheres(rng, 60),
+                           *random_rays(rng, 3000))
+    assert found.sum() > 500
+
+
+def test_spheres_only_and_rays_from_inside(ctx, queue, trace_kernel):
+    rng = np.random.default_rng(8)
+    sp = random_spheres(rng, 40)
+    o, d, tmin, tmax = random_rays(rng, 2000)
+    k = rng.integers(0, 40, 1000)
+    o[:1000] = sp[k, :3] + rng.uniform(-0.5, 0.5, (1000, 3)) * sp[k, 3:4]   # strictly inside sphere k
+    tmin[:1000] = 0.0
+    found, ref = check_trace(ctx, queue, trace_kernel, np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)), sp,
+                             o, d, tmin, tmax)
+    assert ref[:1000][np.isinf(tmax[:1000])].all()            # from inside with no tmax, always a hit
+
+
+def test_axis_aligned_rays_and_triangles(ctx, queue, trace_kernel):
+    rng = np.random.default_rng(9)
+    v0, v1, v2 = random_soup(rng, 400, size=0.1)
+    v1[:100, 0] = v0[:100, 0]                                   # triangles in planes x = const: flat boxes
+    v2[:100, 0] = v0[:100, 0]
+    v1[100:200, 2] = v2[100:200, 2] = v0[100:200, 2]
+    o, d, tmin, tmax = random_rays(rng, 3000, zero_components=True)
+    found, _ = check_trace(ctx, queue, trace_kernel, v0, v1, v2, random_spheres(rng, 10), o, d, tmin, tmax)
+    assert found.sum() > 300
+
+
+def test_coplanar_and_duplicate_triangles(ctx, queue, trace_kernel):
+    rng = np.random.default_rng(10)
+    g = np.linspace(-1, 1, 9)
+    x, y = np.meshgrid(g[:-1], g[:-1])
+    x, y = x.ravel(), y.ravel()
+    h = g[1] - g[0]
+    z = np.zeros_like(x)
+    a = np.stack([x, y, z], 1)
+    b = np.stack([x + h, y, z], 1)
+    c = np.stack([x, y + h, z], 1)
+    dd = np.stack([x + h, y + h, z], 1)
+    v0 = np.concatenate([a, dd, a, a, dd])                      # a grid, then duplicates of part of it
+    v1 = np.concatenate([b, c, b, b, c])
+    v2 = np.concatenate([c, b, c, c, b])
+    big = np.array([[-1, -1, 0.0]]), np.array([[3, -1, 0.0]]), np.array([[-1, 3, 0.0]])  # overlaps the grid
+    v0, v1, v2 = (np.concatenate([p, q]) for p, q in zip((v0, v1, v2), big))
+    n = 2000
+    o = np.stack([rng.uniform(-1.2, 1.2, n), rng.uniform(-1.2, 1.2, n), rng.uniform(0.2, 2, n)], 1)
+    o[n // 2:, 2] *= -1
+    d = np.stack([rng.normal(0, 0.3, n), rng.normal(0, 0.3, n), -np.sign(o[:, 2]) * rng.uniform(0.5, 2, n)], 1)
+    found, ref = check_trace(ctx, queue, trace_kernel, v0, v1, v2, None, o, d, np.zeros(n), np.full(n, np.inf),
+                             max_ambiguous=0.1)
+    assert ref.mean() > 0.5
+
+
+def test_icosphere_mesh(ctx, queue, trace_kernel):
+    rng = np.random.default_rng(11)
+    v0, v1, v2 = icosphere(4)                                   # 5120 triangles
+    n = 3000
+    o, d, tmin, tmax = random_rays(rng, n, spread=2.0)
+    o[: n // 2] *= 0.25                                         # half the rays start inside the closed mesh
+    tmin[: n // 4], tmax[: n // 4] = 0.0, np.inf
+    found, ref = check_trace(ctx, queue, trace_kernel, v0, v1, v2, None, o, d, tmin, tmax)
+    inside_unbounded = slice(0, n // 4)
+    assert ref[inside_unbounded].mean() > 0.98
+
+
+def test_single_primitives_and_empty_scene(ctx, queue, trace_kernel):
+    rng = np.random.default_rng(12)
+    e = np.zeros((0, 3))
+    o, d, tmin, tmax = random_rays(rng, 500, spread=0.5)
+    check_trace(ctx, queue, trace_kernel, e, e, e, np.array([[0.1, 0.0, -0.1, 0.7]]), o, d, tmin, tmax)
+    tri = (np.array([[-1.0, -1, 0]]), np.array([[1.0, -1, 0.2]]), np.array([[0.0, 1, -0.1]]))
+    found, _ = check_trace(ctx, queue, trace_kernel, *tri, None, o, d, tmin, tmax)
+    assert found.any()
+    found, _ = check_trace(ctx, queue, trace_kernel, e, e, e, None, o, d, tmin, tmax)
+    assert not found.any()
+
+
+def test_rays_on_axes_through_a_box_of_spheres(ctx, queue, trace_kernel):
+    # Exactly axis-aligned directions with all other components zero, origins off-centre.
+    rng = np.random.default_rng(13)
+    sp = random_spheres(rng, 80)
+    n = 1200
+    o = rng.uniform(-1.5, 1.5, (n, 3))
+    d = np.zeros((n, 3))
+    d[np.arange(n), rng.integers(0, 3, n)] = rng.choice([-1.0, 1.0, -3.0, 0.25], n)
+    found, _ = check_trace(ctx, queue, trace_kernel, *random_soup(rng, 200, size=0.1), sp, o, d,
+                           np.zeros(n), np.full(n, np.inf))
+    assert found.sum() > 100

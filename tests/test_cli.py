@@ -1,0 +1,87 @@
+"""The command line: clear errors (file:line, non-zero exit, no traceback) and Ctrl-C keeping the partial image."""
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from clrender.cli import main
+from clrender.film import read_exr
+
+GOOD = """<scene>
+  <integrator type="ao"/>
+  <camera type="perspective"><integer name="width" value="{w}"/><integer name="height" value="{h}"/>
+    <transform name="toWorld"><lookat origin="0,0,3" target="0,0,0" up="0,1,0"/></transform></camera>
+  <mesh type="sphere"><float name="radius" value="1"/></mesh>
+  <mesh type="obj"><string name="filename" value="{mesh}"/></mesh>
+</scene>
+"""
+QUAD = "v -2 -2 -1\nv 2 -2 -1\nv 2 2 -1\nv -2 2 -1\nf 1 2 3 4\n"
+
+
+def write(tmp_path, text, name="s.xml"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+@pytest.mark.parametrize("text,where,what", [
+    (GOOD.replace('type="ao"', 'type="magic"'), ":2:", "unknown integrator type 'magic'"),
+    (GOOD.replace('<float name="radius" value="1"/>', '<float name="radius" value="1x"/>'), ":5:", "radius"),
+    (GOOD.replace('<float name="radius" value="1"/>', '<float name="radiuss" value="1"/>'), ":5:", "radiuss"),
+    (GOOD.replace("</scene>", "<mesh type=\"obj\"/></scene>"), ":7:", "filename"),
+    (GOOD.replace("</camera>", ""), ":", "mismatched"),
+    (GOOD.replace('value="{mesh}"', 'value="nowhere.obj"'), ":6:", "nowhere.obj"),
+])
+def test_bad_scene_gives_a_clear_error(tmp_path, capsys, text, where, what):
+    (tmp_path / "quad.obj").write_text(QUAD)
+    p = write(tmp_path, text.format(w=8, h=8, mesh="quad.obj"))
+    assert main(["render", str(p), "-q", "-o", str(tmp_path / "o.exr")]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    assert f"s.xml{where}" in err and what in err, err
+    assert not (tmp_path / "o.exr").exists()
+
+
+def test_bad_obj_names_its_line(tmp_path, capsys):
+    (tmp_path / "quad.obj").write_text("v 0 0 0\nv 1 0 0\nv 1 x 0\nf 1 2 3\n")
+    p = write(tmp_path, GOOD.format(w=8, h=8, mesh="quad.obj"))
+    assert main(["render", str(p), "-q"]) == 2
+    assert "quad.obj:3" in capsys.readouterr().err
+
+
+def test_missing_scene_file(tmp_path, capsys):
+    assert main(["render", str(tmp_path / "none.xml")]) == 2
+    assert "none.xml" in capsys.readouterr().err
+
+
+def test_devices_lists_the_default(capsys):
+    assert main(["devices"]) == 0
+    out = capsys.readouterr().out
+    assert "*[" in out and "OpenCL C" in out
+
+
+def test_ctrl_c_writes_the_partial_image(tmp_path):
+    (tmp_path / "quad.obj").write_text(QUAD)
+    p = write(tmp_path, GOOD.format(w=256, h=256, mesh="quad.obj"))
+    out = tmp_path / "partial.exr"
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen([sys.executable, "-m", "clrender.cli", "render", str(p), "--spp", "1000000", "-o",
+                             str(out)], stderr=subprocess.PIPE, text=True, env=env)
+    # Wait until rendering has started (the progress bar appears), then press Ctrl-C once.
+    start = time.time()
+    seen = ""
+    while "rendering" not in seen and time.time() - start < 60:
+        seen += proc.stderr.read(1)
+    time.sleep(1.0)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    img, header = read_exr(out)
+    spp = int(header["clrender.spp"])
+    assert 0 < spp < 1000000 and header["clrender.interrupted"] == "True"
+    assert img.max() > 0
+    assert "partial" in err
