@@ -67,7 +67,7 @@ class _SigintFlag:
 class Renderer:
     """A scene uploaded to one device, with its program built; `render()` may be called repeatedly."""
 
-    def __init__(self, scene, device=None, fast_math: bool = False, buffers=None):
+    def __init__(self, scene, device=None, fast_math: bool = False, buffers=None, defines=None):
         import pyopencl as cl
 
         self.scene = scene
@@ -77,7 +77,8 @@ class Renderer:
         self.buffers = buffers if buffers is not None else pack_scene(scene)
         t0 = time.perf_counter()
         self.program = build_program(self.ctx, '#include "render.cl"\n',
-                                     defines={"INTEGRATOR": scene.integrator.kernel}, fast_math=fast_math)
+                                     defines={"INTEGRATOR": scene.integrator.kernel, **(defines or {})},
+                                     fast_math=fast_math)
         self.kernel = cl.Kernel(self.program, "render_pass")
         self.build_seconds = time.perf_counter() - t0
         t0 = time.perf_counter()

@@ -1,4 +1,4 @@
-/* Emitters: one query record, per-type sample/pdf/eval (kernels/emitters/*.h), a switch that dispatches on
+/* Emitters: one query record, per-type sample/pdf/eval (kernels/emitters/<type>.h), a switch that dispatches on
    the row's type tag, and scene-level light selection (a uniform choice among the N emitters).
 
    Measures. pdf values are solid-angle densities of wi at ref, except for delta lights (point, distant),

@@ -32,6 +32,12 @@ __kernel void render_pass(SCENE_ARGS, __global const Camera* cam, __global const
         float2 off = filter_sample(cam, filter_cdf, next2d(&smp), &w);
         Ray ray = camera_ray(cam, (float)px + 0.5f + off.x, (float)py + 0.5f + off.y);
         float3 L = Li(&sd, ray, &smp);
+#ifdef CLRENDER_TEST_POISON
+        /* test builds only: prove that bad samples are dropped and counted */
+        uint si = sample_offset + s;
+        if (si % 5u == 0u) L.x = NAN;
+        else if (si % 7u == 0u) L.y = INFINITY;
+#endif
         if (!all_finite(L) || !isfinite(w)) { nbad += 1u; continue; }
         float3 wl = L * w;
         swl += wl;

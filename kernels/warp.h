@@ -86,7 +86,9 @@ INLINE float beckmann_d(float3 h, float alpha) {
     float c2 = c * c;
     float tan2 = (1.0f - c2) / c2;
     float a2 = alpha * alpha;
-    return exp(-tan2 / a2) / (M_PI_F_ * a2 * c2 * c2);
+    float e = exp(-tan2 / a2);
+    /* near the horizon cos^4 underflows to 0 (0/0 = NaN) long after exp() has reached 0 */
+    return e > 0.0f ? e / (M_PI_F_ * a2 * c2 * c2) : 0.0f;
 }
 INLINE float square_to_beckmann_pdf(float3 h, float alpha) { return beckmann_d(h, alpha) * h.z; }
 

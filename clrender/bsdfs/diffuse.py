@@ -5,6 +5,8 @@
     <color name="albedo" value="0.5, 0.5, 0.5"/>   <!-- default 0.5 -->
 </bsdf>
 ```
+ETH variant: a nested `<texture type="checkerboard_color" name="albedo">` replaces the albedo colour
+(see checkerboard.py). Bsdf row: color = albedo (or the texture's lanes).
 """
 import numpy as np
 
@@ -12,13 +14,18 @@ from ..device.layout import ENUMS
 from ..errors import SceneError
 from ..scene.registry import register
 from .bsdf import Bsdf
+from .checkerboard import texture_child
 
 
 @register("bsdf", "diffuse")
 class Diffuse(Bsdf):
     bsdf_type = ENUMS["BSDF_DIFFUSE"]
+    children = ("texture",)
 
     def __init__(self, props, children, spec):
+        self.texture = texture_child(children, "albedo", '<bsdf type="diffuse">')
+        if self.texture is not None and props.has("albedo"):
+            raise SceneError("albedo given both as a color and as a texture", props.location("albedo"))
         self.albedo = np.asarray(props.get_color("albedo", np.full(3, 0.5)), np.float64)
         if np.any(self.albedo < 0) or not np.all(np.isfinite(self.albedo)):
             raise SceneError(f"albedo must be non-negative, got {self.albedo.tolist()}", props.location("albedo"))
@@ -27,8 +34,11 @@ class Diffuse(Bsdf):
     def default(cls):
         obj = cls.__new__(cls)
         obj.albedo = np.full(3, 0.5)
+        obj.texture = None
         obj.spec = None
         return obj
 
     def fill(self, row):
         row["color"][:3] = self.albedo
+        if self.texture is not None:
+            self.texture.fill(row)

@@ -12,7 +12,8 @@ rational fit. Sampling picks the specular lobe with probability ks; the pdf is t
     <color name="kd" value="0.5, 0.5, 0.5"/>  <!-- diffuse albedo, default 0.5 -->
 </bsdf>
 ```
-Bsdf row: color = kd; params = (alpha, intIOR, extIOR, ks).
+A nested `<texture type="checkerboard_color" name="kd">` may replace kd (then ks = 1 - the largest
+component of either texture colour). Bsdf row: color = kd (or the texture's lanes); params = (alpha, intIOR, extIOR, ks).
 """
 import numpy as np
 
@@ -20,14 +21,19 @@ from ..device.layout import ENUMS
 from ..errors import SceneError
 from ..scene.registry import register
 from .bsdf import Bsdf
+from .checkerboard import texture_child
 from .ior import read_iors
 
 
 @register("bsdf", "microfacet")
 class Microfacet(Bsdf):
     bsdf_type = ENUMS["BSDF_MICROFACET"]
+    children = ("texture",)
 
     def __init__(self, props, children, spec):
+        self.texture = texture_child(children, "kd", '<bsdf type="microfacet">')
+        if self.texture is not None and props.has("kd"):
+            raise SceneError("kd given both as a color and as a texture", props.location("kd"))
         self.alpha = float(props.get_float("alpha", 0.1))
         if not 0 < self.alpha <= 10:
             raise SceneError(f"alpha must be in (0, 10], got {self.alpha}", props.location("alpha"))
@@ -36,7 +42,13 @@ class Microfacet(Bsdf):
         if np.any(self.kd < 0) or np.any(self.kd > 1):
             raise SceneError(f"kd must be within [0, 1], got {self.kd.tolist()}", props.location("kd"))
         self.ks = 1.0 - float(self.kd.max())
+        if self.texture is not None:
+            if self.texture.max_value() > 1:
+                raise SceneError("a kd texture must stay within [0, 1]", getattr(self.texture.spec, "location", None))
+            self.ks = 1.0 - self.texture.max_value()
 
     def fill(self, row):
         row["color"][:3] = self.kd
         row["params"] = (self.alpha, self.int_ior, self.ext_ior, self.ks)
+        if self.texture is not None:
+            self.texture.fill(row)

@@ -1,0 +1,69 @@
+"""ETH Nori's checkerboard texture: two colours alternating over a grid in uv space.
+
+```xml
+<bsdf type="diffuse">
+    <texture type="checkerboard_color" name="albedo">
+        <color name="value1" value="0.8, 0.8, 0.8"/>   <!-- default 0 -->
+        <color name="value2" value="0.2, 0.2, 0.2"/>   <!-- default 1 -->
+        <point name="delta" value="0, 0"/>             <!-- uv offset of the grid, default (0, 0) -->
+        <vector name="scale" value="0.5, 0.5"/>        <!-- uv size of one cell, default (0.5, 0.5) -->
+    </texture>
+</bsdf>
+```
+The colour at uv is value1 where floor((u - delta_u) / scale_u) + floor((v - delta_v) / scale_v) is even,
+value2 where it is odd (kernels/bsdfs/texture.h). Packed into the owning BSDF's row: texture =
+TEXTURE_CHECKERBOARD, color = value1, tex[0] = value2, tex[1] = (delta_u, delta_v, scale_u, scale_v).
+"""
+import numpy as np
+
+from ..device.layout import ENUMS
+from ..errors import SceneError
+from ..scene.registry import register
+
+
+@register("texture", "checkerboard_color")
+class CheckerboardColor:
+    texture_type = ENUMS["TEXTURE_CHECKERBOARD"]
+
+    def __init__(self, props, children, spec):
+        self.value1 = np.asarray(props.get_color("value1", np.zeros(3)), np.float64)
+        self.value2 = np.asarray(props.get_color("value2", np.ones(3)), np.float64)
+        self.delta = np.asarray(props.get_point2("delta", np.zeros(2)), np.float64)
+        self.scale = np.asarray(props.get_vector2("scale", np.full(2, 0.5)), np.float64)
+        for name, v in (("value1", self.value1), ("value2", self.value2)):
+            if np.any(v < 0) or not np.all(np.isfinite(v)):
+                raise SceneError(f"{name} must be non-negative, got {v.tolist()}", props.location(name))
+        if not np.all(self.scale > 0) or not np.all(np.isfinite(self.scale)):
+            raise SceneError(f"scale must be positive, got {self.scale.tolist()}", props.location("scale"))
+
+    def max_value(self) -> float:
+        return float(max(self.value1.max(), self.value2.max()))
+
+    def eval(self, uv) -> np.ndarray:
+        """The colour at uv (..., 2) on the host (a reference for tests)."""
+        uv = np.asarray(uv, np.float64)
+        c = np.floor((uv[..., 0] - self.delta[0]) / self.scale[0]) + np.floor((uv[..., 1] - self.delta[1])
+                                                                             / self.scale[1])
+        even = (np.mod(c, 2) == 0)[..., None]
+        return np.where(even, self.value1, self.value2)
+
+    def fill(self, row) -> None:
+        row["texture"] = self.texture_type
+        row["color"][:3] = self.value1
+        row["tex"][0][:3] = self.value2
+        row["tex"][1] = (*self.delta, *self.scale)
+
+
+def texture_child(children, name: str, owner: str):
+    """The nested texture called `name` (None if there is none); any other nested texture is an error."""
+    found = None
+    for c in children:
+        spec = getattr(c, "spec", None)
+        cname = getattr(spec, "name", None)
+        if cname != name:
+            raise SceneError(f"{owner} takes a texture named '{name}', not {cname!r}",
+                             getattr(spec, "location", None))
+        if found is not None:
+            raise SceneError(f"{owner} has two '{name}' textures", getattr(spec, "location", None))
+        found = c
+    return found

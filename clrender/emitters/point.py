@@ -1,0 +1,39 @@
+"""Point light: a delta light at `position` radiating the flux `power` evenly, i.e. with intensity
+I = Φ / (4π) in every direction; a surface at distance d receives I cosθ / d².
+
+```xml
+<emitter type="point">
+    <point name="position" value="0, 2, 0"/>     <!-- default 0, 0, 0 -->
+    <color name="power" value="100, 100, 100"/>  <!-- required: flux Φ in watts (a single number is grey) -->
+</emitter>
+```
+Emitter row (kernels/emitters/point.h): radiance.xyz = I = Φ/(4π); params[0].xyz = position;
+params[1].xyz = Φ.
+"""
+import numpy as np
+
+from ..device.layout import ENUMS
+from ..errors import SceneError
+from ..scene.registry import register
+from .emitter import Emitter, nonnegative_color
+
+
+@register("emitter", "point")
+class PointEmitter(Emitter):
+    emitter_type = ENUMS["EMITTER_POINT"]
+    is_delta = True
+
+    def __init__(self, props, children, spec):
+        self.position = np.asarray(props.get_point("position", np.zeros(3)), np.float64)
+        if not np.all(np.isfinite(self.position)):
+            raise SceneError(f"position must be finite, got {self.position.tolist()}", props.location("position"))
+        self.power = nonnegative_color(props, "power")
+
+    @property
+    def intensity(self) -> np.ndarray:
+        return self.power / (4.0 * np.pi)
+
+    def fill(self, row, ctx, shape):
+        row["radiance"][:3] = self.intensity
+        row["params"][0][:3] = self.position
+        row["params"][1][:3] = self.power

@@ -1,0 +1,300 @@
+"""Running BSDFs and warps on the device, in bulk, for statistical tests.
+
+Every helper builds its program once per context (``program.build_program`` caches), launches with one
+fixed local size (64) and a global size padded to a multiple of it, and splits large batches into launches
+of at most ``CHUNK`` work-items so each stays short. Random numbers come from the counter-based Sampler of
+kernels/rng.h keyed by (seed, global sample index, 0), so a batch is reproducible however it is split.
+
+The BSDF helpers take any Bsdf row from a plugin's ``.pack()`` (or an array of rows plus a per-sample
+row index, to run many cases in one launch).
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..device import layout
+from ..device.program import build_program
+
+LOCAL = 64
+CHUNK = 1 << 20
+# CLRENDER_TEST_FAST_MATH=1 builds these programs with -cl-fast-relaxed-math (as a renderer may run).
+FAST_MATH = os.environ.get("CLRENDER_TEST_FAST_MATH", "") not in ("", "0")
+
+BSDF_SRC = r"""
+#include "rng.h"
+#include "bsdf.h"
+
+/* One bsdf_sample per work-item. args[i] = (wi.xyz, bitcast row index); uvs[i] = uv. */
+__kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const float4* args,
+                                __global const float2* uvs, uint n, uint first, uint seed,
+                                __global float4* wo_out, __global float4* w_out, __global float4* f_out,
+                                __global float* pdf_out, __global uint* measure_out) {
+    uint i = get_global_id(0);
+    if (i >= n) return;
+    float4 a = args[i];
+    __global const Bsdf* b = rows + as_uint(a.w);
+    Sampler s;
+    sampler_init(&s, seed, first + i, 0u);
+    BsdfQuery q;
+    q.wi = a.xyz;
+    q.wo = (float3)(0.0f);
+    q.eta = 1.0f;
+    q.measure = MEASURE_SOLID_ANGLE;
+    q.uv = uvs[i];
+    float3 w = bsdf_sample(b, &q, next2d(&s));
+    wo_out[i] = (float4)(q.wo, q.eta);
+    w_out[i] = (float4)(w, 0.0f);
+    f_out[i] = (float4)(bsdf_eval(b, &q), 0.0f);
+    pdf_out[i] = bsdf_pdf(b, &q);
+    measure_out[i] = q.measure;
+}
+
+/* bsdf_pdf and bsdf_eval for given (wi, wo); wi[i].w = bitcast row index, wo[i].w unused. */
+__kernel void bsdf_pdf_eval_batch(__global const Bsdf* rows, __global const float4* wi_in,
+                                  __global const float4* wo_in, __global const float2* uvs, uint n,
+                                  __global float* pdf_out, __global float4* f_out, __global float4* alb_out) {
+    uint i = get_global_id(0);
+    if (i >= n) return;
+    float4 a = wi_in[i];
+    __global const Bsdf* b = rows + as_uint(a.w);
+    BsdfQuery q;
+    q.wi = a.xyz;
+    q.wo = wo_in[i].xyz;
+    q.eta = 1.0f;
+    q.measure = MEASURE_SOLID_ANGLE;
+    q.uv = uvs[i];
+    pdf_out[i] = bsdf_pdf(b, &q);
+    f_out[i] = (float4)(bsdf_eval(b, &q), bsdf_is_delta(b) ? 1.0f : 0.0f);
+    alb_out[i] = (float4)(bsdf_albedo(b, q.uv), 0.0f);
+}
+"""
+
+
+def _cl():
+    import pyopencl as cl
+
+    return cl
+
+
+def _program(ctx, source=BSDF_SRC, defines=None):
+    return build_program(ctx, source, defines, fast_math=FAST_MATH)
+
+
+_KERNELS: dict = {}
+
+
+def _kernel(ctx, name, source=BSDF_SRC, defines=None):
+    key = (ctx.int_ptr, name, source, tuple(sorted((defines or {}).items())), FAST_MATH)
+    k = _KERNELS.get(key)
+    if k is None:
+        k = _KERNELS[key] = _cl().Kernel(_program(ctx, source, defines), name)
+    return k
+
+
+def padded(n: int, local: int = LOCAL) -> int:
+    return max(local, (n + local - 1) // local * local)
+
+
+def _rows(bsdf_rows) -> np.ndarray:
+    rows = np.atleast_1d(np.asarray(bsdf_rows))
+    if rows.dtype != layout.dtype("Bsdf"):
+        rows = rows.astype(layout.dtype("Bsdf"))
+    return np.ascontiguousarray(rows)
+
+
+def _per_item(x, n, width, dtype=np.float32):
+    a = np.asarray(x, np.float64)
+    if a.ndim == 1:
+        a = np.broadcast_to(a, (n, a.shape[0]))
+    out = np.zeros((n, width), dtype)
+    out[:, :a.shape[1]] = a
+    return out
+
+
+@dataclass
+class BsdfSamples:
+    """One bsdf_sample per entry: wo (n,3), weight = f cos/pdf (n,3), pdf = bsdf_pdf(wi, wo) (n,),
+    measure (n,), eta (n,) and f = bsdf_eval(wi, wo) (n,3). Unpacks as (wo, weight, pdf, measure)."""
+    wo: np.ndarray
+    weight: np.ndarray
+    pdf: np.ndarray
+    measure: np.ndarray
+    eta: np.ndarray
+    f: np.ndarray
+
+    def __iter__(self):
+        return iter((self.wo, self.weight, self.pdf, self.measure))
+
+
+def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 0.5), row_index=None,
+                      first: int = 0) -> BsdfSamples:
+    """n calls of bsdf_sample on the device. `bsdf_row`: one packed row or an array of rows (then
+    `row_index` (n,) picks each sample's row); `wi`: (3,) or (n,3) in the local frame (normalised here);
+    `uv`: (2,) or (n,2). Sample i uses the Sampler stream (seed, first + i, 0)."""
+    cl = _cl()
+    rows = _rows(bsdf_row)
+    wi = np.asarray(wi, np.float64)
+    wi = wi / np.linalg.norm(wi, axis=-1, keepdims=True)
+    args = _per_item(wi, n, 4)
+    idx = np.zeros(n, np.uint32) if row_index is None else np.asarray(row_index, np.uint32)
+    if idx.shape != (n,) or (n and idx.max() >= len(rows)):
+        raise ValueError("row_index must be (n,) indices into bsdf_row")
+    args[:, 3] = idx.view(np.float32)
+    uvs = _per_item(uv, n, 2)
+    k = _kernel(ctx, "bsdf_sample_batch")
+    mf = cl.mem_flags
+    d_rows = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=rows)
+    out = BsdfSamples(np.empty((n, 3), np.float32), np.empty((n, 3), np.float32), np.empty(n, np.float32),
+                      np.empty(n, np.uint32), np.empty(n, np.float32), np.empty((n, 3), np.float32))
+    for s in range(0, n, CHUNK):
+        m = min(CHUNK, n - s)
+        g = padded(m)
+        d_args = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(args[s:s + m]))
+        d_uv = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(uvs[s:s + m]))
+        wo = np.empty((m, 4), np.float32)
+        w = np.empty((m, 4), np.float32)
+        f = np.empty((m, 4), np.float32)
+        pdf = np.empty(m, np.float32)
+        meas = np.empty(m, np.uint32)
+        bufs = [cl.Buffer(ctx, mf.WRITE_ONLY, a.nbytes) for a in (wo, w, f, pdf, meas)]
+        k(queue, (g,), (LOCAL,), d_rows, d_args, d_uv, np.uint32(m), np.uint32(first + s), np.uint32(seed),
+          *bufs)
+        for a, b in zip((wo, w, f, pdf, meas), bufs):
+            cl.enqueue_copy(queue, a, b)
+        queue.finish()
+        out.wo[s:s + m] = wo[:, :3]
+        out.eta[s:s + m] = wo[:, 3]
+        out.weight[s:s + m] = w[:, :3]
+        out.f[s:s + m] = f[:, :3]
+        out.pdf[s:s + m] = pdf
+        out.measure[s:s + m] = meas
+    return out
+
+
+def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=None, with_albedo=False):
+    """bsdf_pdf and bsdf_eval at m direction pairs: wi (3,) or (m,3), wo (m,3). Returns (pdf (m,), f (m,3)),
+    plus bsdf_albedo(uv) (m,3) if `with_albedo`."""
+    cl = _cl()
+    rows = _rows(bsdf_row)
+    wo = np.asarray(wo, np.float64).reshape(-1, 3)
+    m = len(wo)
+    wi_a = _per_item(np.asarray(wi, np.float64), m, 4)
+    idx = np.zeros(m, np.uint32) if row_index is None else np.asarray(row_index, np.uint32)
+    wi_a[:, 3] = idx.view(np.float32)
+    wo_a = _per_item(wo, m, 4)
+    uvs = _per_item(uv, m, 2)
+    k = _kernel(ctx, "bsdf_pdf_eval_batch")
+    mf = cl.mem_flags
+    d_rows = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=rows)
+    pdf = np.empty(m, np.float32)
+    f = np.empty((m, 3), np.float32)
+    alb = np.empty((m, 3), np.float32)
+    for s in range(0, m, CHUNK):
+        c = min(CHUNK, m - s)
+        g = padded(c)
+        d_wi = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(wi_a[s:s + c]))
+        d_wo = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(wo_a[s:s + c]))
+        d_uv = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(uvs[s:s + c]))
+        p = np.empty(c, np.float32)
+        ff = np.empty((c, 4), np.float32)
+        aa = np.empty((c, 4), np.float32)
+        bufs = [cl.Buffer(ctx, mf.WRITE_ONLY, a.nbytes) for a in (p, ff, aa)]
+        k(queue, (g,), (LOCAL,), d_rows, d_wi, d_wo, d_uv, np.uint32(c), *bufs)
+        for a, b in zip((p, ff, aa), bufs):
+            cl.enqueue_copy(queue, a, b)
+        queue.finish()
+        pdf[s:s + c] = p
+        f[s:s + c] = ff[:, :3]
+        alb[s:s + c] = aa[:, :3]
+    return (pdf, f, alb) if with_albedo else (pdf, f)
+
+
+# ------------------------------------------------------------------------------------------- warps
+WARP_SRC = r"""
+#include "rng.h"
+#include "warp.h"
+
+/* kind: 0 square, 1 tent, 2 disk, 3 sphere, 4 hemisphere, 5 cosine hemisphere, 6 cone (param = cos_max),
+   7 triangle (barycentrics), 8 Beckmann (param = alpha). 2-D results in .xy, directions in .xyz. */
+INLINE float4 warp_point(uint kind, float param, float2 u) {
+    switch (kind) {
+        case 0: return (float4)(square_to_uniform_square(u), 0.0f, 0.0f);
+        case 1: return (float4)(square_to_tent(u), 0.0f, 0.0f);
+        case 2: return (float4)(square_to_uniform_disk(u), 0.0f, 0.0f);
+        case 3: return (float4)(square_to_uniform_sphere(u), 0.0f);
+        case 4: return (float4)(square_to_uniform_hemisphere(u), 0.0f);
+        case 5: return (float4)(square_to_cosine_hemisphere(u), 0.0f);
+        case 6: return (float4)(square_to_uniform_cone(u, param), 0.0f);
+        case 7: return (float4)(square_to_uniform_triangle(u), 0.0f, 0.0f);
+        default: return (float4)(square_to_beckmann(u, param), 0.0f);
+    }
+}
+INLINE float warp_density(uint kind, float param, float4 p) {
+    switch (kind) {
+        case 0: return square_to_uniform_square_pdf(p.xy);
+        case 1: return square_to_tent_pdf(p.xy);
+        case 2: return square_to_uniform_disk_pdf(p.xy);
+        case 3: return square_to_uniform_sphere_pdf(p.xyz);
+        case 4: return square_to_uniform_hemisphere_pdf(p.xyz);
+        case 5: return square_to_cosine_hemisphere_pdf(p.xyz);
+        case 6: return square_to_uniform_cone_pdf(p.xyz, param);
+        case 7: return square_to_uniform_triangle_pdf(p.xy);
+        default: return square_to_beckmann_pdf(p.xyz, param);
+    }
+}
+__kernel void warp_sample_batch(uint kind, float param, uint n, uint first, uint seed, __global float4* out) {
+    uint i = get_global_id(0);
+    if (i >= n) return;
+    Sampler s;
+    sampler_init(&s, seed, first + i, 0u);
+    out[i] = warp_point(kind, param, next2d(&s));
+}
+__kernel void warp_pdf_batch(uint kind, float param, uint n, __global const float4* pts, __global float* out) {
+    uint i = get_global_id(0);
+    if (i >= n) return;
+    out[i] = warp_density(kind, param, pts[i]);
+}
+"""
+
+WARPS = {"square": 0, "tent": 1, "disk": 2, "sphere": 3, "hemisphere": 4, "cosine_hemisphere": 5, "cone": 6,
+         "triangle": 7, "beckmann": 8}
+
+
+def warp_sample_batch(ctx, queue, warp: str, n: int, param: float = 0.0, seed: int = 0) -> np.ndarray:
+    """n warped points (n,2) for 2-D warps or directions (n,3); `param`: cone cos_max or Beckmann alpha."""
+    cl = _cl()
+    kind = WARPS[warp]
+    k = _kernel(ctx, "warp_sample_batch", WARP_SRC)
+    out = np.empty((n, 4), np.float32)
+    for s in range(0, n, CHUNK):
+        m = min(CHUNK, n - s)
+        buf = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, m * 16)
+        k(queue, (padded(m),), (LOCAL,), np.uint32(kind), np.float32(param), np.uint32(m), np.uint32(s),
+          np.uint32(seed), buf)
+        cl.enqueue_copy(queue, out[s:s + m], buf)
+    queue.finish()
+    return out[:, :2] if kind in (0, 1, 2, 7) else out[:, :3]
+
+
+def warp_pdf_batch(ctx, queue, warp: str, points: np.ndarray, param: float = 0.0) -> np.ndarray:
+    """The warp's density at points (m,2) or directions (m,3)."""
+    cl = _cl()
+    kind = WARPS[warp]
+    k = _kernel(ctx, "warp_pdf_batch", WARP_SRC)
+    p = np.asarray(points, np.float64)
+    m = len(p)
+    pts = np.zeros((m, 4), np.float32)
+    pts[:, :p.shape[1]] = p
+    out = np.empty(m, np.float32)
+    for s in range(0, m, CHUNK):
+        c = min(CHUNK, m - s)
+        mf = cl.mem_flags
+        d_in = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(pts[s:s + c]))
+        d_out = cl.Buffer(ctx, mf.WRITE_ONLY, c * 4)
+        k(queue, (padded(c),), (LOCAL,), np.uint32(kind), np.float32(param), np.uint32(c), d_in, d_out)
+        cl.enqueue_copy(queue, out[s:s + c], d_out)
+    queue.finish()
+    return out

@@ -1,0 +1,40 @@
+/* What every BSDF kernel shares: the query record and small helpers (Fresnel, reflection).
+   Everything is in the local shading frame (z = shading normal). */
+#ifndef CLRENDER_BSDFS_COMMON_H
+#define CLRENDER_BSDFS_COMMON_H
+#include "math.h"
+
+#define MEASURE_SOLID_ANGLE 0u
+#define MEASURE_DISCRETE 1u
+
+/* wi points toward where the path came from (= -ray.d); wo is the sampled / queried direction.
+   eta: relative index of refraction of the sampled event, eta_t / eta_i (the index on wo's side over the
+   index on wi's side): intIOR/extIOR when a dielectric refracts into the object, extIOR/intIOR when it
+   refracts out of it, 1 for every reflection. */
+typedef struct {
+    float3 wi;
+    float3 wo;
+    float eta;
+    uint measure;
+    float2 uv;
+} BsdfQuery;
+
+/* Unpolarised Fresnel reflectance of a smooth dielectric interface. cos_i is measured against the normal
+   on the ext side: cos_i < 0 means the ray arrives from inside (the indices swap). Returns 1 under total
+   internal reflection; *cos_t receives |cos| of the refracted direction (0 under TIR). */
+INLINE float fresnel_dielectric(float cos_i, float eta_ext, float eta_int, float* cos_t_out) {
+    float eta_i = eta_ext, eta_t = eta_int;
+    if (cos_i < 0.0f) { eta_i = eta_int; eta_t = eta_ext; cos_i = -cos_i; }
+    float eta = eta_i / eta_t;
+    float sin2_t = eta * eta * maxf(0.0f, 1.0f - cos_i * cos_i);
+    if (sin2_t >= 1.0f) { *cos_t_out = 0.0f; return 1.0f; }
+    float cos_t = sqrt(1.0f - sin2_t);
+    *cos_t_out = cos_t;
+    float rs = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
+    float rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
+    return 0.5f * (rs * rs + rp * rp);
+}
+
+INLINE float3 reflect_local(float3 w) { return (float3)(-w.x, -w.y, w.z); }
+
+#endif

@@ -1,0 +1,63 @@
+/* Nori's microfacet BRDF: a diffuse base plus a Beckmann specular lobe with dielectric Fresnel.
+   Row: color = kd (or a texture), params = (alpha, intIOR, extIOR, ks), ks = 1 - max(kd) (set by the host).
+     f   = kd/pi + ks D(h) F(h.wi) G1(wi,h) G1(wo,h) / (4 cos_i cos_o),   h = normalize(wi + wo)
+     pdf = ks D(h) cos(theta_h) / (4 |h.wo|) + (1 - ks) cos_o / pi
+   D is beckmann_d (warp.h, the standard D with cos^4), F the Fresnel term extIOR -> intIOR, G1 the rational
+   Smith-Beckmann fit. Only reflection: both wi and wo must be above the surface. */
+#ifndef CLRENDER_BSDFS_MICROFACET_H
+#define CLRENDER_BSDFS_MICROFACET_H
+#include "common.h"
+#include "texture.h"
+#include "warp.h"
+
+INLINE float microfacet_g1(float3 v, float3 h, float alpha) {
+    if (dot3(v, h) / v.z <= 0.0f) return 0.0f;
+    float sin2 = maxf(0.0f, 1.0f - v.z * v.z);
+    if (sin2 <= 0.0f) return 1.0f;
+    float tan_t = sqrt(sin2) / v.z;
+    float bb = 1.0f / (alpha * tan_t);
+    if (bb >= 1.6f) return 1.0f;
+    return (3.535f * bb + 2.181f * bb * bb) / (1.0f + 2.276f * bb + 2.577f * bb * bb);
+}
+
+INLINE float3 microfacet_eval(__global const Bsdf* b, const BsdfQuery* q) {
+    float3 wi = q->wi, wo = q->wo;
+    if (wi.z <= 0.0f || wo.z <= 0.0f) return (float3)(0.0f);
+    float alpha = b->params.x, eta_int = b->params.y, eta_ext = b->params.z, ks = b->params.w;
+    float3 h = normalize3(wi + wo);
+    float cos_t;
+    float F = fresnel_dielectric(dot3(h, wi), eta_ext, eta_int, &cos_t);
+    float spec = beckmann_d(h, alpha) * F * microfacet_g1(wi, h, alpha) * microfacet_g1(wo, h, alpha)
+                 / (4.0f * wi.z * wo.z);
+    return bsdf_color(b, q->uv) * INV_PI + (float3)(ks * spec);
+}
+
+INLINE float microfacet_pdf(__global const Bsdf* b, const BsdfQuery* q) {
+    float3 wi = q->wi, wo = q->wo;
+    if (wi.z <= 0.0f || wo.z <= 0.0f) return 0.0f;
+    float alpha = b->params.x, ks = b->params.w;
+    float3 h = normalize3(wi + wo);
+    /* dwo = 4 |h.wo| dh: the Jacobian of reflecting wi about h */
+    float spec = square_to_beckmann_pdf(h, alpha) / (4.0f * fabs(dot3(h, wo)));
+    return ks * spec + (1.0f - ks) * wo.z * INV_PI;
+}
+
+INLINE float3 microfacet_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+    float alpha = b->params.x, ks = b->params.w;
+    q->measure = MEASURE_SOLID_ANGLE;
+    q->eta = 1.0f;
+    if (u.x < ks) {
+        u.x = u.x / ks;   /* re-use the sample dimension: uniform again on [0,1) */
+        float3 h = square_to_beckmann(u, alpha);
+        q->wo = 2.0f * dot3(q->wi, h) * h - q->wi;
+    } else {
+        u.x = (u.x - ks) / (1.0f - ks);
+        q->wo = square_to_cosine_hemisphere(u);
+    }
+    if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return (float3)(0.0f);
+    float pdf = microfacet_pdf(b, q);
+    if (!(pdf > 0.0f)) return (float3)(0.0f);
+    return microfacet_eval(b, q) * (q->wo.z / pdf);
+}
+
+#endif

@@ -1,0 +1,30 @@
+/* Constant environment, an extension: radiance L from every direction (furnace tests, a uniform sky).
+
+   Emitter row: type EMITTER_CONSTANT; radiance.xyz = L.
+   sample: uniform on the sphere, pdf 1 / (4 pi), returns 4 pi L, dist = INFINITY. */
+#ifndef CLRENDER_EMITTERS_CONSTANT_H
+#define CLRENDER_EMITTERS_CONSTANT_H
+#ifndef CLRENDER_EMITTER_H
+#error "include emitter.h, not emitters/constant.h"
+#endif
+
+INLINE float3 constant_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
+    float3 wi = square_to_uniform_sphere(u);
+    q->wi = wi;
+    q->p = q->ref + wi * emitter_far(sd, q->ref);
+    q->n = -wi;
+    q->ng = -wi;
+    q->dist = INFINITY;
+    q->pdf = INV_FOURPI;
+    return em->radiance.xyz * (4.0f * M_PI_F_);
+}
+
+INLINE float constant_pdf(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
+    return INV_FOURPI;
+}
+
+INLINE float3 constant_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
+    return em->radiance.xyz;
+}
+
+#endif

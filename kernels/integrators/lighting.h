@@ -1,0 +1,77 @@
+/* What the illumination integrators share: emission seen at a hit, one emitter sample with its shadow
+   ray, and the MIS weights (balance heuristic). Every integrator below is a loop over path vertices with
+   its state in locals: no recursion, so the same stage functions can serve a wavefront variant later. */
+#ifndef CLRENDER_LIGHTING_H
+#define CLRENDER_LIGHTING_H
+#include "../warp.h"
+#include "../bsdf.h"
+#include "../emitter.h"
+
+INLINE __global const Bsdf* bsdf_at(const SceneData* sd, const Intersection* its) {
+    return sd->bsdfs + sd->shapes[its->shape].bsdf;
+}
+
+INLINE float mis_balance(float a, float b) { return a + b > 0.0f ? a / (a + b) : 0.0f; }
+
+INLINE BsdfQuery bsdf_query(const Intersection* its, float3 wi_world) {
+    BsdfQuery q;
+    q.wi = to_local(&its->sh, wi_world);
+    q.wo = (float3)(0.0f);
+    q.eta = 1.0f;
+    q.measure = MEASURE_SOLID_ANGLE;
+    q.uv = its->uv;
+    return q;
+}
+
+/* Radiance an emitter sends from the hit `its` back along -d (0 if the surface does not emit). */
+INLINE float3 hit_emission(const SceneData* sd, const Intersection* its, float3 d) {
+    if (sd->shapes[its->shape].emitter == NONE) return (float3)(0.0f);
+    return area_emitter_Le(sd, its, -d);
+}
+
+/* The light-selection pdf of having reached emitter hit `its` from `ref` (for MIS of BSDF samples). */
+INLINE float hit_emitter_pdf(const SceneData* sd, float3 ref, const Intersection* its) {
+    uint e = sd->shapes[its->shape].emitter;
+    if (e == NONE) return 0.0f;
+    EmitterQuery q;
+    emitter_query_from_hit(&q, ref, its);
+    return scene_emitter_pdf(sd, e, &q);
+}
+
+/* Does anything block the segment from p toward q->wi before the light? */
+INLINE bool light_occluded(const SceneData* sd, float3 p, const EmitterQuery* q) {
+    float tmin = ray_eps(p);
+    float tmax = q->dist;
+    if (isfinite(tmax)) tmax = tmax * (1.0f - 1e-4f) - ray_eps(q->p);
+    if (!(tmax > tmin)) return false;
+    return scene_occluded(sd, p, q->wi, tmin, tmax);
+}
+
+/* One emitter sample at a non-delta vertex: f * cos * Le / pdf, times the MIS weight against BSDF
+   sampling when `mis` (delta lights always get full weight: BSDF sampling cannot find them). */
+INLINE float3 sample_light(const SceneData* sd, const Intersection* its, __global const Bsdf* b,
+                           float3 wi_local, Sampler* smp, bool mis) {
+    EmitterQuery q;
+    q.ref = its->p;
+    float a = next1d(smp);
+    float2 u = next2d(smp);
+    float3 le = scene_sample_emitter(sd, &q, (float3)(a, u.x, u.y));
+    if (is_black(le) || !(q.pdf > 0.0f)) return (float3)(0.0f);
+    BsdfQuery bq;
+    bq.wi = wi_local;
+    bq.wo = to_local(&its->sh, q.wi);
+    bq.eta = 1.0f;
+    bq.measure = MEASURE_SOLID_ANGLE;
+    bq.uv = its->uv;
+    float3 f = bsdf_eval(b, &bq);
+    if (is_black(f)) return (float3)(0.0f);
+    if (light_occluded(sd, its->p, &q)) return (float3)(0.0f);
+    float w = 1.0f;
+    if (mis && !q.delta) w = mis_balance(q.pdf, bsdf_pdf(b, &bq));
+    return f * fabs(bq.wo.z) * le * w;
+}
+
+/* Radiance from the environment (infinite emitters) along an escaping direction d. */
+INLINE float3 escaped(const SceneData* sd, float3 d) { return scene_eval_environment(sd, d); }
+
+#endif
