@@ -13,7 +13,8 @@ rational fit. Sampling picks the specular lobe with probability ks; the pdf is t
 </bsdf>
 ```
 A nested `<texture type="checkerboard_color" name="kd">` may replace kd (then ks = 1 - the largest
-component of either texture colour). Bsdf row: color = kd (or the texture's lanes); params = (alpha, intIOR, extIOR, ks).
+component of either texture colour).
+Bsdf row: color = kd (or the texture's lanes); params = (alpha, intIOR, extIOR, ks).
 """
 import numpy as np
 
