@@ -1,4 +1,4 @@
-"""Command line: `clrender render | devices` (a thin wrapper over the Python API)."""
+"""Command line: `clrender render | devices | bench` (a thin wrapper over the Python API)."""
 from __future__ import annotations
 
 import argparse
@@ -56,7 +56,7 @@ def cmd_render(args) -> int:
 
 
 def cmd_devices(args) -> int:
-    from .device.context import choose_device, list_devices
+    from .device.context import build_check, choose_device, list_devices
 
     devices = list_devices()
     try:
@@ -69,11 +69,45 @@ def cmd_devices(args) -> int:
         print(f"      {d.version.strip()}; {d.opencl_c_version.strip()}; driver {d.driver_version.strip()}")
         print(f"      {d.max_compute_units} compute units, {d.global_mem_size / 2**30:.1f} GiB global memory, "
               f"max work-group {d.max_work_group_size}")
+        why = build_check(p, d)
+        print("      builds kernels: yes" if why is None else f"      builds kernels: NO ({why})")
     if not devices:
         print("no OpenCL devices found")
         return 1
     print("(* = default; choose with --device INDEX | cpu | gpu | name substring)")
     return 0
+
+
+def cmd_bench(args) -> int:
+    from . import bench
+
+    if args.compare:
+        if args.scenes:
+            raise ClrenderError("--compare takes two JSON files and no scenes")
+        a, b = (bench.load_json(p) for p in args.compare)
+        print(bench.format_compare(a, b, args.compare[0], args.compare[1]))
+        return 0
+    for name in ("spp", "repeat", "width", "height"):
+        v = getattr(args, name)
+        if v is not None and v < 1:
+            raise ClrenderError(f"--{name} must be at least 1")
+    if args.plot:  # fail before measuring, not after
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            raise ClrenderError('--plot needs matplotlib: pip install "clrender[plot]"') from None
+    say = None if args.quiet else (lambda msg: print(f"clrender bench: {msg}", file=sys.stderr, flush=True))
+    result = bench.run_benchmark(args.scenes or None, devices=args.devices, integrator=args.integrator,
+                                 spp=args.spp, repeat=args.repeat, width=args.width, height=args.height,
+                                 seed=args.seed, reference=args.reference, cold=not args.no_cold,
+                                 scenes_dir=args.scenes_dir, progress=say)
+    print(bench.format_table(result))
+    if args.json:
+        print(f"clrender bench: wrote {bench.write_json(result, args.json)}", file=sys.stderr)
+    if args.plot:
+        print(f"clrender bench: wrote {bench.plot(result, args.plot)}", file=sys.stderr)
+    bad = [r for r in result["results"] if r["status"] == "error"]
+    return 1 if bad else 0
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -94,6 +128,31 @@ def build_parser() -> argparse.ArgumentParser:
     r.set_defaults(func=cmd_render)
     d = sub.add_parser("devices", help="list OpenCL platforms and devices")
     d.set_defaults(func=cmd_devices)
+    from .cli_tests import add_parsers
+
+    add_parsers(sub)
+    b = sub.add_parser("bench", help="benchmark scenes on OpenCL devices (or --compare two results)",
+                       description="Measure build, load, BVH, render speed (samples/s, rays/s), memory and, "
+                                   "with --reference, convergence, per scene and device. Without SCENE: the "
+                                   "default set from the repository's scenes/ folder.")
+    b.add_argument("scenes", nargs="*", metavar="SCENE", help="Nori XML scene files (default: the default set)")
+    b.add_argument("--devices", metavar="all|SPEC,...",
+                   help="'all', or comma-separated device specs as --device takes (default: the default device)")
+    b.add_argument("--integrator", metavar="NAME", help="render with this integrator instead of the scene's")
+    b.add_argument("--spp", type=int, default=16, help="samples per pixel per repetition (default 16)")
+    b.add_argument("--repeat", type=int, default=3, help="timed repetitions after the warm-up (default 3)")
+    b.add_argument("--width", type=int, help="override the image width")
+    b.add_argument("--height", type=int, help="override the image height")
+    b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    b.add_argument("--reference", action="append", metavar="REF.exr",
+                   help="reference image for a relMSE convergence curve (one per scene, in order)")
+    b.add_argument("--json", metavar="OUT", help="write all figures as JSON")
+    b.add_argument("--plot", metavar="OUT.png", help="write a plot (needs matplotlib: clrender[plot])")
+    b.add_argument("--compare", nargs=2, metavar=("A.json", "B.json"), help="print ratios B/A of two results")
+    b.add_argument("--scenes-dir", help="where the default set lives (default: ./scenes or a parent's)")
+    b.add_argument("--no-cold", action="store_true", help="skip the cold-build subprocess")
+    b.add_argument("-q", "--quiet", action="store_true", help="no progress messages")
+    b.set_defaults(func=cmd_bench)
     return ap
 
 

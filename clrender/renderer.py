@@ -39,6 +39,12 @@ class RenderStats:
     upload_seconds: float = 0.0
     interrupted: bool = False
     dropped: int = 0
+    #: rays traced, (camera, closest-hit other than camera, shadow); None unless the Renderer counts rays
+    rays: tuple | None = None
+
+    @property
+    def rays_total(self) -> int | None:
+        return None if self.rays is None else int(sum(self.rays))
 
 
 class _SigintFlag:
@@ -65,19 +71,28 @@ class _SigintFlag:
 
 
 class Renderer:
-    """A scene uploaded to one device, with its program built; `render()` may be called repeatedly."""
+    """A scene uploaded to one device, with its program built; `render()` may be called repeatedly.
 
-    def __init__(self, scene, device=None, fast_math: bool = False, buffers=None, defines=None):
+    With ``count_rays=True`` the kernels are built with ``-DCLRENDER_COUNT_RAYS`` and every render reports the
+    rays it traced (``film.stats.rays``, ``film.metadata["rays_*"]``); normal builds compile no counting code.
+    """
+
+    def __init__(self, scene, device=None, fast_math: bool = False, buffers=None, defines=None,
+                 count_rays: bool = False):
         import pyopencl as cl
 
         self.scene = scene
+        self.count_rays = bool(count_rays)
+        defines = dict(defines or {})
+        if self.count_rays:
+            defines["CLRENDER_COUNT_RAYS"] = 1
         self.ctx, self.queue = get_context(device)
         dev = self.ctx.devices[0]
         self.device_name = f"{dev.platform.name.strip()} / {dev.name.strip()}"
         self.buffers = buffers if buffers is not None else pack_scene(scene)
         t0 = time.perf_counter()
         self.program = build_program(self.ctx, '#include "render.cl"\n',
-                                     defines={"INTEGRATOR": scene.integrator.kernel, **(defines or {})},
+                                     defines={"INTEGRATOR": scene.integrator.kernel, **defines},
                                      fast_math=fast_math)
         self.kernel = cl.Kernel(self.program, "render_pass")
         self.build_seconds = time.perf_counter() - t0
@@ -93,6 +108,14 @@ class Renderer:
         self.launch_pixels = min(self.n_pixels, MAX_LAUNCH_PIXELS)
         self.global_size = -(-self.launch_pixels // LOCAL_SIZE) * LOCAL_SIZE
         self.upload_seconds = time.perf_counter() - t0
+
+    def device_memory_bytes(self) -> int:
+        """Bytes this renderer keeps on the device during a render: scene tables, camera, filter table,
+        and the per-pixel accumulators (acc0, acc1, bad, and the ray counters when counting)."""
+        fixed = sum(a.nbytes for a in self.buffers.scene_arrays())
+        fixed += self.buffers.camera.nbytes + self.buffers.filter_cdf.nbytes
+        per_pixel = 16 + 16 + 4 + (16 if self.count_rays else 0)
+        return int(fixed + per_pixel * self.n_pixels + (0 if self.count_rays else 16))
 
     def render(self, spp: int | None = None, seed: int = 0, time_limit: float | None = None,
                progress: bool = False, on_pass=None, start_sample: int = 0) -> Film:
@@ -110,8 +133,11 @@ class Renderer:
         d_acc0 = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=acc0)
         d_acc1 = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=acc1)
         d_bad = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=bad)
+        # Ray counters: per pixel when counting, else a one-element dummy the kernel never touches.
+        rays = np.zeros((n if self.count_rays else 1, 4), np.uint32)
+        d_rays = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=rays)
         k = self.kernel
-        args = self._scene_bufs + [self._camera, self._filter, d_acc0, d_acc1, d_bad]
+        args = self._scene_bufs + [self._camera, self._filter, d_acc0, d_acc1, d_bad, d_rays]
         for i, a in enumerate(args):
             k.set_arg(i, a)
         nargs = len(args)
@@ -166,6 +192,8 @@ class Renderer:
         cl.enqueue_copy(self.queue, acc0, d_acc0)
         cl.enqueue_copy(self.queue, acc1, d_acc1)
         cl.enqueue_copy(self.queue, bad, d_bad)
+        if self.count_rays:
+            cl.enqueue_copy(self.queue, rays, d_rays)
         self.queue.finish()
         stats.samples = done * n
         stats.dropped = int(bad.sum())
@@ -174,6 +202,11 @@ class Renderer:
             "integrator": self.scene.integrator.kernel, "version": __version__,
             "interrupted": stats.interrupted, "dropped_samples": stats.dropped, "start_sample": start_sample,
         }
+        if self.count_rays:
+            tot = rays[:, :3].astype(np.uint64).sum(axis=0)
+            stats.rays = (int(tot[0]), int(tot[1]), int(tot[2]))
+            meta.update(rays_camera=stats.rays[0], rays_closest=stats.rays[1], rays_shadow=stats.rays[2],
+                        rays_total=stats.rays_total)
         film = Film.from_accumulators(self.width, self.height, acc0, acc1, bad, meta)
         film.stats = stats
         return film

@@ -13,9 +13,11 @@
 
 /* One pass: `spp` samples for each of `pixel_count` pixels starting at `pixel_offset`. Each work-item owns
    one pixel, so accumulation needs no atomics. Per pixel: acc0 = (sum wL, sum w), acc1 = (sum (wL)^2, n),
-   bad = samples dropped for being NaN/Inf. */
+   bad = samples dropped for being NaN/Inf. rays (written only in builds with -DCLRENDER_COUNT_RAYS; otherwise a
+   one-element dummy, so both builds take the same arguments) = rays traced: (camera, other closest-hit,
+   shadow/any-hit, 0). The first closest-hit query of a sample is its camera ray. */
 __kernel void render_pass(SCENE_ARGS, __global const Camera* cam, __global const float* filter_cdf,
-                          __global float4* acc0, __global float4* acc1, __global uint* bad,
+                          __global float4* acc0, __global float4* acc1, __global uint* bad, __global uint4* rays,
                           uint pixel_offset, uint pixel_count, uint sample_offset, uint spp, uint seed) {
     uint gid = get_global_id(0);
     if (gid >= pixel_count) return;
@@ -25,13 +27,26 @@ __kernel void render_pass(SCENE_ARGS, __global const Camera* cam, __global const
     float3 swl = (float3)(0.0f), swl2 = (float3)(0.0f);
     float sw = 0.0f;
     uint nbad = 0u;
+#ifdef CLRENDER_COUNT_RAYS
+    uint n_camera = 0u, n_closest = 0u, n_shadow = 0u;
+#endif
     for (uint s = 0u; s < spp; ++s) {
         Sampler smp;
         sampler_init(&smp, seed, pix, sample_offset + s);
         float w;
         float2 off = filter_sample(cam, filter_cdf, next2d(&smp), &w);
         Ray ray = camera_ray(cam, (float)px + 0.5f + off.x, (float)py + 0.5f + off.y);
+#ifdef CLRENDER_COUNT_RAYS
+        sd.n_closest = 0u;
+        sd.n_shadow = 0u;
+#endif
         float3 L = Li(&sd, ray, &smp);
+#ifdef CLRENDER_COUNT_RAYS
+        uint cam_ray = sd.n_closest > 0u ? 1u : 0u;
+        n_camera += cam_ray;
+        n_closest += sd.n_closest - cam_ray;
+        n_shadow += sd.n_shadow;
+#endif
 #ifdef CLRENDER_TEST_POISON
         /* test builds only: prove that bad samples are dropped and counted */
         uint si = sample_offset + s;
@@ -48,4 +63,7 @@ __kernel void render_pass(SCENE_ARGS, __global const Camera* cam, __global const
     acc0[pix] = (float4)(a0.xyz + swl, a0.w + sw);
     acc1[pix] = (float4)(a1.xyz + swl2, a1.w + (float)(spp - nbad));
     bad[pix] += nbad;
+#ifdef CLRENDER_COUNT_RAYS
+    rays[pix] += (uint4)(n_camera, n_closest, n_shadow, 0u);
+#endif
 }

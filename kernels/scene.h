@@ -21,7 +21,22 @@ typedef struct {
     __global const Emitter* emitters;
     __global const float* emitter_cdf;  /* area emitters' triangle CDFs, back to back */
     __global const SceneInfo* info;
+#ifdef CLRENDER_COUNT_RAYS
+    uint n_closest, n_shadow;           /* rays traced by this work-item (benchmark builds only) */
+#endif
 } SceneData;
+
+/* Ray counting for `clrender bench`: built with -DCLRENDER_COUNT_RAYS, scene_intersect/scene_occluded count
+   their queries in the (private) SceneData. The queries take a const SceneData*, so the counters are reached
+   through a cast: the struct itself lives in the kernel's private memory, never const. Normal builds
+   compile none of this. */
+#ifdef CLRENDER_COUNT_RAYS
+#define COUNT_RAY(sd, field) (((SceneData*)(sd))->field += 1u)
+#define SCENE_INIT_COUNTERS(sd) sd.n_closest = 0u; sd.n_shadow = 0u
+#else
+#define COUNT_RAY(sd, field) ((void)0)
+#define SCENE_INIT_COUNTERS(sd) ((void)0)
+#endif
 
 /* The kernel-argument list of a scene, and the code that gathers it into a SceneData. Every kernel entry
    point that needs the scene takes SCENE_ARGS first, so the host sets them the same way everywhere. */
@@ -36,7 +51,8 @@ typedef struct {
     sd.nodes = s_nodes; sd.prims = s_prims; sd.positions = s_positions; sd.normals = s_normals; \
     sd.uvs = s_uvs; sd.tri_index = s_tri_index; sd.spheres = s_spheres; sd.sphere_shape = s_sphere_shape; \
     sd.shapes = s_shapes; sd.bsdfs = s_bsdfs; sd.emitters = s_emitters; sd.emitter_cdf = s_emitter_cdf; \
-    sd.info = s_info
+    sd.info = s_info; \
+    SCENE_INIT_COUNTERS(sd)
 
 typedef struct {
     float3 p;        /* hit point */
@@ -52,6 +68,7 @@ typedef struct {
 
 INLINE bool scene_intersect(const SceneData* sd, const Ray* r, Intersection* its) {
     Hit h;
+    COUNT_RAY(sd, n_closest);
     if (!bvh_closest_hit(sd->nodes, sd->prims, r->o, r->d, r->tmin, r->tmax, &h)) return false;
     its->t = h.t;
     if (h.prim & SPHERE_FLAG) {
@@ -92,6 +109,7 @@ INLINE bool scene_intersect(const SceneData* sd, const Ray* r, Intersection* its
 }
 
 INLINE bool scene_occluded(const SceneData* sd, float3 o, float3 d, float tmin, float tmax) {
+    COUNT_RAY(sd, n_shadow);
     return bvh_any_hit(sd->nodes, sd->prims, o, d, tmin, tmax);
 }
 

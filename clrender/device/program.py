@@ -50,8 +50,11 @@ _PROGRAMS: dict = {}
 
 
 def build_program(ctx, source: str, defines: dict | None = None, fast_math: bool = False,
-                  with_types: bool = True):
-    """Build (and cache) a program; ``source`` may ``#include`` any header under kernels/."""
+                  with_types: bool = True, use_cache: bool = True):
+    """Build (and cache) a program; ``source`` may ``#include`` any header under kernels/.
+
+    ``use_cache=False`` bypasses (and does not fill) this in-memory cache, so the driver really builds the
+    program again (PoCL still uses its disk cache): `clrender bench` times warm builds this way."""
     import pyopencl as cl
 
     if with_types:
@@ -60,12 +63,13 @@ def build_program(ctx, source: str, defines: dict | None = None, fast_math: bool
         source = c_header() + "\n" + source
     opts = build_options(defines, fast_math)
     key = (ctx.int_ptr, source, tuple(opts))
-    prg = _PROGRAMS.get(key)
+    prg = _PROGRAMS.get(key) if use_cache else None
     if prg is not None:
         return prg
     try:
         prg = cl.Program(ctx, source).build(options=opts)
     except cl.RuntimeError as exc:
         raise DeviceError(f"OpenCL program failed to build:\n{exc}") from exc
-    _PROGRAMS[key] = prg
+    if use_cache:
+        _PROGRAMS[key] = prg
     return prg

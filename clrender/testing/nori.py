@@ -1,0 +1,373 @@
+"""Nori's statistical test files (`<test type="ttest">`, `<test type="chi2test">`), run on any OpenCL device.
+
+ttest: Student's t-test of the mean luminance of sample weights against each reference, Šidák-corrected
+over all references of the file.
+- `bsdf` children: the weights f·cos/pdf of `sample()` at wi = (sin θ, 0, cos θ) for each of `angles`
+  (references in BSDF-major order).
+- emitter children (a `point`, `distantdisk`, ... emitter, or a `mesh` with an `area` emitter): the weights
+  radiance/pdf of `sample()` seen from the reference point (0, 0, d) for each of `distances` (default: the
+  origin only), in emitter-major order.
+- `scene` children: one reference per scene; each sample is the radiance estimate at a uniformly random
+  image position (we render every pixel with the same number of samples and a box filter of one pixel).
+  The per-sample luminance variance is bounded by the per-channel variances (exact for grey scenes), which
+  can only make the test more conservative.
+chi2test: for each `bsdf`, `testCount` incident directions (cosine-distributed, from --seed), samples binned
+on the sphere (`resolution` cos θ bins × 2·resolution φ bins) against the integral of `pdf()` over each
+cell, small cells pooled, Šidák-corrected over testCount × BSDFs. A failing case writes its observed and
+expected histograms as a PNG beside the test file.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import SceneError, SourceLocation
+from ..scene.registry import register
+from .chi2 import bin_directions, chi2_test, expected_from_grid, refined_direction_grid, sidak
+
+LUM = np.array([0.212671, 0.715160, 0.072169])
+
+
+def _numbers(props, name, default=None):
+    if not props.has(name):
+        if default is None:
+            raise SceneError(f"missing required property '{name}' of <test>", props.owner_location)
+        return list(default)
+    text = props.get_string(name)
+    try:
+        return [float(t) for t in text.replace(",", " ").split()]
+    except ValueError:
+        raise SceneError(f"'{name}' must be a list of numbers, got '{text}'", props.location(name)) from None
+
+
+class _TestFile:
+    children = ("bsdf", "emitter", "scene", "mesh")
+
+    def __init__(self, props, children, spec):
+        self.location = spec.location
+        self.alpha = props.get_float("significanceLevel", 0.01)
+        self.items = children
+
+
+@register("test", "ttest")
+class TTestFile(_TestFile):
+    def __init__(self, props, children, spec):
+        super().__init__(props, children, spec)
+        self.sample_count = props.get_int("sampleCount", 100000)
+        self.angles = _numbers(props, "angles", [0.0]) if props.has("angles") else []
+        self.distances = _numbers(props, "distances", [0.0]) if props.has("distances") else [0.0]
+        self.references = _numbers(props, "references")
+        n_bsdf = sum(1 for c in children if c.spec.tag == "bsdf")
+        n_em = sum(1 for c in children if c.spec.tag in ("emitter", "mesh"))
+        n_scene = sum(1 for c in children if c.spec.tag == "scene")
+        if n_bsdf and not self.angles:
+            raise SceneError("a ttest of BSDFs needs 'angles'", spec.location)
+        expected = n_bsdf * len(self.angles) + n_em * len(self.distances) + n_scene
+        if expected != len(self.references):
+            raise SceneError(f"{len(self.references)} references given, but the test has {expected} cases "
+                             f"({n_bsdf} BSDF(s) × {len(self.angles)} angle(s), {n_em} emitter(s) × "
+                             f"{len(self.distances)} distance(s), {n_scene} scene(s))", props.location("references"))
+
+
+@register("test", "chi2test")
+class Chi2TestFile(_TestFile):
+    def __init__(self, props, children, spec):
+        super().__init__(props, children, spec)
+        self.resolution = props.get_int("resolution", 10)
+        self.min_exp = props.get_float("minExpFrequency", 5.0)
+        self.sample_count = props.get_int("sampleCount", self.resolution * 2 * self.resolution * 5000)
+        self.test_count = props.get_int("testCount", 5)
+        for c in children:
+            if c.spec.tag != "bsdf":
+                raise SceneError("a chi2test takes only <bsdf> children", c.spec.location)
+
+
+@dataclass
+class CaseResult:
+    file: str
+    kind: str
+    what: str
+    passed: bool
+    p_value: float
+    reference: float | None = None
+    estimate: float | None = None
+    std_error: float | None = None
+    detail: str = ""
+    extra: dict = field(default_factory=dict)
+
+    def line(self) -> str:
+        status = "PASS" if self.passed else "FAIL"
+        if self.reference is not None:
+            body = (f"reference {self.reference:.6g}, estimate {self.estimate:.6g} ± {self.std_error:.3g}, "
+                    f"p = {self.p_value:.4g}")
+        else:
+            body = f"p = {self.p_value:.4g}; {self.detail}"
+        return f"{status}  {self.kind:6s} {self.what}: {body}"
+
+
+def _describe_plugin(obj) -> str:
+    spec = obj.spec
+    if spec is None:
+        return "default"
+    parts = []
+    for name in spec.props.names():
+        raw = spec.props.raw(name)
+        parts.append(f"{name}={raw}")
+    return f'{spec.tag} "{spec.type}"' + (f" ({', '.join(parts)})" if parts else "")
+
+
+def _ttest(values_mean, values_std_err, reference, alpha_corrected, dof):
+    from scipy import stats
+
+    if values_std_err == 0:
+        ok = abs(values_mean - reference) <= 1e-5 * max(1.0, abs(reference))
+        return ok, 1.0 if ok else 0.0
+    t = (values_mean - reference) / values_std_err
+    p = float(2 * stats.t.sf(abs(t), dof))
+    return p >= alpha_corrected, p
+
+
+class _EmitterScene:
+    """A scene holding just one emitter (and its mesh), to pack the tables its sampling needs."""
+
+    def __init__(self, item):
+        from ..cameras.perspective import PerspectiveCamera  # noqa: F401 (registers)
+        from ..integrators.integrator import Integrator
+
+        if item.spec.tag == "mesh":
+            if item.emitter is None:
+                raise SceneError("a <mesh> in a ttest must carry an emitter", item.spec.location)
+            self.shapes, self.emitters = [item], []
+        else:
+            self.shapes, self.emitters = [], [item]
+        self.integrator = Integrator()
+        self.camera = _DummyCamera()
+
+
+class _DummyCamera:
+    width = height = 1
+
+    def pack(self):
+        from ..device import layout
+
+        row = layout.zeros("Camera")
+        row["filter_bins"] = 1
+        return row, np.array([0.0, 1.0], np.float32)
+
+
+EMITTER_SRC = r"""
+#include "rng.h"
+#include "scene.h"
+#include "emitter.h"
+__kernel void emitter_sample_batch(SCENE_ARGS, uint e, float4 ref, uint n, uint first, uint seed,
+                                   __global float4* out) {
+    uint i = get_global_id(0);
+    if (i >= n) return;
+    SCENE_INIT(sd);
+    Sampler s;
+    sampler_init(&s, seed, first + i, 0u);
+    EmitterQuery q;
+    q.ref = ref.xyz;
+    float3 w = emitter_sample(&sd, e, &q, next2d(&s));
+    out[i] = (float4)(w, q.pdf);
+}
+"""
+
+
+class Runner:
+    """Runs test files on one device and collects CaseResults."""
+
+    def __init__(self, device=None, seed: int = 0, plots: bool = True):
+        from ..device.context import get_context
+
+        self.ctx, self.queue = get_context(device)
+        self.seed = seed
+        self.plots = plots
+
+    # -- files ----------------------------------------------------------------------------------------
+    def run_file(self, path) -> list[CaseResult]:
+        from .. import plugins  # noqa: F401
+        from ..scene.registry import create
+        from ..scene.xmlparser import parse_file
+
+        path = Path(path)
+        spec = parse_file(str(path))
+        if spec.tag != "test":
+            raise SceneError(f"expected a <test> file, found <{spec.tag}> (use `clrender render` for scenes)",
+                             SourceLocation(str(path), spec.location.line, spec.location.col))
+        test = create(spec)
+        if isinstance(test, TTestFile):
+            return self._ttest(path, test)
+        return self._chi2(path, test)
+
+    # -- ttest ----------------------------------------------------------------------------------------
+    def _ttest(self, path, test: TTestFile) -> list[CaseResult]:
+        from .kernels import bsdf_sample_batch
+
+        n_cases = len(test.references)
+        a = sidak(test.alpha, n_cases)
+        refs = iter(test.references)
+        out = []
+        n = test.sample_count
+        for item in test.items:
+            tag = item.spec.tag
+            if tag == "bsdf":
+                row = item.pack()
+                for ang in test.angles:
+                    th = math.radians(ang)
+                    wi = np.array([math.sin(th), 0.0, math.cos(th)])
+                    s = bsdf_sample_batch(self.ctx, self.queue, row, wi, n, seed=self.seed)
+                    lum = s.weight.astype(np.float64) @ LUM
+                    out.append(self._tcase(path, "bsdf", f"{_describe_plugin(item)}, angle {ang:g}°", lum,
+                                           next(refs), a))
+            elif tag in ("emitter", "mesh"):
+                for dist in test.distances:
+                    lum = self._emitter_samples(item, dist, n) @ LUM
+                    out.append(self._tcase(path, "emitter", f"{_describe_plugin(item if tag == 'emitter' else item.emitter)}"
+                                           f", reference point (0, 0, {dist:g})", lum, next(refs), a))
+            else:
+                out.append(self._scene_case(path, item, n, next(refs), a))
+        return out
+
+    def _tcase(self, path, kind, what, lum, ref, a):
+        lum = np.where(np.isfinite(lum), lum, np.nan)
+        bad = int(np.isnan(lum).sum())
+        lum = np.nan_to_num(lum)
+        m = float(lum.mean())
+        se = float(lum.std(ddof=1) / math.sqrt(len(lum))) if len(lum) > 1 else 0.0
+        ok, p = _ttest(m, se, ref, a, len(lum) - 1)
+        if bad:
+            ok = False
+        return CaseResult(str(path), kind, what, ok, p, ref, m, se,
+                          detail=f"{bad} NaN/Inf sample weights" if bad else "")
+
+    def _emitter_samples(self, item, dist, n):
+        import pyopencl as cl
+
+        from ..device.program import build_program
+        from ..pack import pack_scene
+
+        buffers = pack_scene(_EmitterScene(item))
+        prg = build_program(self.ctx, EMITTER_SRC)
+        k = cl.Kernel(prg, "emitter_sample_batch")
+        mf = cl.mem_flags
+        bufs = [cl.Buffer(self.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(x))
+                for x in buffers.scene_arrays()]
+        out = np.empty((n, 4), np.float32)
+        chunk = 1 << 20
+        for s in range(0, n, chunk):
+            m = min(chunk, n - s)
+            d_out = cl.Buffer(self.ctx, mf.WRITE_ONLY, m * 16)
+            k(self.queue, (-(-m // 64) * 64,), (64,), *bufs, np.uint32(0),
+              np.array([0, 0, dist, 0], np.float32), np.uint32(m), np.uint32(s), np.uint32(self.seed), d_out)
+            cl.enqueue_copy(self.queue, out[s:s + m], d_out)
+        self.queue.finish()
+        return out[:, :3].astype(np.float64)
+
+    def _scene_case(self, path, scene, n, ref, a):
+        from ..filters.box import BoxFilter
+        from ..renderer import Renderer
+
+        box = BoxFilter.__new__(BoxFilter)
+        box.radius = 0.5
+        scene.camera.filter = box
+        npix = scene.width * scene.height
+        spp = max(2, -(-n // npix))
+        film = Renderer(scene, device=self._device_spec()).render(spp=spp, seed=self.seed)
+        lum = film.image.astype(np.float64).reshape(-1, 3) @ LUM
+        m = float(lum.mean())
+        # Per pixel: variance of its mean, per channel; the luminance's is at most (sum_k c_k sd_k)^2.
+        sd = np.sqrt(film.variance().reshape(-1, 3)) @ LUM
+        se = float(np.sqrt(np.sum(sd ** 2)) / npix)
+        dof = int(film.count.sum()) - 1
+        ok, p = _ttest(m, se, ref, a, dof)
+        what = f"scene with {scene.integrator.kernel} ({scene.width}×{scene.height}, {spp} spp)"
+        if film.metadata.get("dropped_samples"):
+            ok = False
+        return CaseResult(str(path), "scene", what, ok, p, ref, m, se)
+
+    def _device_spec(self):
+        d = self.ctx.devices[0]
+        from ..device.context import list_devices
+
+        for i, (_, dd) in enumerate(list_devices()):
+            if dd.int_ptr == d.int_ptr:
+                return str(i)
+        return None
+
+    # -- chi2test -------------------------------------------------------------------------------------
+    def _chi2(self, path, test: Chi2TestFile) -> list[CaseResult]:
+        from .kernels import bsdf_pdf_eval_batch, bsdf_sample_batch
+
+        res = test.resolution
+        n_tests = test.test_count * len(test.items)
+        rng = np.random.default_rng(self.seed)
+        out = []
+        for bi, item in enumerate(test.items):
+            row = item.pack()
+            alpha = float(getattr(item, "alpha", 0.0) or 0.0)
+            for t in range(test.test_count):
+                u = rng.random(2)
+                r, phi = math.sqrt(u[0]), 2 * math.pi * u[1]
+                wi = np.array([r * math.cos(phi), r * math.sin(phi), math.sqrt(max(0.0, 1 - u[0]))])
+                s = bsdf_sample_batch(self.ctx, self.queue, row, wi, test.sample_count, seed=self.seed + 7919 * t)
+                ok_w = np.any(s.weight != 0, axis=1) & np.all(np.isfinite(s.weight), axis=1)
+                observed = bin_directions(s.wo[ok_w], res)
+                peaks = []
+                if alpha > 0:
+                    refl = np.array([-wi[0], -wi[1], wi[2]])
+                    peaks = [(refl, min(math.pi, 12 * alpha)), (refl, min(math.pi, 3 * alpha))]
+                dirs, weights, cell = refined_direction_grid(res, sub=8, peaks=peaks, n_fine=200 if peaks else 0)
+                pdf, _ = bsdf_pdf_eval_batch(self.ctx, self.queue, row, np.broadcast_to(wi, dirs.shape), dirs)
+                expected = expected_from_grid(pdf, weights, cell, (res, 2 * res), test.sample_count)
+                r_ = chi2_test(observed, expected, test.min_exp, test.alpha, n_tests)
+                what = f"{_describe_plugin(item)}, wi = ({wi[0]:.3f}, {wi[1]:.3f}, {wi[2]:.3f})"
+                case = CaseResult(str(path), "chi2", what, r_.passed, r_.p_value, detail=r_.message)
+                if not r_.passed and self.plots:
+                    png = Path(path).with_name(f"{Path(path).stem}_chi2_{bi}_{t}.png")
+                    write_histograms(png, observed, expected, what)
+                    case.extra["plot"] = str(png)
+                    case.detail += f"; histograms: {png}"
+                out.append(case)
+        return out
+
+
+def write_histograms(path, observed, expected, title=""):
+    """Observed and expected counts side by side (rows: cos θ from -1 at the bottom, columns: φ)."""
+    from PIL import Image, ImageDraw
+
+    from ..film import _atomic_write
+
+    vmax = max(float(observed.max()), float(expected.max()), 1.0)
+    scale = 24
+
+    def panel(h):
+        g = np.clip(h[::-1] / vmax, 0, 1)
+        rgb = np.stack([g ** 0.5, g ** 1.5, 1 - g], axis=-1)
+        rgb = (np.repeat(np.repeat(rgb, scale, axis=0), scale, axis=1) * 255).astype(np.uint8)
+        return Image.fromarray(rgb, "RGB")
+
+    a, b = panel(observed), panel(expected)
+    img = Image.new("RGB", (a.width * 2 + 30, a.height + 40), "white")
+    img.paste(a, (10, 30))
+    img.paste(b, (a.width + 20, 30))
+    d = ImageDraw.Draw(img)
+    d.text((10, 5), "observed", fill="black")
+    d.text((a.width + 20, 5), "expected", fill="black")
+    d.text((10, 18), title[:120], fill="black")
+    return _atomic_write(Path(path), lambda tmp: img.save(str(tmp), format="PNG"))
+
+
+def run_files(paths, device=None, seed: int = 0, plots: bool = True) -> list[CaseResult]:
+    runner = Runner(device=device, seed=seed, plots=plots)
+    results = []
+    for p in paths:
+        results.extend(runner.run_file(p))
+    return results
+
+
+def results_json(results) -> list[dict]:
+    return [asdict(r) for r in results]

@@ -1,0 +1,61 @@
+"""Our own Nori test files (tests/nori/*.xml) through the same runner as `clrender test`, and the runner's
+verdicts: it must fail on a broken BSDF, on wrong references, and exit non-zero."""
+from pathlib import Path
+
+import pytest
+
+from clrender.cli import main
+
+NORI = Path(__file__).resolve().parent / "nori"
+FILES = sorted(NORI.glob("*.xml"))
+
+
+@pytest.mark.parametrize("path", FILES, ids=[p.name for p in FILES])
+def test_our_test_files_pass(path, capsys):
+    code = main(["test", str(path), "--seed", "1"])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    assert " 0 failed" in out
+
+
+def test_wrong_reference_fails(tmp_path, capsys):
+    text = (NORI / "bsdf_ttest.xml").read_text().replace("0.464596, 0.465451", "0.47, 0.465451")
+    p = tmp_path / "wrong.xml"
+    p.write_text(text)
+    assert main(["test", str(p)]) == 1
+    out = capsys.readouterr().out
+    assert "FAIL" in out and "1 failed" in out
+
+
+def test_broken_bsdf_fails_chi2_with_histograms(tmp_path, capsys, monkeypatch):
+    """A microfacet whose pdf() is wrong (alpha given to pdf differs from the sampled one) must fail, and
+    the failing case's histograms must be written beside the file."""
+    p = tmp_path / "chi2.xml"
+    p.write_text('<test type="chi2test"><integer name="testCount" value="2"/><bsdf type="microfacet">'
+                 '<float name="alpha" value="0.3"/><color name="kd" value="0"/></bsdf></test>')
+    import clrender.testing.kernels as K
+
+    real = K.bsdf_pdf_eval_batch
+
+    def wrong_pdf(ctx, queue, rows, wi, wo, **kw):
+        import numpy as np
+
+        rows = np.array(rows, copy=True)
+        rows["params"][..., 0] *= 1.3  # the pdf of a rougher surface than the one sampled
+        return real(ctx, queue, rows, wi, wo, **kw)
+
+    monkeypatch.setattr(K, "bsdf_pdf_eval_batch", wrong_pdf)
+    assert main(["test", str(p)]) == 1
+    out = capsys.readouterr().out
+    assert "FAIL" in out and "histograms:" in out
+    assert list(tmp_path.glob("chi2_chi2_*.png"))
+
+
+@pytest.mark.parametrize("warp,param", [("square", None), ("tent", None), ("disk", None), ("triangle", None),
+                                        ("sphere", None), ("hemisphere", None), ("cosine_hemisphere", None),
+                                        ("cone", 20.0), ("beckmann", 0.2)])
+def test_warptest(tmp_path, warp, param, capsys):
+    args = ["warptest", warp] + ([str(param)] if param is not None else []) + [
+        "--samples", "400000", "--plot", str(tmp_path / "w.png")]
+    assert main(args) == 0, capsys.readouterr().out
+    assert (tmp_path / "w.png").exists()
