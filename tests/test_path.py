@@ -20,8 +20,14 @@ def quad(path, corners, flip=False):
     path.write_text("".join(f"v {x:g} {y:g} {z:g}\n" for x, y, z in c) + "f 1 2 3 4\n")
 
 
-def box_scene(tmp_path, integrator, width=12, height=12):
-    """A Cornell-like box (open front) with a large ceiling light, a mirror sphere and a glass sphere."""
+GLOSSY = ('<bsdf type="microfacet"><float name="alpha" value="0.15"/><color name="kd" value="0.2,0.3,0.4"/></bsdf>',
+          '<bsdf type="microfacet"><float name="alpha" value="0.5"/><color name="kd" value="0.6,0.3,0.1"/></bsdf>')
+SPECULAR = ('<bsdf type="mirror"/>', '<bsdf type="dielectric"/>')
+
+
+def box_scene(tmp_path, integrator, width=12, height=12, spheres=SPECULAR):
+    """A Cornell-like box (open front) with a large ceiling light and two spheres (by default a mirror and a
+    glass one)."""
     walls = {
         "floor": [(-1, 0, -1), (1, 0, -1), (1, 0, 1), (-1, 0, 1)],
         "ceil": [(-1, 2, -1), (-1, 2, 1), (1, 2, 1), (1, 2, -1)],
@@ -44,9 +50,9 @@ def box_scene(tmp_path, integrator, width=12, height=12):
     meshes.append('<mesh type="obj"><string name="filename" value="light.obj"/><emitter type="area">'
                   '<color name="radiance" value="6"/></emitter></mesh>')
     meshes.append('<mesh type="sphere"><point name="center" value="-0.45,0.35,-0.3"/><float name="radius" '
-                  'value="0.35"/><bsdf type="mirror"/></mesh>')
+                  f'value="0.35"/>{spheres[0]}</mesh>')
     meshes.append('<mesh type="sphere"><point name="center" value="0.45,0.35,0.3"/><float name="radius" '
-                  'value="0.35"/><bsdf type="dielectric"/></mesh>')
+                  f'value="0.35"/>{spheres[1]}</mesh>')
     cam = A.camera(width=width, height=height, fov=45, target=(0, 1, 0), origin=(0, 1, 3.4))
     cam = cam.replace('up="0,0,1"', 'up="0,1,0"').replace("<lookat", '<scale value="-1,1,1"/><lookat')
     return load(tmp_path, f'<scene><integrator type="{integrator}"/>{cam}{"".join(meshes)}</scene>')
@@ -59,6 +65,41 @@ def test_path_strategies_agree_per_pixel(tmp_path):
     for a, b in (("path_mis", "path_mats"), ("path_mis", "path_ems"), ("path_mats", "path_ems")):
         res = compare_films(films[a], films[b], alpha=0.01 / 3)
         assert res.passed, (a, b, res.message)
+
+
+@pytest.mark.slow
+def test_direct_strategies_agree_per_pixel(tmp_path):
+    """Without delta BSDFs, direct_ems, direct_mats and direct_mis converge to the same image."""
+    films = {k: clrender.render(box_scene(tmp_path, k, spheres=GLOSSY), spp=16384, seed=i)
+             for i, k in enumerate(("direct_ems", "direct_mats", "direct_mis"))}
+    for a, b in (("direct_mis", "direct_ems"), ("direct_mis", "direct_mats"), ("direct_ems", "direct_mats")):
+        res = compare_films(films[a], films[b], alpha=0.01 / 3)
+        assert res.passed, (a, b, res.message)
+
+
+def test_direct_strategies_agree_on_the_whole_image(tmp_path):
+    from clrender.testing.stats import mean_and_error
+
+    films = [clrender.render(box_scene(tmp_path, k, spheres=GLOSSY), spp=256, seed=i)
+             for i, k in enumerate(("direct_ems", "direct_mats", "direct_mis"))]
+    (ma, ea), (mb, eb), (mc, ec) = (mean_and_error(f) for f in films)
+    for m, e in ((mb, eb), (mc, ec)):
+        z = (ma - m) / np.sqrt(ea ** 2 + e ** 2)
+        assert np.all(np.abs(z) < 3.5), (ma, m, z)
+
+
+def test_back_of_a_one_sided_light_is_black(tmp_path):
+    """A camera looking at the back of an area light (whose surface reflects nothing) sees black, with
+    every integrator; the front shows the radiance."""
+    for flip, expected in ((False, 2.5), (True, 0.0)):
+        quad(tmp_path / "l.obj", np.array([(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], float), flip=flip)
+        cam = A.camera(width=2, height=2, fov=10, target=(0, 0, 0), origin=(0, 0, 3)).replace('up="0,0,1"', 'up="0,1,0"')
+        for integ in ("direct_ems", "direct_mats", "direct_mis", "path_mats", "path_ems", "path_mis", "whitted"):
+            scene = load(tmp_path, f'<scene><integrator type="{integ}"/>{cam}<mesh type="obj"><string name="filename" '
+                                   'value="l.obj"/><bsdf type="diffuse"><color name="albedo" value="0"/></bsdf>'
+                                   '<emitter type="area"><color name="radiance" value="2.5"/></emitter></mesh></scene>')
+            film = clrender.render(scene, spp=4)
+            np.testing.assert_allclose(film.image, expected, err_msg=f"{integ}, flipped={flip}")
 
 
 def test_path_strategies_agree_on_the_whole_image(tmp_path):

@@ -17,7 +17,7 @@ def _params():
                            marks=marks)
 
 
-@pytest.mark.parametrize("path", _params())
+@pytest.mark.parametrize("path", list(_params()))
 def test_scene_renders(path):
     scene = clrender.load_scene(path)
     cam = scene.camera
