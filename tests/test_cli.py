@@ -85,3 +85,35 @@ def test_ctrl_c_writes_the_partial_image(tmp_path):
     assert 0 < spp < 1000000 and header["clrender.interrupted"] == "True"
     assert img.max() > 0
     assert "partial" in err
+
+
+def test_defines_fill_placeholders(tmp_path, capsys):
+    (tmp_path / "quad.obj").write_text(QUAD)
+    text = GOOD.replace('value="{w}"', 'value="$w"').replace("<scene>", '<scene><default name="w" value="4"/>')
+    p = write(tmp_path, text.format(w=8, h=8, mesh="quad.obj"))
+    out = tmp_path / "d.exr"
+    assert main(["render", str(p), "-q", "-o", str(out), "--spp", "1", "-D", "w=6"]) == 0
+    assert read_exr(out)[0].shape == (8, 6, 3)
+    assert main(["render", str(p), "-q", "-o", str(out), "--spp", "1"]) == 0
+    assert read_exr(out)[0].shape == (8, 4, 3)
+    assert main(["render", str(p), "-q", "-D", "oops"]) == 2
+    assert "name=value" in capsys.readouterr().err
+
+
+def test_unknown_device_is_a_clear_error(tmp_path, capsys):
+    (tmp_path / "quad.obj").write_text(QUAD)
+    p = write(tmp_path, GOOD.format(w=8, h=8, mesh="quad.obj"))
+    assert main(["render", str(p), "-q", "--device", "no-such-device-xyz"]) == 2
+    err = capsys.readouterr().err
+    assert "no-such-device-xyz" in err and "Traceback" not in err
+
+
+def test_time_limit_stops_early_with_true_count(tmp_path):
+    (tmp_path / "quad.obj").write_text(QUAD)
+    p = write(tmp_path, GOOD.format(w=128, h=128, mesh="quad.obj"))
+    out = tmp_path / "t.exr"
+    start = time.time()
+    main(["render", str(p), "-q", "-o", str(out), "--spp", "10000000", "--time-limit", "1.5"])
+    assert time.time() - start < 30
+    _, header = read_exr(out)
+    assert 0 < int(header["clrender.spp"]) < 10000000
