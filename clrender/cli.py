@@ -170,6 +170,15 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("clrender: interrupted", file=sys.stderr)
         return 130
+    except OSError as exc:  # unwritable output, full disk, ...
+        print(f"clrender: error: {exc}", file=sys.stderr)
+        return 2
+    except Exception as exc:
+        # The OpenCL driver failed (out of device memory, a lost device, a driver bug): say so plainly.
+        if type(exc).__module__.startswith("pyopencl"):
+            print(f"clrender: OpenCL error on the device: {exc}", file=sys.stderr)
+            return 3
+        raise
 
 
 if __name__ == "__main__":

@@ -117,3 +117,13 @@ def test_time_limit_stops_early_with_true_count(tmp_path):
     assert time.time() - start < 30
     _, header = read_exr(out)
     assert 0 < int(header["clrender.spp"]) < 10000000
+
+
+def test_unwritable_output_is_a_clear_error(tmp_path, capsys):
+    (tmp_path / "quad.obj").write_text(QUAD)
+    p = write(tmp_path, GOOD.format(w=8, h=8, mesh="quad.obj"))
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    assert main(["render", str(p), "-q", "--spp", "1", "-o", str(blocker / "x.exr")]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "error" in err
