@@ -161,7 +161,6 @@ def pack_scene(scene) -> SceneBuffers:
     info["iparams"][0] = integ.iparams()
     info["max_depth"] = integ.max_depth
     info["rr_depth"] = integ.rr_depth
-    info["env_emitter"] = NONE
     camera, filter_cdf = scene.camera.pack()
     emitters = np.array(emitter_rows, layout.dtype("Emitter")) if emitter_rows else layout.zeros("Emitter")
     cdf = np.concatenate(ctx.cdf_chunks) if ctx.cdf_chunks else np.zeros(1, np.float32)

@@ -44,8 +44,7 @@ STRUCTS: dict[str, list[tuple]] = {
         ("iparams", "float4", 2),     # integrator-specific (av: length; simple: position, energy; ...)
         ("max_depth", "uint"),        # path length limit (0xFFFFFFFF: none)
         ("rr_depth", "uint"),         # Russian roulette starts at this depth
-        ("env_emitter", "uint"),      # index of the environment emitter hit by escaping rays, or NONE
-        ("flags", "uint"),
+        ("pad", "uint", 2),
     ],
     # One row per shape (a mesh or an analytic sphere).
     "Shape": [

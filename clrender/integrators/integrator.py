@@ -9,7 +9,7 @@ NO_LIMIT = 0xFFFFFFFF
 class Integrator:
     #: name of kernels/integrators/<kernel>.h
     kernel = ""
-    #: whether Li may need the BSDF/emitter code (the whole material system is compiled in)
+    #: path segments at most (path integrators' maxDepth); NO_LIMIT = none
     max_depth = NO_LIMIT
     rr_depth = 3
 

@@ -44,9 +44,6 @@ class Scene:
         if self.integrator is None:
             raise SceneError("no integrator was specified: add e.g. <integrator type=\"normals\"/>",
                              spec.location)
-        self.check = getattr(self.integrator, "check_scene", None)
-        if self.check:
-            self.check(self)
 
     @property
     def sample_count(self) -> int:
