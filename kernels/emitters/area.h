@@ -41,6 +41,21 @@ INLINE float area_solid_angle_pdf(float inv_area, float3 ref, float3 p, float3 n
     return inv_area * d2 / c;
 }
 
+/* Complete the query for a point p (shading normal n, geometric normal ng) drawn with area density 1/A;
+   returns L/pdf, or 0 when p faces away from ref (one-sided) or the conversion is degenerate. */
+INLINE float3 area_point_sample(__global const Emitter* em, EmitterQuery* q, float3 p, float3 n, float3 ng,
+                                float area) {
+    float3 d = p - q->ref;
+    float l = len3(d);
+    q->wi = l > 0.0f ? d * (1.0f / l) : ng;
+    q->p = p;
+    q->n = n;
+    q->ng = ng;
+    q->dist = l;
+    q->pdf = area_solid_angle_pdf(1.0f / area, q->ref, p, ng, q->wi);
+    return (q->pdf > 0.0f && dot3(n, q->wi) < 0.0f) ? em->radiance.xyz * (1.0f / q->pdf) : (float3)(0.0f);
+}
+
 INLINE float3 area_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
     Shape sh = sd->shapes[em->shape];
     float area = em->radiance.w;
@@ -77,15 +92,7 @@ INLINE float3 area_sample(const SceneData* sd, __global const Emitter* em, Emitt
         /* inside: uniform on the sphere */
         float3 n = square_to_uniform_sphere(u);
         float3 p = s.xyz + n * s.w;
-        float3 d = p - ref;
-        float l = len3(d);
-        q->wi = l > 0.0f ? d * (1.0f / l) : n;
-        q->p = p;
-        q->n = n;
-        q->ng = n;
-        q->dist = l;
-        q->pdf = area_solid_angle_pdf(1.0f / area, ref, p, n, q->wi);
-        return (q->pdf > 0.0f && dot3(n, q->wi) < 0.0f) ? em->radiance.xyz * (1.0f / q->pdf) : (float3)(0.0f);
+        return area_point_sample(em, q, p, n, n, area);
     }
     /* mesh: pick a triangle by area, rescale u.x for reuse */
     __global const float* cdf = sd->emitter_cdf + em->cdf_offset;
@@ -105,15 +112,7 @@ INLINE float3 area_sample(const SceneData* sd, __global const Emitter* em, Emitt
         float l2 = dot3(m, m);
         if (l2 > 0.0f) n = m * (1.0f / sqrt(l2));
     }
-    float3 d = p - ref;
-    float l = len3(d);
-    q->wi = l > 0.0f ? d * (1.0f / l) : ng;
-    q->p = p;
-    q->n = n;
-    q->ng = ng;
-    q->dist = l;
-    q->pdf = area_solid_angle_pdf(1.0f / area, ref, p, ng, q->wi);
-    return (q->pdf > 0.0f && dot3(n, q->wi) < 0.0f) ? em->radiance.xyz * (1.0f / q->pdf) : (float3)(0.0f);
+    return area_point_sample(em, q, p, n, ng, area);
 }
 
 INLINE float area_pdf(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
