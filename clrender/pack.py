@@ -13,9 +13,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .accel.bvh import build_bvh
+from .accel.bvh4 import Bvh4Unsupported, collapse_bvh4
 from .accel.primitives import pack_primitives, primitive_bounds
 from .device import layout
 from .device.layout import ENUMS, NONE
+from .filters.filter import with_guide
 
 log = logging.getLogger("clrender")
 
@@ -38,6 +40,9 @@ class SceneBuffers:
     camera: np.ndarray
     filter_cdf: np.ndarray
     stats: dict = field(default_factory=dict)
+    #: node table layout: 4 (kernels/bvh4.h, the default) or 2 (kernels/bvh.h); the Renderer passes it to the
+    #: kernels as BVH_WIDTH
+    bvh_width: int = 4
 
     #: order of the SCENE_ARGS kernel arguments
     SCENE_ARGS = ("nodes", "prims", "positions", "normals", "uvs", "tri_index", "spheres", "sphere_shape",
@@ -73,7 +78,15 @@ def _nonempty(a: np.ndarray, dtype=None, shape=None) -> np.ndarray:
     return np.zeros(shape if shape is not None else (1,) + a.shape[1:], dtype or a.dtype)
 
 
-def pack_scene(scene) -> SceneBuffers:
+DEFAULT_BVH_WIDTH = 4   # kernels/scene.h's default for BVH_WIDTH; measured faster on PoCL (benchmarks/README.md)
+
+
+def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | None = None) -> SceneBuffers:
+    """Pack ``scene`` into device tables; ``bvh_width`` 4 collapses the binary BVH into 4-wide nodes (falls back
+    to 2 when the tree does not fit the 4-wide kernel, see clrender/accel/bvh4.py); ``bvh_options`` go to
+    :func:`clrender.accel.bvh.build_bvh` (e.g. ``max_leaf_size``, ``traversal_cost``)."""
+    if bvh_width not in (2, 4):
+        raise ValueError(f"bvh_width must be 2 or 4, got {bvh_width}")
     t0 = time.perf_counter()
     shapes = scene.shapes
     bsdf_index: dict[int, int] = {}
@@ -142,8 +155,16 @@ def pack_scene(scene) -> SceneBuffers:
 
     t_bvh = time.perf_counter()
     lo, hi = primitive_bounds(tris[:, 0], tris[:, 1], tris[:, 2], sph)
-    bvh = build_bvh(lo, hi)
+    bvh = build_bvh(lo, hi, **(bvh_options or {}))
     prims = pack_primitives(tris[:, 0], tris[:, 1], tris[:, 2], sph, bvh.order)
+    nodes, node_count = bvh.nodes, bvh.node_count
+    if bvh_width == 4:
+        try:
+            bvh4 = collapse_bvh4(bvh)
+            nodes, node_count = bvh4.nodes, bvh4.node_count
+        except Bvh4Unsupported as exc:
+            log.warning("using the 2-wide BVH: %s", exc)
+            bvh_width = 2
     t_bvh = time.perf_counter() - t_bvh
 
     info = layout.zeros("SceneInfo")
@@ -162,17 +183,19 @@ def pack_scene(scene) -> SceneBuffers:
     info["max_depth"] = integ.max_depth
     info["rr_depth"] = integ.rr_depth
     camera, filter_cdf = scene.camera.pack()
+    filter_cdf = with_guide(filter_cdf)     # + the guide that render.cl's filter_sample_guided reads
     emitters = np.array(emitter_rows, layout.dtype("Emitter")) if emitter_rows else layout.zeros("Emitter")
     cdf = np.concatenate(ctx.cdf_chunks) if ctx.cdf_chunks else np.zeros(1, np.float32)
     stats = {
         "triangles": int(len(tris)), "spheres": int(len(sph)), "shapes": len(shapes),
-        "emitters": len(emitter_rows), "bvh_nodes": int(bvh.node_count), "bvh_depth": int(bvh.depth),
+        "emitters": len(emitter_rows), "bvh_nodes": int(node_count), "bvh_depth": int(bvh.depth),
+        "bvh_width": bvh_width,
         "bvh_build_seconds": float(t_bvh), "pack_seconds": float(time.perf_counter() - t0),
     }
     return SceneBuffers(
-        nodes=_nonempty(bvh.nodes), prims=_nonempty(prims), positions=_nonempty(positions),
+        nodes=_nonempty(nodes), prims=_nonempty(prims), positions=_nonempty(positions),
         normals=_nonempty(normals), uvs=_nonempty(uvs), tri_index=_nonempty(tri_index),
         spheres=_nonempty(sph), sphere_shape=_nonempty(np.asarray(sphere_shape, np.uint32)),
         shapes=_nonempty(shape_rows), bsdfs=np.array(bsdf_rows, layout.dtype("Bsdf")) if bsdf_rows
         else layout.zeros("Bsdf"), emitters=emitters, emitter_cdf=cdf, info=info, camera=camera,
-        filter_cdf=filter_cdf, stats=stats)
+        filter_cdf=filter_cdf, stats=stats, bvh_width=bvh_width)

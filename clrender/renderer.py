@@ -18,7 +18,7 @@ from . import __version__
 from .device.context import describe, get_context
 from .device.program import build_program
 from .film import Film
-from .pack import pack_scene
+from .pack import DEFAULT_BVH_WIDTH, pack_scene
 
 LOCAL_SIZE = 64              # one fixed launch shape: every new shape costs PoCL a fresh compile
 MAX_LAUNCH_PIXELS = 1 << 16  # pixels per launch; a pass over a larger image is several launches
@@ -90,6 +90,8 @@ class Renderer:
         dev = self.ctx.devices[0]
         self.device_name = f"{dev.platform.name.strip()} / {dev.name.strip()}"
         self.buffers = buffers if buffers is not None else pack_scene(scene)
+        if self.buffers.bvh_width != DEFAULT_BVH_WIDTH:   # the default needs no define (same program as bench's)
+            defines["BVH_WIDTH"] = self.buffers.bvh_width
         t0 = time.perf_counter()
         self.program = build_program(self.ctx, '#include "render.cl"\n',
                                      defines={"INTEGRATOR": scene.integrator.kernel, **defines},

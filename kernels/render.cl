@@ -15,7 +15,7 @@
    one pixel, so accumulation needs no atomics. Per pixel: acc0 = (sum wL, sum w), acc1 = (sum (wL)^2, n),
    bad = samples dropped for being NaN/Inf. rays (written only in builds with -DCLRENDER_COUNT_RAYS; otherwise a
    one-element dummy, so both builds take the same arguments) = rays traced: (camera, other closest-hit,
-   shadow/any-hit, 0). The first closest-hit query of a sample is its camera ray. */
+   shadow/any-hit, 0). filter_cdf is the filter's CDF followed by its guide (clrender/filters/filter.py). The first closest-hit query of a sample is its camera ray. */
 __kernel void render_pass(SCENE_ARGS, __global const Camera* cam, __global const float* filter_cdf,
                           __global float4* acc0, __global float4* acc1, __global uint* bad, __global uint4* rays,
                           uint pixel_offset, uint pixel_count, uint sample_offset, uint spp, uint seed) {
@@ -34,7 +34,7 @@ __kernel void render_pass(SCENE_ARGS, __global const Camera* cam, __global const
         Sampler smp;
         sampler_init(&smp, seed, pix, sample_offset + s);
         float w;
-        float2 off = filter_sample(cam, filter_cdf, next2d(&smp), &w);
+        float2 off = filter_sample_guided(cam, filter_cdf, next2d(&smp), &w);
         Ray ray = camera_ray(cam, (float)px + 0.5f + off.x, (float)py + 0.5f + off.y);
 #ifdef CLRENDER_COUNT_RAYS
         sd.n_closest = 0u;

@@ -5,7 +5,18 @@
 #include "math.h"
 #include "frame.h"
 #include "camera.h"
+/* BVH_WIDTH picks the node table the host packed (SceneBuffers.bvh_width): 4 = kernels/bvh4.h (default),
+   2 = kernels/bvh.h. Both define bvh_closest_hit / bvh_any_hit over the same primitive table. */
+#ifndef BVH_WIDTH
+#define BVH_WIDTH 4
+#endif
+#if BVH_WIDTH == 4
+#include "bvh4.h"
+#elif BVH_WIDTH == 2
 #include "bvh.h"
+#else
+#error "BVH_WIDTH must be 2 or 4"
+#endif
 
 typedef struct {
     __global const float4* nodes;
@@ -58,7 +69,7 @@ typedef struct {
     float3 p;        /* hit point */
     float3 ng;       /* geometric normal (triangle winding / sphere outward) */
     Frame sh;        /* shading frame, z = interpolated shading normal */
-    float2 uv;
+    float2 uv;       /* spheres: (0, 0) unless the shape's BSDF has a texture (the only reader of uv) */
     float t;
     uint shape;
     uint tri;        /* triangle id, or NONE for spheres */
@@ -79,9 +90,15 @@ INLINE bool scene_intersect(const SceneData* sd, const Ray* r, Intersection* its
         its->p = s.xyz + n * s.w; /* re-project: the hit point lies on the sphere to float precision */
         its->ng = n;
         its->sh = frame_from_normal(n);
-        float u = atan2(n.y, n.x) * INV_TWOPI;
-        its->uv = (float2)(u < 0.0f ? u + 1.0f : u, acos(clampf(n.z, -1.0f, 1.0f)) * INV_PI);
-        its->shape = sd->sphere_shape[j];
+        uint shape = sd->sphere_shape[j];
+        /* Only textures read uv; atan2 and acos cost more than the rest of a sphere hit. */
+        if (sd->bsdfs[sd->shapes[shape].bsdf].texture != TEXTURE_NONE) {
+            float u = atan2(n.y, n.x) * INV_TWOPI;
+            its->uv = (float2)(u < 0.0f ? u + 1.0f : u, acos(clampf(n.z, -1.0f, 1.0f)) * INV_PI);
+        } else {
+            its->uv = (float2)(0.0f);
+        }
+        its->shape = shape;
         its->tri = NONE;
         return true;
     }

@@ -24,7 +24,8 @@ INLINE float2 square_to_uniform_disk(float2 u) {
     float r, phi;
     if (a * a > b * b) { r = a; phi = (M_PI_F_ / 4.0f) * (b / a); }
     else { r = b; phi = (M_PI_F_ / 2.0f) - (M_PI_F_ / 4.0f) * (a / b); }
-    return (float2)(r * cos(phi), r * sin(phi));
+    float2 sc = sin_cos(phi);
+    return (float2)(r * sc.y, r * sc.x);
 }
 INLINE float square_to_uniform_disk_pdf(float2 p) { return (p.x * p.x + p.y * p.y <= 1.0f) ? INV_PI : 0.0f; }
 
@@ -32,7 +33,8 @@ INLINE float3 square_to_uniform_sphere(float2 u) {
     float z = 1.0f - 2.0f * u.x;
     float r = safe_sqrt(1.0f - z * z);
     float phi = 2.0f * M_PI_F_ * u.y;
-    return (float3)(r * cos(phi), r * sin(phi), z);
+    float2 sc = sin_cos(phi);
+    return (float3)(r * sc.y, r * sc.x, z);
 }
 INLINE float square_to_uniform_sphere_pdf(float3 v) { return INV_FOURPI; }
 
@@ -40,7 +42,8 @@ INLINE float3 square_to_uniform_hemisphere(float2 u) {
     float z = u.x;
     float r = safe_sqrt(1.0f - z * z);
     float phi = 2.0f * M_PI_F_ * u.y;
-    return (float3)(r * cos(phi), r * sin(phi), z);
+    float2 sc = sin_cos(phi);
+    return (float3)(r * sc.y, r * sc.x, z);
 }
 INLINE float square_to_uniform_hemisphere_pdf(float3 v) { return v.z > 0.0f ? INV_TWOPI : 0.0f; }
 
@@ -56,7 +59,8 @@ INLINE float3 square_to_uniform_cone(float2 u, float cos_max) {
     float z = 1.0f - u.x * (1.0f - cos_max);
     float r = safe_sqrt(1.0f - z * z);
     float phi = 2.0f * M_PI_F_ * u.y;
-    return (float3)(r * cos(phi), r * sin(phi), z);
+    float2 sc = sin_cos(phi);
+    return (float3)(r * sc.y, r * sc.x, z);
 }
 INLINE float square_to_uniform_cone_pdf(float3 v, float cos_max) {
     return (v.z >= cos_max && cos_max < 1.0f) ? 1.0f / (2.0f * M_PI_F_ * (1.0f - cos_max)) : 0.0f;
@@ -77,7 +81,8 @@ INLINE float3 square_to_beckmann(float2 u, float alpha) {
     float cos_t = 1.0f / sqrt(1.0f + tan2);
     float sin_t = safe_sqrt(1.0f - cos_t * cos_t);
     float phi = 2.0f * M_PI_F_ * u.y;
-    return (float3)(sin_t * cos(phi), sin_t * sin(phi), cos_t);
+    float2 sc = sin_cos(phi);
+    return (float3)(sin_t * sc.y, sin_t * sc.x, cos_t);
 }
 INLINE float beckmann_d(float3 h, float alpha) {
     /* D(h) itself (without the cos), zero below the surface. */

@@ -50,8 +50,8 @@ from dataclasses import dataclass
 import numpy as np
 
 LEAF_FLAG = 0x80000000
-SWEEP_MAX = 32
-_SWEEP_PADS = (4, 8, 16, 32)
+SAH_SAMPLES = 2048
+DP_MAX = 4
 KERNEL_STACK_SIZE = 64
 
 
@@ -74,125 +74,6 @@ def _half_area(lo, hi):
     return d[..., 0] * d[..., 1] + d[..., 1] * d[..., 2] + d[..., 2] * d[..., 0]
 
 
-def _scan(x, op, axis, reverse=False):
-    """Inclusive prefix scan of ``op`` along a short ``axis``; a loop of whole-slice ops is ~15x faster than
-    ``ufunc.accumulate`` along a non-last axis."""
-    y = np.moveaxis(np.array(x, copy=True), axis, 0)
-    rng = range(len(y) - 2, -1, -1) if reverse else range(1, len(y))
-    step = 1 if reverse else -1
-    for k in rng:
-        op(y[k + step], y[k], out=y[k])
-    return np.moveaxis(y, 0, axis)
-
-
-def _segment_ids(counts):
-    return np.repeat(np.arange(len(counts)), counts)
-
-
-def _binned(A, off, n, cmin, cmax, n_bins):
-    """Binned SAH for the (large) segments (off, n) of A: returns (best unnormalised cost, src order, n_left).
-
-    A is (9, M+1) float32: rows lo xyz, 2*centroid xyz, hi xyz; column M is a sentinel. ``src`` lists, for the segments' slots in A, which
-    element goes there (absolute indices into A).
-    """
-    B = len(off)
-    seg = _segment_ids(n)
-    elem = (np.repeat(off - np.concatenate([[0], np.cumsum(n)[:-1]]), n) + np.arange(n.sum()))
-    ext = cmax - cmin
-    with np.errstate(divide="ignore"):
-        # (1 - 2^-20) keeps the largest centroid in the last bin despite rounding.
-        ok = ext > 1e-30                                        # tinier extents would overflow the scale
-        scale = np.where(ok, n_bins * (1.0 - 2.0 ** -20) / np.where(ok, ext, 1), 0).astype(np.float32)
-    bins = np.empty((3, len(elem)), np.int64)
-    for a in range(3):
-        b = ((A[3 + a, elem] - cmin[seg, a]) * scale[seg, a]).astype(np.int64)
-        np.clip(b, 0, n_bins - 1, out=b)
-        bins[a] = b
-    key = ((seg * 3)[None, :] + np.arange(3)[:, None]) * n_bins + bins    # (3, Mb)
-    cells = B * 3 * n_bins
-    cnt = np.bincount(key.ravel(), minlength=cells).reshape(B, 3, n_bins)
-    bmin = np.empty((3, cells), np.float32)
-    bmax = np.empty((3, cells), np.float32)
-    for j in range(3):
-        bmin[j].fill(np.inf)
-        bmax[j].fill(-np.inf)
-        vlo, vhi = np.take(A[j], elem), np.take(A[6 + j], elem)
-        for a in range(3):
-            np.minimum.at(bmin[j], key[a], vlo)
-            np.maximum.at(bmax[j], key[a], vhi)
-    bmin = bmin.T.reshape(B, 3, n_bins, 3)
-    bmax = bmax.T.reshape(B, 3, n_bins, 3)
-    lmin = _scan(bmin, np.minimum, 2)[:, :, :-1]
-    lmax = _scan(bmax, np.maximum, 2)[:, :, :-1]
-    rmin = _scan(bmin, np.minimum, 2, reverse=True)[:, :, 1:]
-    rmax = _scan(bmax, np.maximum, 2, reverse=True)[:, :, 1:]
-    nl = np.cumsum(cnt, axis=2)[:, :, :-1]
-    nr = n[:, None, None] - nl
-    with np.errstate(invalid="ignore"):
-        cost = (_half_area(lmin.astype(np.float64), lmax.astype(np.float64)) * nl
-                + _half_area(rmin.astype(np.float64), rmax.astype(np.float64)) * nr)
-    cost = np.where((nl > 0) & (nr > 0), cost, np.inf).reshape(B, -1)
-    best = np.argmin(cost, axis=1)
-    best_cost = cost[np.arange(B), best]
-    axis, plane = best // (n_bins - 1), best % (n_bins - 1)
-    n_left = nl.reshape(B, -1)[np.arange(B), best]
-    # Stable partition inside each segment: left elements keep their order, then right ones.
-    left = bins[axis[seg], np.arange(len(elem))] <= plane[seg]
-    cl = np.cumsum(left)
-    first = np.concatenate([[0], np.cumsum(n)[:-1]])
-    before = (cl - left)[first]                                 # lefts before each segment
-    rank_l = cl - left - before[seg]
-    pos = np.arange(len(elem)) - first[seg]
-    dest = np.where(left, rank_l, n_left[seg] + pos - rank_l) + off[seg]
-    src_slots = np.empty_like(elem)
-    src_slots[dest - off[seg] + first[seg]] = elem
-    return best_cost, src_slots, n_left
-
-
-def _sweep(A, off, n, pad):
-    """Exact sweep SAH for small segments padded to ``pad`` slots: (best cost, src order, n_left).
-
-    A's last column must be a sentinel (empty box, centroid +inf): padding slots point at it, so gathers
-    need no masking and padding sorts last.
-    """
-    S = len(off)
-    sentinel = A.shape[1] - 1
-    k = np.arange(pad)
-    valid = k[:, None] < n[None, :]                             # (pad, S): slot-major so scans run over
-    idx = np.where(valid, off[None, :] + k[:, None], sentinel)  # long contiguous rows
-    nl = (k[:-1] + 1)[:, None].astype(np.float32)
-    nr = n[None, :].astype(np.float32) - nl
-    best_cost = np.full(S, np.inf, np.float32)
-    best_i = np.zeros(S, np.int64)
-    best_order = idx
-    for a in range(3):
-        # Ties may come out in any order: any split between equal centroids is as good as another.
-        o = np.argsort(np.take(A[3 + a], idx.T), axis=1).T
-        sidx = np.take_along_axis(idx, o, axis=0)
-        blo, bhi = np.take(A[0:3], sidx, axis=1), np.take(A[6:9], sidx, axis=1)   # (3, pad, S)
-        lmin = _scan(blo, np.minimum, 1)[:, :-1]
-        lmax = _scan(bhi, np.maximum, 1)[:, :-1]
-        rmin = _scan(blo, np.minimum, 1, reverse=True)[:, 1:]
-        rmax = _scan(bhi, np.maximum, 1, reverse=True)[:, 1:]
-        with np.errstate(invalid="ignore"):
-            cost = _half_area3(lmin, lmax) * nl + _half_area3(rmin, rmax) * nr
-        cost[~(nr > 0)] = np.inf
-        i = np.argmin(cost, axis=0)
-        c = cost[i, np.arange(S)]
-        better = c < best_cost
-        best_cost = np.where(better, c, best_cost)
-        best_i = np.where(better, i, best_i)
-        best_order = np.where(better[None, :], sidx, best_order)
-    src = best_order.T[valid.T]                                 # segment by segment, slot order
-    return best_cost.astype(np.float64), src, best_i + 1
-
-
-def _half_area3(lo, hi):
-    """Half surface area of boxes stored coordinate-first: lo, hi of shape (3, ...)."""
-    d = np.maximum(hi - lo, np.float32(0))
-    return d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
-
-
 def _empty_nodes():
     nodes = np.zeros((4, 4), np.float32)
     u = nodes.view(np.uint32)
@@ -200,7 +81,216 @@ def _empty_nodes():
     return nodes
 
 
-def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersection_cost=1.0):
+# -------------------------------------------------------------------------------------------- build
+_BIN_CLASSES = ((16, 8),)                  # (largest node, bins): nodes of <= 16 primitives get 8 bins, ...
+
+
+def _node_bins(n, n_bins, sample_above):
+    """Bins per node by its size; 0 = not evaluated."""
+    nb = np.full(len(n), n_bins, np.int64)
+    for top, b in reversed(_BIN_CLASSES):
+        nb[n <= top] = min(b, n_bins)
+    nb[n > sample_above] = max(n_bins, 2)
+    return nb
+
+
+def _binned_splits(L, H, pos, seg, nb, cmin, cmax):
+    """Binned SAH for the nodes ``ev`` (local ids) of the frontier.
+
+    L, H: the three lo / hi coordinate rows of the active primitives; pos: the positions of the primitives to
+    bin (None = all), seg: their frontier node; nb: bins per node (0 = skip); cmin/cmax: centroid bounds
+    (doubled) per node. Returns per node (inf/-1 where not evaluated): cost, axis, plane, and the left / right
+    boxes of the best split from the bins (exact when every primitive of the node was binned).
+    """
+    F = len(nb)
+    cost = np.full(F, np.inf)
+    axis = np.zeros(F, np.int64)
+    plane = np.full(F, -1, np.int64)
+    box = np.zeros((4, F, 3), np.float32)              # left lo, left hi, right lo, right hi
+    ext = cmax - cmin
+    with np.errstate(divide="ignore", over="ignore"):
+        # (1 - 2^-20) keeps the largest centroid in the last bin despite rounding.
+        ok = ext > 1e-30
+        scale = np.where(ok, (nb * (1.0 - 2.0 ** -20))[:, None] / np.where(ok, ext, 1), 0).astype(np.float32)
+    # Cells: the nodes of one bin count form a block [base, base + nb * F_c), bin-major (cell = base +
+    # bin * F_c + node) so the scans below run over contiguous rows.
+    classes = [b for b in np.unique(nb) if b >= 2]
+    cell0 = np.zeros(F, np.int64)
+    stride = np.zeros(F, np.int64)
+    blocks = []
+    total = 0
+    for b in classes:
+        ids = np.nonzero(nb == b)[0]
+        cell0[ids] = total + np.arange(len(ids))
+        stride[ids] = len(ids)
+        blocks.append((b, ids, total))
+        total += len(ids) * b
+    cell0[nb < 2] = total                              # one dump cell for primitives of skipped nodes
+    total += 1
+    e_cell0 = cell0[seg]
+    e_stride = stride[seg]
+    e_top = np.maximum(nb - 1, 0)[seg]
+    Lv = [x if pos is None else x[pos] for x in L]
+    Hv = [x if pos is None else x[pos] for x in H]
+    cnt = np.empty((3, total), np.float32)
+    bmin = np.empty((3, 3, total), np.float32)
+    bmax = np.empty((3, 3, total), np.float32)
+    for a in range(3):
+        c = Lv[a] + Hv[a]
+        bi = ((c - cmin[:, a][seg]) * scale[:, a][seg]).astype(np.int64)
+        np.clip(bi, 0, e_top, out=bi)
+        key = e_cell0 + bi * e_stride
+        cnt[a] = np.bincount(key, minlength=total)
+        bmin[a].fill(np.inf)
+        bmax[a].fill(-np.inf)
+        for j in range(3):
+            np.minimum.at(bmin[a, j], key, Lv[j])
+            np.maximum.at(bmax[a, j], key, Hv[j])
+    for b, ids, base in blocks:
+        Fc = len(ids)
+        sl = slice(base, base + Fc * b)
+        ymin = bmin[:, :, sl].reshape(3, 3, b, Fc)
+        ymax = bmax[:, :, sl].reshape(3, 3, b, Fc)
+        lmin, lmax = ymin.copy(), ymax.copy()
+        for k in range(1, b):
+            np.minimum(lmin[:, :, k - 1], lmin[:, :, k], out=lmin[:, :, k])
+            np.maximum(lmax[:, :, k - 1], lmax[:, :, k], out=lmax[:, :, k])
+        rmin, rmax = ymin, ymax                         # in place: the bins are not needed afterwards
+        for k in range(b - 2, -1, -1):
+            np.minimum(rmin[:, :, k + 1], rmin[:, :, k], out=rmin[:, :, k])
+            np.maximum(rmax[:, :, k + 1], rmax[:, :, k], out=rmax[:, :, k])
+        nl = np.cumsum(cnt[:, sl].reshape(3, b, Fc), axis=1)
+        nr = nl[:, -1:] - nl[:, :-1]
+        nl = nl[:, :-1]
+        dl = lmax[:, :, :-1] - lmin[:, :, :-1]          # (3 axes, 3 coords, b-1, Fc)
+        dr = rmax[:, :, 1:] - rmin[:, :, 1:]
+        np.maximum(dl, 0, out=dl)
+        np.maximum(dr, 0, out=dr)
+        cst = (dl[:, 0] * dl[:, 1] + dl[:, 1] * dl[:, 2] + dl[:, 2] * dl[:, 0]) * nl
+        cst += (dr[:, 0] * dr[:, 1] + dr[:, 1] * dr[:, 2] + dr[:, 2] * dr[:, 0]) * nr
+        cst[(nl == 0) | (nr == 0)] = np.inf
+        cst = cst.reshape(3 * (b - 1), Fc)               # candidates: axis-major, then plane
+        best = np.argmin(cst, axis=0)
+        r = np.arange(Fc)
+        cost[ids] = cst[best, r]
+        ax, pl = best // (b - 1), best % (b - 1)
+        axis[ids], plane[ids] = ax, pl
+        at_l = (ax * b + pl) * Fc + r                   # flat (axis, bin, node) index of the left prefix
+        at_r = at_l + Fc
+        for j in range(3):
+            box[0, ids, j] = lmin[:, j].reshape(-1)[at_l]
+            box[1, ids, j] = lmax[:, j].reshape(-1)[at_l]
+            box[2, ids, j] = rmin[:, j].reshape(-1)[at_r]
+            box[3, ids, j] = rmax[:, j].reshape(-1)[at_r]
+    plane[~np.isfinite(cost)] = -1
+    return cost, axis, plane, scale, box
+
+
+def _range_reduce(x, starts, ends, op):
+    """op.reduce over each non-empty range [starts[i], ends[i]) of x."""
+    if len(starts) == 0:
+        return np.empty(0, x.dtype)
+    idx = np.stack([starts, ends], axis=1).ravel()
+    if idx[-1] >= len(x):
+        idx = idx[:-1]
+    return op.reduceat(x, idx)[0::2]
+
+
+class _Nodes:
+    """Binary nodes in creation order; siblings are always created side by side (right = left + 1)."""
+
+    def __init__(self):
+        self.lo, self.hi, self.start, self.count, self.depth, self.links = [], [], [], [], [], []
+        self.n = 0
+
+    def add(self, lo, hi, start, count, depth):
+        ids = self.n + np.arange(len(count))
+        self.lo.append(np.asarray(lo, np.float32).reshape(-1, 3))
+        self.hi.append(np.asarray(hi, np.float32).reshape(-1, 3))
+        self.start.append(np.asarray(start, np.int64))
+        self.count.append(np.asarray(count, np.int64))
+        self.depth.append(np.broadcast_to(np.asarray(depth, np.int64), len(count)))
+        self.n += len(count)
+        return ids
+
+    def add_children(self, parents, l_lo, l_hi, r_lo, r_hi, l_start, l_n, r_n, depth):
+        """Children of ``parents``: left and right interleaved; returns the left ids."""
+        ids = self.add(np.stack([l_lo, r_lo], 1), np.stack([l_hi, r_hi], 1),
+                       np.stack([l_start, l_start + l_n], 1).ravel(), np.stack([l_n, r_n], 1).ravel(),
+                       np.repeat(np.broadcast_to(np.asarray(depth, np.int64), len(parents)), 2))
+        self.links.append((np.asarray(parents, np.int64), ids[0::2]))
+        return ids[0::2]
+
+
+_POPCOUNT = np.array([bin(m).count("1") for m in range(1 << DP_MAX)], np.int64)
+
+
+def _small_subtrees(nodes, Lg, Hg, ids_g, node_id, start, depth, order, max_leaf, ct, ci):
+    """Optimal SAH subtrees for S nodes of exactly n <= DP_MAX primitives each, by dynamic programming over
+    all subsets of each node's primitives (every two-way partition, not only planes).
+
+    Lg, Hg: (3, n, S) boxes of the primitives in slot order; ids_g (n, S) their ids. Emits the subtrees' nodes
+    below ``node_id`` and writes the leaves' primitives into ``order`` (slot order within a leaf).
+    """
+    n, S = Lg.shape[1], Lg.shape[2]
+    full = (1 << n) - 1
+    blo = np.empty((full + 1, 3, S), np.float32)
+    bhi = np.empty((full + 1, 3, S), np.float32)
+    cost = np.empty((full + 1, S))
+    choice = np.zeros((full + 1, S), np.int64)                  # 0 = leaf, else the left part (has the low bit)
+    for m in range(1, full + 1):
+        low = m & -m
+        if m == low:
+            i = low.bit_length() - 1
+            blo[m], bhi[m] = Lg[:, i], Hg[:, i]
+        else:
+            np.minimum(blo[low], blo[m ^ low], out=blo[m])
+            np.maximum(bhi[low], bhi[m ^ low], out=bhi[m])
+        d = np.maximum(bhi[m] - blo[m], np.float32(0)).astype(np.float64)
+        area = d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
+        k = int(_POPCOUNT[m])
+        best = ci * k * area if k <= max_leaf else np.full(S, np.inf)
+        ch = choice[m]
+        rest = m ^ low
+        t = (rest - 1) & rest                                   # proper subsets of rest, largest first
+        while rest:
+            sub = low | t
+            c = ct * area + cost[sub] + cost[m ^ sub]
+            better = c < best
+            best = np.where(better, c, best)
+            ch[better] = sub
+            if t == 0:
+                break
+            t = (t - 1) & rest
+        cost[m] = best
+    # Emit top-down: (group column, mask, node id, start, depth) per open node.
+    col = np.arange(S)
+    mask = np.full(S, full)
+    while len(col):
+        ch = choice[mask, col]
+        lf = ch == 0
+        if lf.any():
+            lc, lm, ls = col[lf], mask[lf], start[lf]
+            for i in range(n):
+                has = (lm >> i) & 1 == 1
+                rank = _POPCOUNT[lm[has] & ((1 << i) - 1)]
+                order[ls[has] + rank] = ids_g[i, lc[has]]
+        sp = ~lf
+        if not sp.any():
+            break
+        col, mask, ch, node_id, start, depth = col[sp], mask[sp], ch[sp], node_id[sp], start[sp], depth[sp]
+        rm = mask ^ ch
+        lid = nodes.add_children(node_id, blo[ch, :, col], bhi[ch, :, col], blo[rm, :, col], bhi[rm, :, col],
+                                 start, _POPCOUNT[ch], _POPCOUNT[rm], depth + 1)
+        col = np.repeat(col, 2)
+        mask = np.stack([ch, rm], 1).ravel()
+        node_id = np.stack([lid, lid + 1], 1).ravel()
+        start = np.stack([start, start + _POPCOUNT[ch]], 1).ravel()
+        depth = np.repeat(depth + 1, 2)
+
+
+def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersection_cost=1.0,
+              sah_samples=SAH_SAMPLES):
     """Build a binned-SAH BVH over boxes ``lo``/``hi`` (N, 3) and flatten it (layout: module docstring)."""
     t0 = time.perf_counter()
     lo = np.ascontiguousarray(lo, np.float32).reshape(-1, 3)
@@ -208,118 +298,150 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
     N = len(lo)
     max_leaf_size = max(1, int(max_leaf_size))
     n_bins = max(2, int(n_bins))
+    sah_samples = max(int(sah_samples), 64)
+    sample_above = 2 * sah_samples
+    ct, ci = float(traversal_cost), float(intersection_cost)
     if N == 0:
         return BVH(_empty_nodes(), np.zeros(0, np.int64), 1, 0, time.perf_counter() - t0, 0.0, 0, 0)
 
-    # The active set: primitives of the frontier nodes only, each node a contiguous run, in frontier order.
-    # Rows: lo xyz, 2*centroid xyz, hi xyz (so min-reductions read rows 0-5 and max-reductions rows 3-8).
-    # The last column is a sentinel (empty box, centroid +inf) that _sweep pads with.
-    A = np.empty((9, N + 1), np.float32)
-    A[0:3, :N] = lo.T
-    A[3:6, :N] = lo.T + hi.T
-    A[6:9, :N] = hi.T
-    A[0:6, N] = np.inf
-    A[6:9, N] = -np.inf
+    # The active set: primitives of the frontier nodes only, each node a contiguous run, in frontier order;
+    # one float32 row per coordinate (doubled centroids are L + H, computed when needed).
+    L = [np.ascontiguousarray(lo[:, a]) for a in range(3)]
+    H = [np.ascontiguousarray(hi[:, a]) for a in range(3)]
     ids = np.arange(N, dtype=np.int64)
     order = np.empty(N, np.int64)
     force_depth = max(1, KERNEL_STACK_SIZE - math.ceil(math.log2(max(N, 2))) - 4)
 
-    # Binary nodes, appended level by level (children always after their parent).
+    nodes = _Nodes()
     root_lo, root_hi = lo.min(axis=0), hi.max(axis=0)
-    b_lo, b_hi, b_start, b_count = [root_lo[None]], [root_hi[None]], [np.array([0])], [np.array([N])]
-    lefts, level_first = [], [0]
-    n_nodes = 1
-    # Frontier: node ids, starts in the final order, counts, centroid bounds, box half-areas.
+    nodes.add(root_lo, root_hi, [0], [N], 0)
+    # Frontier: node ids, starts in the final order, counts, boxes, doubled-centroid bounds.
     f_id, f_start, f_n = np.array([0]), np.array([0]), np.array([N])
-    f_cmin, f_cmax = A[3:6, :N].min(axis=1)[None], A[3:6, :N].max(axis=1)[None]
-    f_area = _half_area(root_lo.astype(np.float64), root_hi.astype(np.float64))[None]
+    f_lo, f_hi = root_lo[None], root_hi[None]
+    f_cmin = np.array([[x.min() for x in (L[a] + H[a] for a in range(3))]], np.float32)
+    f_cmax = np.array([[x.max() for x in (L[a] + H[a] for a in range(3))]], np.float32)
     depth = 0
     while len(f_id):
-        depth += 1
         F = len(f_id)
-        M = A.shape[1] - 1
-        off = np.concatenate([[0], np.cumsum(f_n)[:-1]])
+        M = len(ids)
+        off = np.cumsum(f_n) - f_n
         seg = np.repeat(np.arange(F), f_n)
-        split_cost = np.full(F, np.inf)
-        n_left = f_n // 2
-        src = np.arange(M)
-
-        multi = f_n >= 2
+        p_in = np.arange(M) - off[seg]
+        small = (f_n >= 2) & (f_n <= DP_MAX)
         coincident = np.all(f_cmax <= f_cmin, axis=1)
-        forced = multi & (coincident | (depth >= force_depth))
-        small = multi & ~forced & (f_n <= SWEEP_MAX)
-        big = multi & ~forced & ~small
-        if big.any():
-            sel = np.nonzero(big)[0]
-            c, s, nl = _binned(A, off[sel], f_n[sel], f_cmin[sel], f_cmax[sel], n_bins)
-            split_cost[sel], n_left[sel] = c, nl
-            src[big[seg]] = s
-        lo_pad = 1
-        for pad in _SWEEP_PADS:
-            m = small & (f_n > lo_pad) & (f_n <= pad)
-            lo_pad = pad
-            if m.any():
-                sel = np.nonzero(m)[0]
-                c, s, nl = _sweep(A, off[sel], f_n[sel], pad)
-                split_cost[sel], n_left[sel] = c, nl
-                src[m[seg]] = s
+        ev = (f_n > DP_MAX) & ~coincident & (depth < force_depth)
+        nb = np.where(ev, _node_bins(f_n, n_bins, sample_above), 0)
+        sampled = ev & (f_n > sample_above)
+        if sampled.any():
+            # Large nodes estimate their SAH from an evenly strided sample of their primitives.
+            k = np.where(sampled, sah_samples, f_n)
+            e_seg = np.repeat(np.arange(F), k)
+            j = np.arange(k.sum()) - np.repeat(np.cumsum(k) - k, k)
+            pos = off[e_seg] + np.where(sampled[e_seg], (j * f_n[e_seg]) // sah_samples, j)
+        else:
+            e_seg, pos = seg, None
+        cost, axis, plane, scale, box = _binned_splits(L, H, pos, e_seg, nb, f_cmin, f_cmax)
+        planar = plane >= 0
+        cost[sampled] *= f_n[sampled] / sah_samples     # sample counts -> estimated primitive counts
+
+        area = _half_area(f_lo.astype(np.float64), f_hi.astype(np.float64))
         with np.errstate(divide="ignore", invalid="ignore"):
-            ratio = np.where(f_area > 0, split_cost / f_area, np.where(np.isfinite(split_cost), f_n, np.inf))
-        sah_split = traversal_cost + intersection_cost * ratio
-        # No usable plane (coincident centroids, depth limit): split mid-range so the node still shrinks.
-        n_left = np.where(np.isfinite(split_cost), n_left, f_n // 2)
-        leaf = (f_n <= max_leaf_size) & (intersection_cost * f_n <= sah_split)
+            ratio = np.where(area > 0, cost / area, np.where(np.isfinite(cost), f_n, np.inf))
+        leaf = (f_n <= max_leaf_size) & (ci * f_n <= ct + ci * ratio) & ~small
 
         # Leaves retire from the active set; their primitives take their final places in the leaf order.
         leaf_el = leaf[seg]
-        order[(f_start - off)[seg][leaf_el] + np.nonzero(leaf_el)[0]] = ids[leaf_el]
-        sp = np.nonzero(~leaf)[0]
+        if leaf_el.any():
+            order[f_start[seg[leaf_el]] + p_in[leaf_el]] = ids[leaf_el]
+        # So do nodes of at most DP_MAX primitives: their whole subtree is built at once.
+        for n in range(2, DP_MAX + 1):
+            g = np.nonzero(small & (f_n == n))[0]
+            if len(g):
+                at = off[g][None, :] + np.arange(n)[:, None]             # (n, S) positions
+                Lg = np.stack([np.take(L[a], at) for a in range(3)])
+                Hg = np.stack([np.take(H[a], at) for a in range(3)])
+                _small_subtrees(nodes, Lg, Hg, np.take(ids, at), f_id[g], f_start[g],
+                                np.full(len(g), depth), order, max_leaf_size, ct, ci)
+        sp = np.nonzero(~leaf & ~small)[0]
         if len(sp) == 0:
             break
-        keep = src[~leaf_el]
-        A = A[:, np.append(keep, M)]
-        ids = ids[keep]
+        depth += 1
+
+        # Left/right: the bin of the chosen axis (the binning computed the same float32 values), or the first
+        # half of the range for nodes without a usable plane (coincident centroids, depth limit).
+        ax = axis[seg]
+        cv = np.where(ax == 0, L[0] + H[0], np.where(ax == 1, L[1] + H[1], L[2] + H[2]))
+        cm = f_cmin[np.arange(F), axis]
+        sc = scale[np.arange(F), axis]
+        bi = ((cv - cm[seg]) * sc[seg]).astype(np.int64)
+        left = np.where(planar[seg], bi <= plane[seg], p_in < (f_n // 2)[seg])
+        # Stable partition inside each node: left primitives keep their order, then the right ones.
+        cl = np.cumsum(left)
+        before = cl[off] - left[off]                    # lefts before each node
+        n_left = cl[off + f_n - 1] - before
+        rank_l = cl - left - before[seg]
+        split = np.zeros(F, bool)
+        split[sp] = True
+        new_off = np.cumsum(np.where(split, f_n, 0)) - np.where(split, f_n, 0)
+        dest = new_off[seg] + np.where(left, rank_l, n_left[seg] + p_in - rank_l)
+        keep = split[seg]
+        src = np.empty(int(keep.sum()), np.int64)
+        src[dest[keep]] = np.nonzero(keep)[0]
+        L = [np.take(x, src) for x in L]
+        H = [np.take(x, src) for x in H]
+        ids = np.take(ids, src)
 
         # Children tile the new active set: left then right of each split node.
-        c_n = np.stack([n_left[sp], f_n[sp] - n_left[sp]], axis=1).ravel()
-        c_off = np.concatenate([[0], np.cumsum(c_n)[:-1]])
-        red_min = np.minimum.reduceat(A[0:6, :-1], c_off, axis=1)
-        red_max = np.maximum.reduceat(A[3:9, :-1], c_off, axis=1)
-        c_lo, c_hi = red_min[0:3].T, red_max[3:6].T
-        c_start = np.stack([f_start[sp], f_start[sp] + n_left[sp]], axis=1).ravel()
-        c_id = n_nodes + np.arange(len(c_n))
-        lefts.append((f_id[sp], c_id[0::2]))
-        b_lo.append(c_lo); b_hi.append(c_hi); b_start.append(c_start); b_count.append(c_n)
-        level_first.append(n_nodes)
-        n_nodes += len(c_n)
-        f_id, f_start, f_n = c_id, c_start, c_n
-        f_cmin, f_cmax = red_min[3:6].T, red_max[0:3].T
-        f_area = _half_area(c_lo.astype(np.float64), c_hi.astype(np.float64))
-    level_first.append(n_nodes)
+        nl_sp = n_left[sp]
+        c_n = np.stack([nl_sp, f_n[sp] - nl_sp], axis=1).ravel()
+        c_off = np.cumsum(c_n) - c_n
+        c_end = c_off + c_n
+        c_lo = np.stack([box[0, sp], box[2, sp]], axis=1).reshape(-1, 3)
+        c_hi = np.stack([box[1, sp], box[3, sp]], axis=1).reshape(-1, 3)
+        # Children of sampled or unplanned splits: exact boxes from their primitives.
+        inexact = np.repeat(sampled[sp] | ~planar[sp], 2)
+        if inexact.any():
+            ci_ = np.nonzero(inexact)[0]
+            for a in range(3):
+                c_lo[ci_, a] = _range_reduce(L[a], c_off[ci_], c_end[ci_], np.minimum)
+                c_hi[ci_, a] = _range_reduce(H[a], c_off[ci_], c_end[ci_], np.maximum)
+        c_cmin = np.empty_like(c_lo)
+        c_cmax = np.empty_like(c_lo)
+        for a in range(3):
+            cc = L[a] + H[a]
+            c_cmin[:, a] = np.minimum.reduceat(cc, c_off)
+            c_cmax[:, a] = np.maximum.reduceat(cc, c_off)
+        c_start = np.stack([f_start[sp], f_start[sp] + nl_sp], axis=1).ravel()
+        lid = nodes.add_children(f_id[sp], c_lo[0::2], c_hi[0::2], c_lo[1::2], c_hi[1::2], f_start[sp], nl_sp,
+                                 f_n[sp] - nl_sp, depth)
+        f_id = np.stack([lid, lid + 1], axis=1).ravel()
+        f_start, f_n = c_start, c_n
+        f_lo, f_hi, f_cmin, f_cmax = c_lo, c_hi, c_cmin, c_cmax
 
-    blo = np.concatenate(b_lo).astype(np.float32)
-    bhi = np.concatenate(b_hi).astype(np.float32)
-    bstart = np.concatenate(b_start)
-    bcount = np.concatenate(b_count)
-    bleft = np.full(n_nodes, -1, np.int64)
-    for (p, c) in lefts:
+    blo = np.concatenate(nodes.lo)
+    bhi = np.concatenate(nodes.hi)
+    bstart = np.concatenate(nodes.start)
+    bcount = np.concatenate(nodes.count)
+    bdepth = np.concatenate(nodes.depth)
+    bleft = np.full(nodes.n, -1, np.int64)
+    for (p, c) in nodes.links:
         bleft[p] = c
-    bright = np.where(bleft >= 0, bleft + 1, -1)                # siblings are created side by side
-    nodes, node_count = _flatten(blo, bhi, bstart, bcount, bleft, bright, level_first)
+    nodes_arr, node_count = _flatten(blo, bhi, bstart, bcount, bleft, bdepth)
 
     inner = bleft >= 0
     area = _half_area(blo.astype(np.float64), bhi.astype(np.float64))
     root_area = area[0] if area[0] > 0 else 1.0
-    sah = (traversal_cost * area[inner].sum() + intersection_cost * (area[~inner] * bcount[~inner]).sum()) / root_area
-    return BVH(nodes=nodes, order=order, node_count=node_count, depth=len(level_first) - 1,
+    sah = (ct * area[inner].sum() + ci * (area[~inner] * bcount[~inner]).sum()) / root_area
+    return BVH(nodes=nodes_arr, order=order, node_count=node_count, depth=int(bdepth.max()) + 1,
                build_seconds=time.perf_counter() - t0, sah_cost=float(sah),
                leaf_count=int((~inner).sum()), max_leaf_prims=int(bcount[~inner].max()))
 
 
-def _flatten(blo, bhi, bstart, bcount, bleft, bright, level_first):
-    """Binary tree (nodes in level order) -> depth-first 2-wide node table (module docstring)."""
+def _flatten(blo, bhi, bstart, bcount, bleft, bdepth):
+    """Binary tree (any node order; right child = left + 1) -> depth-first 2-wide node table (module docstring)."""
     n = len(blo)
     inner = bleft >= 0
+    bright = np.where(inner, bleft + 1, -1)
     if not inner[0]:                                            # the root is a leaf: leaf in A, empty slot in B
         nodes = _empty_nodes()
         u = nodes.view(np.uint32)
@@ -328,19 +450,19 @@ def _flatten(blo, bhi, bstart, bcount, bleft, bright, level_first):
         u[1, 3] = bcount[0]
         nodes[2, :3], nodes[3, :3] = blo[0], bhi[0]
         return nodes, 1
+    # Interior nodes grouped by depth.
+    ids = np.nonzero(inner)[0]
+    ids = ids[np.argsort(bdepth[ids].astype(np.uint8), kind="stable")]
+    bounds = np.searchsorted(bdepth[ids], np.arange(bdepth.max() + 2))
+    levels = [ids[bounds[d]:bounds[d + 1]] for d in range(len(bounds) - 1)]
     size = inner.astype(np.int64)                                # interior nodes in each subtree
-    for d in range(len(level_first) - 2, -1, -1):
-        lv = np.arange(level_first[d], level_first[d + 1])
-        lv = lv[inner[lv]]
+    for lv in reversed(levels):
         size[lv] += size[bleft[lv]] + size[bright[lv]]
     flat = np.full(n, -1, np.int64)
     flat[0] = 0
-    for d in range(len(level_first) - 1):
-        lv = np.arange(level_first[d], level_first[d + 1])
-        lv = lv[inner[lv]]
+    for lv in levels:
         flat[bleft[lv]] = flat[lv] + 1
         flat[bright[lv]] = flat[lv] + 1 + size[bleft[lv]]
-    ids = np.nonzero(inner)[0]
     K = len(ids)
     nodes = np.zeros((K, 4, 4), np.float32)
     u = nodes.view(np.uint32)

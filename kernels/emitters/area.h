@@ -76,7 +76,8 @@ INLINE float3 area_sample(const SceneData* sd, __global const Emitter* em, Emitt
             float sin_t = safe_sqrt(sin2);
             float phi = 2.0f * M_PI_F_ * u.y;
             Frame f = frame_from_normal(axis);
-            float3 wi = normalize3(to_world(&f, (float3)(sin_t * cos(phi), sin_t * sin(phi), cos_t)));
+            float2 sc = sin_cos(phi);
+            float3 wi = normalize3(to_world(&f, (float3)(sin_t * sc.y, sin_t * sc.x, cos_t)));
             /* near intersection: t = d cos - sqrt(r^2 - d^2 sin^2) */
             float t = d * cos_t - safe_sqrt(r2 - d2 * sin2);
             float3 n = normalize3(ref + wi * t - s.xyz);

@@ -31,7 +31,8 @@ INLINE float3 distantdisk_sample(const SceneData* sd, __global const Emitter* em
     float cos_t = 1.0f - omc;
     float sin_t = safe_sqrt(omc * (2.0f - omc));
     float phi = 2.0f * M_PI_F_ * u.y;
-    float3 wi = em->params[0].xyz * (sin_t * cos(phi)) + em->params[1].xyz * (sin_t * sin(phi))
+    float2 sc = sin_cos(phi);
+    float3 wi = em->params[0].xyz * (sin_t * sc.y) + em->params[1].xyz * (sin_t * sc.x)
               + em->params[2].xyz * cos_t;
     wi = normalize3(wi);
     q->wi = wi;
