@@ -426,3 +426,77 @@ def test_rays_on_axes_through_a_box_of_spheres(ctx, queue, trace_kernel):
     found, _ = check_trace(ctx, queue, trace_kernel, *random_soup(rng, 200, size=0.1), sp, o, d,
                            np.zeros(n), np.full(n, np.inf))
     assert found.sum() > 100
+
+
+# ------------------------------------------------------------------------------ build paths and edge cases
+@pytest.mark.parametrize("n", [0, 1, 2, 3, 4])
+@pytest.mark.parametrize("max_leaf", [1, 2, 4])
+def test_tiny_scenes_build_the_optimal_tree(n, max_leaf):
+    # Nodes of <= 4 primitives get their whole subtree from a search over every partition, so for a tiny scene
+    # the SAH cost must equal the best over all binary trees (brute force over set partitions below).
+    rng = np.random.default_rng(7 * n + max_leaf)
+    lo, hi = primitive_bounds(*random_soup(rng, n), None)
+    bvh = build_bvh(lo, hi, max_leaf_size=max_leaf)
+    check_invariants(bvh, lo, hi, max_leaf)
+    if n == 0:
+        return
+
+    def area(m):
+        idx = [i for i in range(n) if m >> i & 1]
+        d = np.maximum(hi[idx].max(0).astype(np.float64) - lo[idx].min(0), 0)
+        return d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
+
+    def best(m):
+        k = bin(m).count("1")
+        c = k * area(m) if k <= max_leaf else np.inf
+        low = m & -m
+        sub = (m ^ low)
+        t = (sub - 1) & sub
+        while sub:
+            c = min(c, area(m) + best(low | t) + best(m ^ (low | t)))
+            if t == 0:
+                break
+            t = (t - 1) & sub
+        return c
+
+    full = (1 << n) - 1
+    ref = best(full) / (area(full) if area(full) > 0 else 1.0)
+    assert bvh.sah_cost == pytest.approx(ref, rel=1e-5)
+
+
+def test_build_is_deterministic():
+    rng = np.random.default_rng(11)
+    lo, hi = primitive_bounds(*random_soup(rng, 20000, 1.0, 0.02), random_spheres(rng, 50))
+    a, b = build_bvh(lo, hi, sah_samples=64), build_bvh(lo, hi, sah_samples=64)
+    assert np.array_equal(a.nodes.view(np.uint32), b.nodes.view(np.uint32))
+    assert np.array_equal(a.order, b.order)
+
+
+def test_sampled_sah_keeps_quality():
+    # Large nodes choose their plane from a strided sample; the tree must stay valid and nearly as good.
+    rng = np.random.default_rng(12)
+    lo, hi = primitive_bounds(*random_soup(rng, 30000, 1.0, 0.01), None)
+    full = build_bvh(lo, hi, sah_samples=10 ** 9)
+    for s in (64, 256):
+        bvh = build_bvh(lo, hi, sah_samples=s)
+        check_invariants(bvh, lo, hi, 4)
+        assert bvh.sah_cost < 1.05 * full.sah_cost
+
+
+@pytest.mark.parametrize("max_leaf", [1, 4])
+def test_coincident_centroids_with_different_boxes(max_leaf):
+    # Nested boxes around one centre (no plane separates any two centroids) plus a flat (z = 0) sheet.
+    k = np.arange(1, 301, dtype=np.float64)[:, None]
+    lo = np.concatenate([-k * [1, 1, 1], np.stack([np.arange(500.0), np.zeros(500), np.zeros(500)], 1)])
+    hi = np.concatenate([k * [1, 1, 1], np.stack([np.arange(500.0) + 0.5, np.ones(500), np.zeros(500)], 1)])
+    bvh = build_bvh(lo, hi, max_leaf_size=max_leaf)
+    check_invariants(bvh, lo.astype(np.float32), hi.astype(np.float32), max_leaf)
+
+
+@pytest.mark.parametrize("n", [5, 17, 40])
+def test_piles_of_identical_boxes(n):
+    lo = np.zeros((n, 3))
+    hi = np.ones((n, 3))
+    for max_leaf in (1, 3, 4):
+        bvh = build_bvh(lo, hi, max_leaf_size=max_leaf)
+        check_invariants(bvh, lo, hi, max_leaf)
