@@ -32,6 +32,19 @@ INLINE float filter_eval_1d(__global const Camera* cam, float x) {
     return 0.0f;
 }
 
+/* The offset for u inside table bin `lo` (cdf[lo] <= u < cdf[lo+1]) and its density. */
+INLINE float filter_in_bin(__global const Camera* cam, __global const float* cdf, uint lo, float u, float* pdf) {
+    uint n = cam->filter_bins;
+    float c0 = cdf[lo], c1 = cdf[lo + 1u];
+    float pm = c1 - c0;
+    float frac = pm > 0.0f ? (u - c0) / pm : 0.5f;
+    frac = clampf(frac, 0.0f, 0.99999994f);
+    float r = cam->filter_radius;
+    float width = 2.0f * r / (float)n;
+    *pdf = pm / width;
+    return -r + ((float)lo + frac) * width;
+}
+
 /* Draw x in [-r, r] from the piecewise-constant table (cdf has bins+1 entries, cdf[0]=0, cdf[bins]=1).
    Returns x; *pdf receives its density. */
 INLINE float filter_sample_1d(__global const Camera* cam, __global const float* cdf, float u, float* pdf) {
@@ -41,14 +54,7 @@ INLINE float filter_sample_1d(__global const Camera* cam, __global const float* 
         uint mid = (lo + hi) >> 1;
         if (cdf[mid] <= u) lo = mid; else hi = mid;
     }
-    float c0 = cdf[lo], c1 = cdf[lo + 1u];
-    float pm = c1 - c0;
-    float frac = pm > 0.0f ? (u - c0) / pm : 0.5f;
-    frac = clampf(frac, 0.0f, 0.99999994f);
-    float r = cam->filter_radius;
-    float width = 2.0f * r / (float)n;
-    *pdf = pm / width;
-    return -r + ((float)lo + frac) * width;
+    return filter_in_bin(cam, cdf, lo, u, pdf);
 }
 
 /* filter_sample_1d for a table followed by its guide (clrender/filters/filter.py, with_guide): the same bin,
@@ -60,14 +66,7 @@ INLINE float filter_sample_1d_guided(__global const Camera* cam, __global const 
     uint lo = (uint)cdf[n + 1u + k];
     while (lo > 0u && cdf[lo] > u) --lo;              /* only if u * n rounded up */
     while (lo + 1u < n && cdf[lo + 1u] <= u) ++lo;
-    float c0 = cdf[lo], c1 = cdf[lo + 1u];
-    float pm = c1 - c0;
-    float frac = pm > 0.0f ? (u - c0) / pm : 0.5f;
-    frac = clampf(frac, 0.0f, 0.99999994f);
-    float r = cam->filter_radius;
-    float width = 2.0f * r / (float)n;
-    *pdf = pm / width;
-    return -r + ((float)lo + frac) * width;
+    return filter_in_bin(cam, cdf, lo, u, pdf);
 }
 
 /* An offset from the pixel centre and the sample's filter weight. */
