@@ -110,6 +110,7 @@ class Renderer:
         self.launch_pixels = min(self.n_pixels, MAX_LAUNCH_PIXELS)
         self.global_size = -(-self.launch_pixels // LOCAL_SIZE) * LOCAL_SIZE
         self.upload_seconds = time.perf_counter() - t0
+        self._warm = False
 
     def device_memory_bytes(self) -> int:
         """Bytes this renderer keeps on the device during a render: scene tables, camera, filter table,
@@ -151,6 +152,17 @@ class Renderer:
             bar = tqdm(total=spp, unit="spp", desc="rendering", dynamic_ncols=True, leave=True)
         done = 0
         per_pass = 1
+        if not self._warm:
+            # PoCL compiles the work-group function at the first launch of a shape (0.3-2 s): do it with a
+            # launch that adds no samples, so timings, pass sizes and the ETA are those of the render.
+            t0 = time.perf_counter()
+            for i, v in enumerate((0, min(self.launch_pixels, n), start_sample, 0, seed & 0xFFFFFFFF)):
+                k.set_arg(nargs + i, np.uint32(v))
+            cl.enqueue_nd_range_kernel(self.queue, k, (self.global_size,), (LOCAL_SIZE,))
+            self.queue.finish()
+            self._warm = True
+            self.build_seconds += time.perf_counter() - t0
+            stats.build_seconds = self.build_seconds
         t_start = time.perf_counter()
         with _SigintFlag() as flag:
             try:
