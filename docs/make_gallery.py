@@ -50,8 +50,8 @@ def main():
         print(rows[-1], flush=True)
     device = film.metadata["device"]
     (out / "gallery.md").write_text(
-        f"Rendered by `python docs/make_gallery.py` on {device} (render time excludes scene loading).\n\n"
-        "| image | scene | size | spp | render | M samples/s | load + BVH |\n|---|---|---|---|---|---|---|\n"
+        f"Rendered by `python docs/make_gallery.py` on {device} (render time: the sample passes, excluding scene loading, BVH build and kernel compilation).\n\n"
+        "| image | scene | size | spp | render | M samples/s | load (XML + meshes) |\n|---|---|---|---|---|---|---|\n"
         + "\n".join(rows) + "\n")
 
 
