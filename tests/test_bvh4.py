@@ -5,9 +5,9 @@ import pytest
 
 from clrender.accel.bvh import LEAF_FLAG, build_bvh
 from clrender.accel.bvh4 import (EMPTY_HI, EMPTY_LO, NODE_ROWS, Bvh4Unsupported, collapse_bvh4, decode_leaf)
-from clrender.accel.primitives import SPHERE_FLAG, pack_primitives, primitive_bounds
-from test_bvh import (TRACE_SRC, build_scene, device_trace, icosphere, random_rays, random_soup, random_spheres,
-                      reference)
+from clrender.accel.primitives import primitive_bounds
+from test_bvh import (TRACE_SRC, build_scene, compare_with_reference, device_trace, icosphere, random_rays,
+                      random_soup, random_spheres)
 
 
 # -------------------------------------------------------------------------------------- host invariants
@@ -109,22 +109,7 @@ def check_trace4(ctx, queue, kernel, v0, v1, v2, spheres, o, d, tmin, tmax, max_
     b4 = collapse_bvh4(bvh)
     check_invariants4(b4, *primitive_bounds(v0, v1, v2, spheres), bvh.order, kw.get("max_leaf_size", 4))
     out, prim, any_ = device_trace(ctx, queue, kernel, _Nodes(b4.nodes), prims, o, d, tmin, tmax)
-    t, pid, u, v, amb, tie = reference(pack_primitives(v0, v1, v2, spheres, np.arange(bvh.order.size)),
-                                       o, d, tmin, tmax)
-    found, ref_found = out[:, 3] > 0, np.isfinite(t)
-    assert amb.mean() <= max_ambiguous
-    ok = ~amb
-    bad = ok & (found != ref_found)
-    assert not bad.any(), f"{bad.sum()} rays disagree on hit/miss, e.g. ray {np.nonzero(bad)[0][:5]}"
-    both = ok & found
-    err = np.abs(out[both, 0] - t[both])
-    assert (err <= 1e-4 * np.maximum(1.0, np.abs(t[both]))).all(), f"t differs by up to {err.max()}"
-    same = both & ~tie
-    assert np.array_equal(prim[same], pid[same]), f"{(prim[same] != pid[same]).sum()} rays hit the wrong primitive"
-    trih = same & ((pid & SPHERE_FLAG) == 0)
-    assert np.allclose(out[trih, 1], u[trih], atol=1e-3) and np.allclose(out[trih, 2], v[trih], atol=1e-3)
-    assert np.array_equal(any_[ok].astype(bool), ref_found[ok]), "any-hit disagrees with closest-hit presence"
-    return found, ref_found
+    return compare_with_reference(out, prim, any_, v0, v1, v2, spheres, o, d, tmin, tmax, max_ambiguous)
 
 
 @pytest.mark.parametrize("n", [1, 2, 100, 5000])

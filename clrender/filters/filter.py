@@ -6,18 +6,21 @@ f/p, so every filter, negative lobes included, converges to the same image as No
 """
 from __future__ import annotations
 
+import abc
+
 import numpy as np
 
 TABLE_BINS = 256
 
 
-class Filter:
+class Filter(abc.ABC):
     filter_type = 0
     radius = 0.5
     p0 = p1 = p2 = 0.0
 
-    def eval(self, x: np.ndarray) -> np.ndarray:  # pragma: no cover - every filter overrides it
-        raise NotImplementedError
+    @abc.abstractmethod
+    def eval(self, x: np.ndarray) -> np.ndarray:
+        """The filter's 1-D profile f(x) (the kernel's filter_eval_1d computes the same)."""
 
     def sampling_table(self, bins: int = TABLE_BINS) -> np.ndarray:
         """CDF (bins+1 entries) of |f| integrated over each bin (by a fine midpoint rule)."""
