@@ -102,6 +102,15 @@ def _node_bins(n, n_bins, sample_above):
     return nb
 
 
+def _spreader(counts):
+    """x -> np.repeat(x, counts), by a gather when the nodes are small (faster there)."""
+    F, M = len(counts), int(counts.sum())
+    if F * 16 < M:
+        return lambda x: np.repeat(x, counts)
+    seg = np.repeat(np.arange(F), counts)
+    return lambda x: np.take(x, seg)
+
+
 def _select(k, x):
     """x[k[i]][i] for a list x of three equally long arrays (k in 0..2)."""
     return np.where(k == 0, x[0], np.where(k == 1, x[1], x[2]))
@@ -138,12 +147,13 @@ def _binned_splits(L, H, C, pos, per_node, nb, cmin, scale):
     dump = total                                       # one cell for primitives of skipped nodes
     total += 1
     skip = nb < 2
-    rep = lambda x: np.repeat(x, per_node)                 # noqa: E731  (per node -> per primitive)
+    rep = _spreader(per_node)                           # per node -> per primitive
     e_top = rep(np.maximum(nb - 1, 0))
     gather = (lambda x: x) if pos is None else (lambda x: x[pos])
     Lv, Hv, Cv = [gather(x) for x in L], [gather(x) for x in H], [gather(x) for x in C]
     base = rep(np.where(skip, dump, cell0))
     st = rep(np.where(skip, 0, stride))
+    bins = []
     cnt = np.empty((3, total), np.float32)
     bmin = np.full((3, 3, total), np.inf, np.float32)
     bmax = np.full((3, 3, total), -np.inf, np.float32)
@@ -151,6 +161,8 @@ def _binned_splits(L, H, C, pos, per_node, nb, cmin, scale):
         c, cm, sc = Cv[k], cmin[:, k], scale[:, k]
         bi = ((c - rep(cm)) * rep(sc)).astype(np.int64)
         np.clip(bi, 0, e_top, out=bi)
+        if pos is None:
+            bins.append(bi)
         key = base + bi * st
         cnt[k] = np.bincount(key, minlength=total)
         for j in range(3):
@@ -169,7 +181,9 @@ def _binned_splits(L, H, C, pos, per_node, nb, cmin, scale):
         for k in range(b - 2, -1, -1):
             np.minimum(rmin[:, :, k + 1], rmin[:, :, k], out=rmin[:, :, k])
             np.maximum(rmax[:, :, k + 1], rmax[:, :, k], out=rmax[:, :, k])
-        nl = np.cumsum(cnt[:, sl].reshape(3, b, Fc), axis=1)
+        nl = cnt[:, sl].reshape(3, b, Fc)             # prefix counts (in place: the counts are not needed afterwards)
+        for k in range(1, b):
+            np.add(nl[:, k - 1], nl[:, k], out=nl[:, k])
         nr = nl[:, -1:] - nl[:, :-1]
         nl = nl[:, :-1]
         dl = lmax[:, :, :-1] - lmin[:, :, :-1]          # (3 axes, 3 coords, b-1, Fc)
@@ -185,17 +199,15 @@ def _binned_splits(L, H, C, pos, per_node, nb, cmin, scale):
         cost[ids] = cst[best, r]
         ax, pl = best // (b - 1), best % (b - 1)
         axis[ids], plane[ids] = ax, pl
-        at_l = (ax * b + pl) * Fc + r                   # flat (axis, bin, node) index of the left prefix
-        at_r = at_l + Fc
         for j in range(3):
-            box[0, ids, j] = lmin[:, j].reshape(-1)[at_l]
-            box[1, ids, j] = lmax[:, j].reshape(-1)[at_l]
-            box[2, ids, j] = rmin[:, j].reshape(-1)[at_r]
-            box[3, ids, j] = rmax[:, j].reshape(-1)[at_r]
+            box[0, ids, j] = lmin[ax, j, pl, r]
+            box[1, ids, j] = lmax[ax, j, pl, r]
+            box[2, ids, j] = rmin[ax, j, pl + 1, r]
+            box[3, ids, j] = rmax[ax, j, pl + 1, r]
     bad = ~np.isfinite(cost)
     plane[bad] = -1
     axis[bad] = 0
-    return cost, axis, plane, box
+    return cost, axis, plane, box, (bins if pos is None else None)
 
 
 def _range_reduce(x, starts, ends, op):
@@ -338,7 +350,7 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
         F = len(f_id)
         M = len(ids)
         off = np.cumsum(f_n) - f_n
-        rep = lambda x: np.repeat(x, f_n)                      # noqa: E731  (per node -> per primitive)
+        rep = _spreader(f_n)                                    # per node -> per primitive
         seg = rep(np.arange(F))
         p_in = np.arange(M) - rep(off)
         small = (f_n >= 2) & (f_n <= DP_MAX)
@@ -360,7 +372,7 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
             ok = ext > 1e-30
             scale = np.where(ok, (nb * (1.0 - 2.0 ** -20))[:, None] / np.where(ok, ext, 1), 0).astype(np.float32)
         C = [L[a] + H[a] for a in range(3)]
-        cost, axis, plane, box = _binned_splits(L, H, C, pos, k, np.where(ev, nb, 0), f_cmin, scale)
+        cost, axis, plane, box, bins = _binned_splits(L, H, C, pos, k, np.where(ev, nb, 0), f_cmin, scale)
         planar = plane >= 0
         cost[sampled] *= f_n[sampled] / sah_samples     # sample counts -> estimated primitive counts
 
@@ -389,10 +401,13 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
 
         # Left/right: the bin of the chosen axis (the binning computed the same float32 values), or the first
         # half of the range for nodes without a usable plane (coincident centroids, depth limit).
-        cv = _select(rep(axis), C)
-        cm = f_cmin[np.arange(F), axis]
-        sc = scale[np.arange(F), axis]
-        bi = ((cv - rep(cm)) * rep(sc)).astype(np.int64)
+        if bins is not None:                            # every primitive was binned: reuse its bins
+            bi = _select(rep(axis), bins)
+        else:
+            cv = _select(rep(axis), C)
+            cm = f_cmin[np.arange(F), axis]
+            sc = scale[np.arange(F), axis]
+            bi = ((cv - rep(cm)) * rep(sc)).astype(np.int64)
         left = np.where(rep(planar), bi <= rep(plane), p_in < rep(f_n // 2))
         # Stable partition inside each node: left primitives keep their order, then the right ones.
         cl = np.cumsum(left)
@@ -485,14 +500,15 @@ def _flatten(blo, bhi, bstart, bcount, bleft, bdepth):
     K = len(ids)
     nodes = np.zeros((K, 4, 4), np.float32)
     u = nodes.view(np.uint32)
-    rows = flat[ids]
-    for slot, child in ((0, bleft[ids]), (2, bright[ids])):
-        nodes[rows, slot, :3] = blo[child]
-        nodes[rows, slot + 1, :3] = bhi[child]
+    at = np.empty(K, np.int64)                                   # the binary node of each flattened row
+    at[flat[ids]] = ids
+    for slot, child in ((0, bleft[at]), (2, bright[at])):
+        nodes[:, slot, :3] = blo[child]
+        nodes[:, slot + 1, :3] = bhi[child]
         leafc = bleft[child] < 0
         ref = np.where(leafc, bstart[child] | LEAF_FLAG, flat[child])
-        u[rows, slot, 3] = ref.astype(np.uint32)
-        u[rows, slot + 1, 3] = np.where(leafc, bcount[child], 0).astype(np.uint32)
+        u[:, slot, 3] = ref.astype(np.uint32)
+        u[:, slot + 1, 3] = np.where(leafc, bcount[child], 0).astype(np.uint32)
     return nodes.reshape(4 * K, 4), K
 
 
