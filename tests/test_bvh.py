@@ -167,14 +167,26 @@ def _reference(P, ids, tri_i, sph_i, o, d, tmin, tmax):
 
 
 # ---------------------------------------------------------------------------------------------- device
-@pytest.fixture(scope="module")
-def trace_kernel(ctx):
+class Tracer:
+    """A traversal kernel (kernels/bvh.h or kernels/bvh4.h) and the node width its BVH must be given in."""
+
+    def __init__(self, kernel, width):
+        self.kernel, self.width = kernel, width
+
+
+def make_tracer(ctx, width):
     import pyopencl as cl
 
     from clrender.device.program import build_program
 
-    prg = build_program(ctx, TRACE_SRC, with_types=False)
-    return cl.Kernel(prg, "trace")
+    src = TRACE_SRC if width == 2 else TRACE_SRC.replace('#include "bvh.h"', '#include "bvh4.h"')
+    return Tracer(cl.Kernel(build_program(ctx, src, with_types=False), "trace"), width)
+
+
+@pytest.fixture(scope="module", params=[2, 4], ids=["bvh2", "bvh4"])
+def trace_kernel(ctx, request):
+    """Every traversal test below runs against both the 2-wide and the 4-wide kernel."""
+    return make_tracer(ctx, request.param)
 
 
 def device_trace(ctx, queue, kernel, bvh, prims, o, d, tmin, tmax):
@@ -210,10 +222,24 @@ def build_scene(v0, v1, v2, spheres, **kw):
     return bvh, pack_primitives(v0, v1, v2, spheres, bvh.order)
 
 
-def check_trace(ctx, queue, kernel, v0, v1, v2, spheres, o, d, tmin, tmax, max_ambiguous=0.02, **kw):
+class _Nodes:
+    def __init__(self, nodes):
+        self.nodes = nodes
+
+
+def check_trace(ctx, queue, tracer, v0, v1, v2, spheres, o, d, tmin, tmax, max_ambiguous=0.02, **kw):
     bvh, prims = build_scene(v0, v1, v2, spheres, **kw)
-    check_invariants(bvh, *primitive_bounds(v0, v1, v2, spheres), kw.get("max_leaf_size", 4))
-    out, prim, any_ = device_trace(ctx, queue, kernel, bvh, prims, o, d, tmin, tmax)
+    bounds = primitive_bounds(v0, v1, v2, spheres)
+    check_invariants(bvh, *bounds, kw.get("max_leaf_size", 4))
+    tree = bvh
+    if tracer.width == 4:
+        from clrender.accel.bvh4 import collapse_bvh4
+        from test_bvh4 import check_invariants4
+
+        b4 = collapse_bvh4(bvh)
+        check_invariants4(b4, *bounds, bvh.order, kw.get("max_leaf_size", 4))
+        tree = _Nodes(b4.nodes)
+    out, prim, any_ = device_trace(ctx, queue, tracer.kernel, tree, prims, o, d, tmin, tmax)
     return compare_with_reference(out, prim, any_, v0, v1, v2, spheres, o, d, tmin, tmax, max_ambiguous)
 
 
@@ -329,7 +355,8 @@ def test_primitive_packing():
 
 # ---------------------------------------------------------------------------------------------- traversal
 @pytest.mark.parametrize("n", [1, 2, 100, 5000])
-def test_triangle_soup(ctx, queue, trace_kernel, n):
+@pytest.mark.parametrize("max_leaf", [1, 4, 8])
+def test_triangle_soup(ctx, queue, trace_kernel, n, max_leaf):
     rng = np.random.default_rng(100 + n)
     tris = random_soup(rng, n, size=0.3 if n < 1000 else 0.05)
     o, d, tmin, tmax = rays = random_rays(rng, 2000)
@@ -338,7 +365,7 @@ def test_triangle_soup(ctx, queue, trace_kernel, n):
     b = rng.dirichlet([1, 1, 1], 1000)
     target = b[:, :1] * tris[0][k] + b[:, 1:2] * tris[1][k] + b[:, 2:] * tris[2][k]
     d[:1000] = (target - o[:1000]) * rng.uniform(0.2, 5, (1000, 1))
-    found, _ = check_trace(ctx, queue, trace_kernel, *tris, None, *rays)
+    found, _ = check_trace(ctx, queue, trace_kernel, *tris, None, *rays, max_leaf_size=max_leaf)
     assert found.sum() > 300
 
 

@@ -6,8 +6,7 @@ import pytest
 from clrender.accel.bvh import LEAF_FLAG, build_bvh
 from clrender.accel.bvh4 import (EMPTY_HI, EMPTY_LO, NODE_ROWS, Bvh4Unsupported, collapse_bvh4, decode_leaf)
 from clrender.accel.primitives import primitive_bounds
-from test_bvh import (TRACE_SRC, build_scene, compare_with_reference, device_trace, icosphere, random_rays,
-                      random_soup, random_spheres)
+from test_bvh import check_trace, icosphere, make_tracer, random_rays, random_soup, random_spheres
 
 
 # -------------------------------------------------------------------------------------- host invariants
@@ -67,7 +66,6 @@ def test_collapse_invariants_random(n, max_leaf):
 
 
 def test_collapse_fills_nodes():
-    rng = np.random.default_rng(1)
     lo, hi = primitive_bounds(*icosphere(4), None)
     bvh = build_bvh(lo, hi)
     b4 = collapse_bvh4(bvh)
@@ -89,59 +87,11 @@ def test_collapse_rejects_what_the_kernel_cannot_take():
 
 
 # ---------------------------------------------------------------------------------------------- traversal
+# The traversal tests of test_bvh.py run against the 4-wide kernel too (its `trace_kernel` fixture); here only
+# what is particular to the 4-wide node: zero direction components and flat boxes in its slab test.
 @pytest.fixture(scope="module")
 def trace4(ctx):
-    import pyopencl as cl
-
-    from clrender.device.program import build_program
-
-    prg = build_program(ctx, TRACE_SRC.replace('#include "bvh.h"', '#include "bvh4.h"'), with_types=False)
-    return cl.Kernel(prg, "trace")
-
-
-class _Nodes:
-    def __init__(self, nodes):
-        self.nodes = nodes
-
-
-def check_trace4(ctx, queue, kernel, v0, v1, v2, spheres, o, d, tmin, tmax, max_ambiguous=0.02, **kw):
-    bvh, prims = build_scene(v0, v1, v2, spheres, **kw)
-    b4 = collapse_bvh4(bvh)
-    check_invariants4(b4, *primitive_bounds(v0, v1, v2, spheres), bvh.order, kw.get("max_leaf_size", 4))
-    out, prim, any_ = device_trace(ctx, queue, kernel, _Nodes(b4.nodes), prims, o, d, tmin, tmax)
-    return compare_with_reference(out, prim, any_, v0, v1, v2, spheres, o, d, tmin, tmax, max_ambiguous)
-
-
-@pytest.mark.parametrize("n", [1, 2, 100, 5000])
-@pytest.mark.parametrize("max_leaf", [1, 4, 8])
-def test_triangle_soup4(ctx, queue, trace4, n, max_leaf):
-    rng = np.random.default_rng(200 + n)
-    tris = random_soup(rng, n, size=0.3 if n < 1000 else 0.05)
-    o, d, tmin, tmax = rays = random_rays(rng, 2000)
-    k = rng.integers(0, n, 1000)
-    b = rng.dirichlet([1, 1, 1], 1000)
-    target = b[:, :1] * tris[0][k] + b[:, 1:2] * tris[1][k] + b[:, 2:] * tris[2][k]
-    d[:1000] = (target - o[:1000]) * rng.uniform(0.2, 5, (1000, 1))
-    found, _ = check_trace4(ctx, queue, trace4, *tris, None, *rays, max_leaf_size=max_leaf)
-    assert found.sum() > 300
-
-
-def test_soup_with_spheres4(ctx, queue, trace4):
-    rng = np.random.default_rng(17)
-    found, _ = check_trace4(ctx, queue, trace4, *random_soup(rng, 300, size=0.1), random_spheres(rng, 60),
-                            *random_rays(rng, 3000))
-    assert found.sum() > 500
-
-
-def test_spheres_from_inside4(ctx, queue, trace4):
-    rng = np.random.default_rng(18)
-    sp = random_spheres(rng, 40)
-    o, d, tmin, tmax = random_rays(rng, 2000)
-    k = rng.integers(0, 40, 1000)
-    o[:1000] = sp[k, :3] + rng.uniform(-0.5, 0.5, (1000, 3)) * sp[k, 3:4]
-    tmin[:1000] = 0.0
-    e = np.zeros((0, 3))
-    check_trace4(ctx, queue, trace4, e, e, e, sp, o, d, tmin, tmax)
+    return make_tracer(ctx, 4)
 
 
 def test_axis_aligned_rays_and_flat_boxes4(ctx, queue, trace4):
@@ -151,39 +101,16 @@ def test_axis_aligned_rays_and_flat_boxes4(ctx, queue, trace4):
     v1[:100, 0] = v2[:100, 0] = v0[:100, 0]
     v1[100:200, 2] = v2[100:200, 2] = v0[100:200, 2]
     o, d, tmin, tmax = random_rays(rng, 3000, zero_components=True)
-    found, _ = check_trace4(ctx, queue, trace4, v0, v1, v2, random_spheres(rng, 10), o, d, tmin, tmax)
+    found, _ = check_trace(ctx, queue, trace4, v0, v1, v2, random_spheres(rng, 10), o, d, tmin, tmax)
     assert found.sum() > 300
     n = 1200
     o = rng.uniform(-1.5, 1.5, (n, 3))
     d = np.zeros((n, 3))
     d[np.arange(n), rng.integers(0, 3, n)] = rng.choice([-1.0, 1.0, -3.0, 0.25], n)
-    check_trace4(ctx, queue, trace4, *random_soup(rng, 200, size=0.1), random_spheres(rng, 80), o, d,
+    check_trace(ctx, queue, trace4, *random_soup(rng, 200, size=0.1), random_spheres(rng, 80), o, d,
                  np.zeros(n), np.full(n, np.inf))
 
 
-def test_icosphere_mesh4(ctx, queue, trace4):
-    rng = np.random.default_rng(21)
-    n = 3000
-    o, d, tmin, tmax = random_rays(rng, n, spread=2.0)
-    o[: n // 2] *= 0.25
-    tmin[: n // 4], tmax[: n // 4] = 0.0, np.inf
-    _, ref = check_trace4(ctx, queue, trace4, *icosphere(4), None, o, d, tmin, tmax)
-    assert ref[: n // 4].mean() > 0.98
-
-
-def test_tiny_and_empty_scenes4(ctx, queue, trace4):
-    rng = np.random.default_rng(22)
-    e = np.zeros((0, 3))
-    o, d, tmin, tmax = random_rays(rng, 500, spread=0.5)
-    check_trace4(ctx, queue, trace4, e, e, e, np.array([[0.1, 0.0, -0.1, 0.7]]), o, d, tmin, tmax)
-    tri = (np.array([[-1.0, -1, 0]]), np.array([[1.0, -1, 0.2]]), np.array([[0.0, 1, -0.1]]))
-    found, _ = check_trace4(ctx, queue, trace4, *tri, None, o, d, tmin, tmax)
-    assert found.any()
-    found, _ = check_trace4(ctx, queue, trace4, e, e, e, None, o, d, tmin, tmax)
-    assert not found.any()
-
-
-# ------------------------------------------------------------------------------------------------ renders
 def test_renders_agree_for_both_widths():
     """Same seed, same samples: the 2-wide and 4-wide trees find the same hits (up to exact ties)."""
     from pathlib import Path
