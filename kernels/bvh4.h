@@ -94,18 +94,7 @@ BVH_INLINE bool bvh4_traverse(__global const float4* nodes, __global const float
     }
 }
 
-bool bvh_closest_hit(__global const float4* nodes, __global const float4* prims, float3 o, float3 d,
-                     float tmin, float tmax, Hit* hit) {
-    Hit h;
-    bool found = bvh4_traverse(nodes, prims, o, d, tmin, tmax, &h, false);
-    if (found) *hit = h;
-    return found;
-}
-
-bool bvh_any_hit(__global const float4* nodes, __global const float4* prims, float3 o, float3 d,
-                 float tmin, float tmax) {
-    Hit h;
-    return bvh4_traverse(nodes, prims, o, d, tmin, tmax, &h, true);
-}
+#define BVH_TRAVERSE bvh4_traverse
+#include "bvh_queries.h"
 
 #endif

@@ -69,13 +69,18 @@ INLINE float filter_sample_1d_guided(__global const Camera* cam, __global const 
     return filter_in_bin(cam, cdf, lo, u, pdf);
 }
 
+/* f(dx) f(dy) / (p(dx) p(dy)): the weight of an offset drawn with densities px, py. */
+INLINE float filter_weight(__global const Camera* cam, float dx, float px, float dy, float py) {
+    if (!(px > 0.0f && py > 0.0f)) return 0.0f;
+    return (filter_eval_1d(cam, dx) / px) * (filter_eval_1d(cam, dy) / py);
+}
+
 /* An offset from the pixel centre and the sample's filter weight. */
 INLINE float2 filter_sample(__global const Camera* cam, __global const float* cdf, float2 u, float* weight) {
     float px, py;
     float dx = filter_sample_1d(cam, cdf, u.x, &px);
     float dy = filter_sample_1d(cam, cdf, u.y, &py);
-    float w = (filter_eval_1d(cam, dx) / px) * (filter_eval_1d(cam, dy) / py);
-    *weight = (px > 0.0f && py > 0.0f) ? w : 0.0f;
+    *weight = filter_weight(cam, dx, px, dy, py);
     return (float2)(dx, dy);
 }
 
@@ -84,8 +89,7 @@ INLINE float2 filter_sample_guided(__global const Camera* cam, __global const fl
     float px, py;
     float dx = filter_sample_1d_guided(cam, table, u.x, &px);
     float dy = filter_sample_1d_guided(cam, table, u.y, &py);
-    float w = (filter_eval_1d(cam, dx) / px) * (filter_eval_1d(cam, dy) / py);
-    *weight = (px > 0.0f && py > 0.0f) ? w : 0.0f;
+    *weight = filter_weight(cam, dx, px, dy, py);
     return (float2)(dx, dy);
 }
 

@@ -1,0 +1,22 @@
+/* The two ray queries every BVH layout offers, over its BVH_TRAVERSE(nodes, prims, o, d, tmin, tmax, hit,
+   any_hit) routine; included at the end of kernels/bvh.h and kernels/bvh4.h (one of them per program). */
+#ifndef CLRENDER_BVH_QUERIES_H
+#define CLRENDER_BVH_QUERIES_H
+
+/* Closest hit in (tmin, tmax); *hit is written only when there is one. */
+bool bvh_closest_hit(__global const float4* nodes, __global const float4* prims, float3 o, float3 d,
+                     float tmin, float tmax, Hit* hit) {
+    Hit h;
+    bool found = BVH_TRAVERSE(nodes, prims, o, d, tmin, tmax, &h, false);
+    if (found) *hit = h;
+    return found;
+}
+
+/* Anything in (tmin, tmax)? Stops at the first hit (shadow rays). */
+bool bvh_any_hit(__global const float4* nodes, __global const float4* prims, float3 o, float3 d,
+                 float tmin, float tmax) {
+    Hit h;
+    return BVH_TRAVERSE(nodes, prims, o, d, tmin, tmax, &h, true);
+}
+
+#endif
