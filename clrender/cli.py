@@ -26,7 +26,7 @@ def cmd_render(args) -> int:
     from .renderer import Interrupted, Renderer
 
     t0 = time.perf_counter()
-    scene = load_scene(args.scene, **_defines(args.define))
+    scene = load_scene(args.scene, nori_dialect=args.nori_dialect, **_defines(args.define))
     out = Path(args.output) if args.output else Path(args.scene).with_suffix(".exr")
     if out.suffix.lower() != ".exr":
         out = out.with_suffix(".exr")
@@ -79,7 +79,13 @@ def cmd_devices(args) -> int:
 
 
 def cmd_bench(args) -> int:
+    import os
+
     from . import bench
+    from .scene.dialect import ENV_VAR, resolve
+
+    if args.nori_dialect:  # through the environment, so the cold-build child process reads the same
+        os.environ[ENV_VAR] = resolve(args.nori_dialect)
 
     if args.compare:
         if args.scenes:
@@ -110,6 +116,15 @@ def cmd_bench(args) -> int:
     return 1 if bad else 0
 
 
+def add_dialect_option(p) -> None:
+    from .scene.dialect import DIALECTS, ENV_VAR
+
+    p.add_argument("--nori-dialect", choices=DIALECTS, default=None,
+                   help=f"how to read Nori XML: upstream (wjakob/nori, EPFL; camera +x on the image's left, "
+                        f"rotate axes normalised) or eth (ETH Zürich, Dartmouth; +x on the right, axes as "
+                        f"written). Default: ${ENV_VAR}, else upstream")
+
+
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
 
@@ -125,6 +140,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--time-limit", type=float, metavar="SEC", help="stop after about SEC seconds")
     r.add_argument("-D", "--define", action="append", metavar="NAME=VALUE", help="set $NAME in the scene")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_dialect_option(r)
     r.set_defaults(func=cmd_render)
     d = sub.add_parser("devices", help="list OpenCL platforms and devices")
     d.set_defaults(func=cmd_devices)
@@ -152,6 +168,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--scenes-dir", help="where the default set lives (default: ./scenes or a parent's)")
     b.add_argument("--no-cold", action="store_true", help="skip the cold-build subprocess")
     b.add_argument("-q", "--quiet", action="store_true", help="no progress messages")
+    add_dialect_option(b)
     b.set_defaults(func=cmd_bench)
     return ap
 
