@@ -15,7 +15,7 @@ import numpy as np
 from .accel.bvh import build_bvh
 from .accel.bvh4 import Bvh4Unsupported, collapse_bvh4
 from .accel.primitives import pack_primitives, primitive_bounds
-from .device import layout
+from .device import dispatch, layout
 from .device.layout import ENUMS, NONE
 from .filters.filter import with_guide
 
@@ -36,6 +36,7 @@ class SceneBuffers:
     bsdfs: np.ndarray
     emitters: np.ndarray
     emitter_cdf: np.ndarray
+    infinite: np.ndarray
     info: np.ndarray
     camera: np.ndarray
     filter_cdf: np.ndarray
@@ -46,7 +47,7 @@ class SceneBuffers:
 
     #: order of the SCENE_ARGS kernel arguments
     SCENE_ARGS = ("nodes", "prims", "positions", "normals", "uvs", "tri_index", "spheres", "sphere_shape",
-                  "shapes", "bsdfs", "emitters", "emitter_cdf", "info")
+                  "shapes", "bsdfs", "emitters", "emitter_cdf", "infinite", "info")
 
     def scene_arrays(self):
         return [getattr(self, n) for n in self.SCENE_ARGS]
@@ -172,6 +173,9 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     info["n_tris"] = len(tris)
     info["n_spheres"] = len(sph)
     info["n_emitters"] = len(emitter_rows)
+    flag_infinite = 1 << dispatch.EMITTER.flags.index("INFINITE")
+    infinite = np.array([i for i, r in enumerate(emitter_rows) if r["flags"] & flag_infinite], np.uint32)
+    info["n_infinite"] = len(infinite)
     if len(lo):
         bmin, bmax = lo.min(axis=0), hi.max(axis=0)
         c = (bmin + bmax) / 2
@@ -197,5 +201,6 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
         normals=_nonempty(normals), uvs=_nonempty(uvs), tri_index=_nonempty(tri_index),
         spheres=_nonempty(sph), sphere_shape=_nonempty(np.asarray(sphere_shape, np.uint32)),
         shapes=_nonempty(shape_rows), bsdfs=np.array(bsdf_rows, layout.dtype("Bsdf")) if bsdf_rows
-        else layout.zeros("Bsdf"), emitters=emitters, emitter_cdf=cdf, info=info, camera=camera,
+        else layout.zeros("Bsdf"), emitters=emitters, emitter_cdf=cdf, infinite=_nonempty(infinite), info=info,
+        camera=camera,
         filter_cdf=filter_cdf, stats=stats, bvh_width=bvh_width)

@@ -31,6 +31,7 @@ typedef struct {
     __global const Bsdf* bsdfs;
     __global const Emitter* emitters;
     __global const float* emitter_cdf;  /* area emitters' triangle CDFs, back to back */
+    __global const uint* infinite;      /* indices of the infinite emitters (info->n_infinite of them) */
     __global const SceneInfo* info;
 #ifdef CLRENDER_COUNT_RAYS
     uint n_closest, n_shadow;           /* rays traced by this work-item (benchmark builds only) */
@@ -56,13 +57,13 @@ typedef struct {
     __global const float4* s_normals, __global const float2* s_uvs, __global const uint4* s_tri_index, \
     __global const float4* s_spheres, __global const uint* s_sphere_shape, __global const Shape* s_shapes, \
     __global const Bsdf* s_bsdfs, __global const Emitter* s_emitters, __global const float* s_emitter_cdf, \
-    __global const SceneInfo* s_info
+    __global const uint* s_infinite, __global const SceneInfo* s_info
 #define SCENE_INIT(sd) \
     SceneData sd; \
     sd.nodes = s_nodes; sd.prims = s_prims; sd.positions = s_positions; sd.normals = s_normals; \
     sd.uvs = s_uvs; sd.tri_index = s_tri_index; sd.spheres = s_spheres; sd.sphere_shape = s_sphere_shape; \
     sd.shapes = s_shapes; sd.bsdfs = s_bsdfs; sd.emitters = s_emitters; sd.emitter_cdf = s_emitter_cdf; \
-    sd.info = s_info; \
+    sd.infinite = s_infinite; sd.info = s_info; \
     SCENE_INIT_COUNTERS(sd)
 
 typedef struct {

@@ -44,7 +44,8 @@ STRUCTS: dict[str, list[tuple]] = {
         ("iparams", "float4", 2),     # integrator-specific (av: length; simple: position, energy; ...)
         ("max_depth", "uint"),        # path length limit (0xFFFFFFFF: none)
         ("rr_depth", "uint"),         # Russian roulette starts at this depth
-        ("pad", "uint", 2),
+        ("n_infinite", "uint"),       # entries of the infinite-emitter index table
+        ("pad", "uint"),
     ],
     # One row per shape (a mesh or an analytic sphere).
     "Shape": [
@@ -55,35 +56,17 @@ STRUCTS: dict[str, list[tuple]] = {
         ("count", "uint"),            # meshes: triangle count; spheres: 1
         ("pad", "uint", 3),
     ],
-    # One row per BSDF; the meaning of the float4 lanes is the plugin's (see kernels/bsdfs/*.h).
-    "Bsdf": [
-        ("type", "uint"),
-        ("texture", "uint"),          # TEXTURE_* kind replacing `color`, or 0
-        ("pad", "uint", 2),
-        ("color", "float4"),          # albedo / kd
-        ("params", "float4"),
-        ("tex", "float4", 2),         # texture parameters
-    ],
-    # One row per emitter; lanes as documented in kernels/emitters/*.h.
-    "Emitter": [
-        ("type", "uint"),
-        ("shape", "uint"),            # area: the emitting shape
-        ("cdf_offset", "uint"),       # area: offset of its triangle-area CDF in the emitter_cdf table
-        ("count", "uint"),            # area: triangle count
-        ("radiance", "float4"),       # radiance / power / irradiance (rgb); w: plugin-specific
-        ("params", "float4", 4),
-    ],
 }
+# Bsdf and Emitter rows are generated from the registered plugins (clrender/device/dispatch.py): the kind's
+# header fields, then a union `p` of every plugin's declared parameter struct.
+UNION_STRUCTS = ("Bsdf", "Emitter")
 
 
 # Type tags and flag bits, shared the same way (emitted as #defines).
 ENUMS: dict[str, int] = {
     "FILTER_BOX": 0, "FILTER_TENT": 1, "FILTER_GAUSSIAN": 2, "FILTER_MITCHELL": 3,
     "SHAPE_HAS_NORMALS": 1, "SHAPE_HAS_UVS": 2, "SHAPE_SPHERE": 4,
-    "BSDF_DIFFUSE": 0, "BSDF_MIRROR": 1, "BSDF_DIELECTRIC": 2, "BSDF_MICROFACET": 3,
     "TEXTURE_NONE": 0, "TEXTURE_CHECKERBOARD": 1,
-    "EMITTER_AREA": 0, "EMITTER_POINT": 1, "EMITTER_DISTANTDISK": 2, "EMITTER_DISTANT": 3,
-    "EMITTER_CONSTANT": 4,
 }
 
 
@@ -113,18 +96,70 @@ def _layout(fields):
     return names, formats, offsets, itemsize, c_lines
 
 
-@functools.lru_cache(maxsize=None)
-def dtype(struct: str) -> np.dtype:
-    names, formats, offsets, itemsize, _ = _layout(STRUCTS[struct])
+def _signature() -> tuple:
+    from .dispatch import signature
+
+    return signature()
+
+
+def _plain_dtype(fields) -> np.dtype:
+    names, formats, offsets, itemsize, _ = _layout(fields)
     return np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": itemsize})
+
+
+@functools.lru_cache(maxsize=None)
+def _union_layout(struct: str, sig: tuple):
+    """(numpy dtype, C text) of a plugin row: header fields, then the union `p` of the plugins' parameters."""
+    from .dispatch import KINDS, member_of, params_struct, plugins
+
+    kind = next(k for k in KINDS.values() if k.struct == struct)
+    names, formats, offsets, size, c_lines = _layout(kind.header)
+    union_off = (size + 15) // 16 * 16
+    c_types, members = [], []
+    for cls in plugins(kind.tag):
+        if not cls.PARAMS:
+            continue  # e.g. a mirror: nothing to store (C has no empty structs)
+        p_names, p_formats, p_offsets, p_size, p_lines = _layout(cls.PARAMS)
+        if p_size > kind.param_bytes:
+            raise ValueError(f"{cls.__qualname__}: its parameters take {p_size} bytes; a {struct} row has room "
+                             f"for {kind.param_bytes}")
+        sub = np.dtype({"names": p_names, "formats": p_formats, "offsets": p_offsets, "itemsize": p_size})
+        names.append(member_of(cls))
+        formats.append(sub)
+        offsets.append(union_off)
+        c_types.append("typedef struct {\n" + "\n".join(p_lines) + f"\n}} {params_struct(cls)};")
+        members.append(f"        {params_struct(cls)} {member_of(cls)};")
+    dt = np.dtype({"names": names, "formats": formats, "offsets": offsets,
+                   "itemsize": union_off + kind.param_bytes})
+    c = "\n".join(c_types) + "\ntypedef struct {\n" + "\n".join(c_lines) + "\n    union {\n" + "\n".join(members)
+    c += f"\n        float4 _size[{kind.param_bytes // 16}];  /* fixes the row size whatever is registered */"
+    c += f"\n    }} p;\n}} {struct};"
+    return dt, c
+
+
+def dtype(struct: str) -> np.dtype:
+    if struct in UNION_STRUCTS:
+        return _union_layout(struct, _signature())[0]
+    return _plain_dtype_cached(struct)
+
+
+@functools.lru_cache(maxsize=None)
+def _plain_dtype_cached(struct: str) -> np.dtype:
+    return _plain_dtype(STRUCTS[struct])
 
 
 def zeros(struct: str, n: int = 1) -> np.ndarray:
     return np.zeros(n, dtype(struct))
 
 
-@functools.lru_cache(maxsize=None)
 def c_header() -> str:
+    return _c_header(_signature())
+
+
+@functools.lru_cache(maxsize=None)
+def _c_header(sig: tuple) -> str:
+    from .dispatch import flag_defines
+
     out = ["#ifndef CLRENDER_TYPES_GEN", "#define CLRENDER_TYPES_GEN",
            "/* generated from clrender/device/layout.py: do not edit */"]
     for name, fields in STRUCTS.items():
@@ -132,7 +167,10 @@ def c_header() -> str:
         out.append("typedef struct {")
         out.extend(lines)
         out.append(f"}} {name};")
+    for name in UNION_STRUCTS:
+        out.append(_union_layout(name, sig)[1])
     out.append(f"#define NONE 0x{NONE:08X}u")
     out.extend(f"#define {k} {v}u" for k, v in ENUMS.items())
+    out.extend(f"#define {k} {v}u" for k, v in flag_defines().items())
     out.append("#endif")
     return "\n".join(out) + "\n"

@@ -38,7 +38,11 @@ def pyopencl_include_dir() -> Path:
 
 
 def build_options(defines: dict | None = None, fast_math: bool = False) -> list[str]:
-    opts = ["-I", str(kernels_dir()), "-I", str(pyopencl_include_dir()), "-cl-std=CL1.2"]
+    from .dispatch import generated_include_dir
+
+    # kernels/, the dispatch headers generated from the registered plugins (gen/*.h), Random123
+    opts = ["-I", str(kernels_dir()), "-I", generated_include_dir(), "-I", str(pyopencl_include_dir()),
+            "-cl-std=CL1.2"]
     if fast_math:
         opts.append("-cl-fast-relaxed-math")
     for k, v in sorted((defines or {}).items()):
