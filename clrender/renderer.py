@@ -93,8 +93,9 @@ class Renderer:
         if self.buffers.bvh_width != DEFAULT_BVH_WIDTH:   # the default needs no define (same program as bench's)
             defines["BVH_WIDTH"] = self.buffers.bvh_width
         t0 = time.perf_counter()
-        self.program = build_program(self.ctx, '#include "render.cl"\n',
-                                     defines={"INTEGRATOR": scene.integrator.kernel, **defines},
+        #: the -D defines of the render program (`clrender bench` times builds of this very program)
+        self.defines = {"INTEGRATOR": scene.integrator.kernel, **defines}
+        self.program = build_program(self.ctx, '#include "render.cl"\n', defines=self.defines,
                                      fast_math=fast_math)
         self.kernel = cl.Kernel(self.program, "render_pass")
         self.build_seconds = time.perf_counter() - t0

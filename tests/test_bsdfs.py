@@ -9,7 +9,6 @@ import pytest
 from scipy import stats
 
 from clrender import plugins  # noqa: F401  (registers the plugins)
-from clrender.device import layout
 from clrender.device.layout import ENUMS
 from clrender.errors import SceneError
 from clrender.scene.registry import create
