@@ -202,13 +202,15 @@ def _first_launch(ctx, queue, program, global_size: int, local_size: int) -> flo
     nothing runs; PoCL compiles the work-group function for this shape)."""
     import pyopencl as cl
 
+    from .device.kernelargs import KernelArgs
+
     k = cl.Kernel(program, "render_pass")
+    args = KernelArgs(k)
     dummy = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, 256)
-    nbuf = k.num_args - 5
-    for i in range(nbuf):
-        k.set_arg(i, dummy)
-    for j, v in enumerate((0, 0, 0, 1, 0)):
-        k.set_arg(nbuf + j, np.uint32(v))
+    counts = ("pixel_offset", "pixel_count", "sample_offset", "spp", "seed")
+    args.set(**{n: dummy for n in args.names() if n not in counts})
+    args.set(pixel_offset=np.uint32(0), pixel_count=np.uint32(0), sample_offset=np.uint32(0), spp=np.uint32(1),
+             seed=np.uint32(0))
     t0 = time.perf_counter()
     cl.enqueue_nd_range_kernel(queue, k, (global_size,), (local_size,))
     queue.finish()

@@ -51,6 +51,7 @@ class Kind:
     row: str                   # how the dispatcher's row pointer is named in `params`
     methods: tuple
     after: tuple = ()          # headers the generated file includes before the plugins'
+    dispatched: bool = True    # False: no switch (integrators: one per program, chosen by -DINTEGRATOR)
 
 
 BSDF = Kind(
@@ -86,7 +87,19 @@ EMITTER = Kind(
     ),
     after=("emitters/common.h",))
 
-KINDS = {k.tag: k for k in (BSDF, EMITTER)}
+# Integrators: their parameters share SceneInfo's union `p` (sd->info->p.av.length); the program includes the one
+# integrator it runs (kernels/integrators/<kernel>.h), so there is nothing to dispatch.
+INTEGRATOR = Kind(
+    tag="integrator", struct="SceneInfo",
+    header=(("n_prims", "uint"), ("n_tris", "uint"), ("n_spheres", "uint"), ("n_emitters", "uint"),
+            ("bounds_center", "float4"),  # xyz: centre of the scene's bounding sphere, w: its radius
+            ("max_depth", "uint"),        # path length limit (0xFFFFFFFF: none)
+            ("rr_depth", "uint"),         # Russian roulette starts at this depth
+            ("n_infinite", "uint"),       # entries of the infinite-emitter index table
+            ("pad", "uint")),
+    param_bytes=32, flags=(), dispatch_name="integrator", row="info", methods=(), dispatched=False)
+
+KINDS = {k.tag: k for k in (BSDF, EMITTER, INTEGRATOR)}
 
 
 def _registry():
@@ -97,7 +110,7 @@ def _registry():
 
 
 def prefix_of(cls) -> str:
-    return getattr(cls, "prefix", None) or Path(cls.kernel).stem
+    return getattr(cls, "prefix", None) or Path(cls.kernel).stem.split(".")[0]
 
 
 def plugins(kind: str) -> list[type]:
@@ -130,12 +143,14 @@ def signature() -> tuple:
     out = []
     for kind in KINDS.values():
         for cls in plugins(kind.tag):
-            out.append((kind.tag, prefix_of(cls), cls.kernel, tuple(tuple(f) for f in cls.PARAMS),
-                        tuple(cls.FLAGS), tuple(methods_of(cls, kind))))
+            out.append((kind.tag, prefix_of(cls), cls.kernel, tuple(tuple(f) for f in getattr(cls, "PARAMS", ())),
+                        tuple(getattr(cls, "FLAGS", ())), tuple(methods_of(cls, kind))))
     return tuple(out)
 
 
 def methods_of(cls, kind: Kind) -> list[str]:
+    if not kind.methods:
+        return []
     declared = list(getattr(cls, "METHODS", [m.name for m in kind.methods]))
     known = {m.name for m in kind.methods}
     unknown = [m for m in declared if m not in known]
@@ -202,7 +217,7 @@ def dispatch_source(kind: Kind) -> str:
 
 @functools.lru_cache(maxsize=None)
 def _generated_dir(sig: tuple) -> str:
-    text = {f"{k.tag}_dispatch.h": dispatch_source(k) for k in KINDS.values()}
+    text = {f"{k.tag}_dispatch.h": dispatch_source(k) for k in KINDS.values() if k.dispatched}
     digest = hashlib.sha256(repr(sorted(text.items())).encode()).hexdigest()[:16]
     # A stable path per content: PoCL's cache key includes the build options (our -I), so a fresh folder per
     # process would make every build cold.
@@ -222,7 +237,7 @@ def generated_include_dir() -> str:
     """A folder holding gen/<kind>_dispatch.h for the plugins registered now (rewritten if it vanished)."""
     sig = signature()
     d = _generated_dir(sig)
-    if not all((Path(d) / "gen" / f"{k}_dispatch.h").is_file() for k in KINDS):
+    if not all((Path(d) / "gen" / f"{k.tag}_dispatch.h").is_file() for k in KINDS.values() if k.dispatched):
         _generated_dir.cache_clear()
         d = _generated_dir(sig)
     return d

@@ -34,19 +34,6 @@ STRUCTS: dict[str, list[tuple]] = {
         ("filter_p1", "float"),      # mitchell: C
         ("filter_p2", "float"),      # gaussian: exp(-r²/2σ²), subtracted so the weight reaches 0 at the radius
     ],
-    # Scene-wide numbers and the integrator's parameters.
-    "SceneInfo": [
-        ("n_prims", "uint"),
-        ("n_tris", "uint"),
-        ("n_spheres", "uint"),
-        ("n_emitters", "uint"),
-        ("bounds_center", "float4"),  # xyz: centre of the scene's bounding sphere, w: its radius
-        ("iparams", "float4", 2),     # integrator-specific (av: length; simple: position, energy; ...)
-        ("max_depth", "uint"),        # path length limit (0xFFFFFFFF: none)
-        ("rr_depth", "uint"),         # Russian roulette starts at this depth
-        ("n_infinite", "uint"),       # entries of the infinite-emitter index table
-        ("pad", "uint"),
-    ],
     # One row per shape (a mesh or an analytic sphere).
     "Shape": [
         ("bsdf", "uint"),
@@ -57,9 +44,29 @@ STRUCTS: dict[str, list[tuple]] = {
         ("pad", "uint", 3),
     ],
 }
+# The scene's tables, in kernel-argument order: (name, element type, what it holds). The kernels' SceneData
+# struct, its SCENE_ARGS argument list (each table is the argument s_<name>) and SCENE_INIT are generated from
+# this list; clrender.pack.SceneBuffers holds one numpy array per entry, and the host sets them by name.
+SCENE_TABLES: list[tuple[str, str, str]] = [
+    ("nodes", "float4", "BVH nodes (2- or 4-wide layout, see BVH_WIDTH)"),
+    ("prims", "float4", "primitives in BVH leaf order (triangles as three float4, spheres)"),
+    ("positions", "float4", "per vertex, xyz"),
+    ("normals", "float4", "per vertex, xyz (meshes with SHAPE_HAS_NORMALS)"),
+    ("uvs", "float2", "per vertex (meshes with SHAPE_HAS_UVS)"),
+    ("tri_index", "uint4", "i0, i1, i2, shape"),
+    ("spheres", "float4", "centre xyz, radius"),
+    ("sphere_shape", "uint", "the shape of each sphere"),
+    ("shapes", "Shape", "one row per shape"),
+    ("bsdfs", "Bsdf", "one row per BSDF"),
+    ("emitters", "Emitter", "one row per emitter"),
+    ("emitter_cdf", "float", "surface emitters' triangle-area CDFs, back to back"),
+    ("infinite", "uint", "indices of the infinite emitters (info->n_infinite of them)"),
+    ("info", "SceneInfo", "scene-wide numbers and the integrator's parameters"),
+]
+
 # Bsdf and Emitter rows are generated from the registered plugins (clrender/device/dispatch.py): the kind's
 # header fields, then a union `p` of every plugin's declared parameter struct.
-UNION_STRUCTS = ("Bsdf", "Emitter")
+UNION_STRUCTS = ("Bsdf", "Emitter", "SceneInfo")  # SceneInfo: scene-wide numbers + the integrator's parameters
 
 
 # Type tags and flag bits, shared the same way (emitted as #defines).
@@ -117,7 +124,7 @@ def _union_layout(struct: str, sig: tuple):
     union_off = (size + 15) // 16 * 16
     c_types, members = [], []
     for cls in plugins(kind.tag):
-        if not cls.PARAMS:
+        if not getattr(cls, "PARAMS", None):
             continue  # e.g. a mirror: nothing to store (C has no empty structs)
         p_names, p_formats, p_offsets, p_size, p_lines = _layout(cls.PARAMS)
         if p_size > kind.param_bytes:
@@ -135,6 +142,19 @@ def _union_layout(struct: str, sig: tuple):
     c += f"\n        float4 _size[{kind.param_bytes // 16}];  /* fixes the row size whatever is registered */"
     c += f"\n    }} p;\n}} {struct};"
     return dt, c
+
+
+def _scene_tables_c() -> str:
+    fields = [f"    __global const {t}* {n};  /* {what} */" for n, t, what in SCENE_TABLES]
+    out = ["typedef struct {", *fields,
+           "#ifdef CLRENDER_COUNT_RAYS",
+           "    uint n_closest, n_shadow;  /* rays traced by this work-item (benchmark builds only) */",
+           "#endif", "} SceneData;"]
+    args = ", ".join(f"__global const {t}* s_{n}" for n, t, _ in SCENE_TABLES)
+    init = " ".join(f"sd.{n} = s_{n};" for n, _, _ in SCENE_TABLES)
+    out.append(f"#define SCENE_ARGS {args}")
+    out.append(f"#define SCENE_INIT(sd) SceneData sd; {init} SCENE_INIT_COUNTERS(sd)")
+    return "\n".join(out)
 
 
 def dtype(struct: str) -> np.dtype:
@@ -169,6 +189,7 @@ def _c_header(sig: tuple) -> str:
         out.append(f"}} {name};")
     for name in UNION_STRUCTS:
         out.append(_union_layout(name, sig)[1])
+    out.append(_scene_tables_c())
     out.append(f"#define NONE 0x{NONE:08X}u")
     out.extend(f"#define {k} {v}u" for k, v in ENUMS.items())
     out.extend(f"#define {k} {v}u" for k, v in flag_defines().items())

@@ -41,8 +41,9 @@ def build_options(defines: dict | None = None, fast_math: bool = False) -> list[
     from .dispatch import generated_include_dir
 
     # kernels/, the dispatch headers generated from the registered plugins (gen/*.h), Random123
+    # -cl-kernel-arg-info: the host sets arguments by name (clrender/device/kernelargs.py)
     opts = ["-I", str(kernels_dir()), "-I", generated_include_dir(), "-I", str(pyopencl_include_dir()),
-            "-cl-std=CL1.2"]
+            "-cl-std=CL1.2", "-cl-kernel-arg-info"]
     if fast_math:
         opts.append("-cl-fast-relaxed-math")
     for k, v in sorted((defines or {}).items()):
