@@ -2,7 +2,7 @@
 
 The .icd rewriting and the device preference run everywhere, on fake files and fake devices with the build
 probe mocked (this machine's PoCL compiles, so "PoCL cannot compile for this CPU" is injected). The renders
-on the real runtime run only where the extra is installed: CI does not install its ~700 MB."""
+on the real runtime run only where the extra is installed: CI does not install its ~280 MB download."""
 import types
 from pathlib import Path
 
@@ -62,6 +62,13 @@ def test_vendor_folder_is_named_by_content_and_rewritten_in_place(tmp_path):
     assert intel_cpu.write_vendor_dir({"y.icd": "liby.so\n", "x.icd": "/a/libx.so\n"}, tmp_path) == a
     b = intel_cpu.write_vendor_dir({"x.icd": "/b/libx.so\n"}, tmp_path)
     assert b != a and (a / "x.icd").read_text() == "/a/libx.so\n"   # another install never clobbers ours
+
+
+def test_preload_reports_what_it_cannot_load(tmp_path):
+    (tmp_path / "libimf.so").write_bytes(b"not an ELF file")
+    missing = intel_cpu._preload({"libimf.so": tmp_path / "libimf.so"})
+    assert missing[0] == "libintlc.so.5" and missing[1].startswith("libimf.so (")
+    assert len(missing) == len(intel_cpu.PRELOAD)
 
 
 @pytest.fixture()
@@ -229,8 +236,8 @@ def intel_device_or_skip():
     context._cl()
     st = intel_cpu.state
     if not st["installed"]:
-        pytest.skip(f"Intel's OpenCL CPU runtime is not installed (`{intel_cpu.EXTRA_HINT}`; CI skips the "
-                    "~700 MB extra)")
+        pytest.skip(f"Intel's OpenCL CPU runtime is not installed (`{intel_cpu.EXTRA_HINT}`, a ~280 MB "
+                    "download that CI does not install)")
     assert st["problem"] is None, st["problem"]
     try:
         return context.choose_device("intel")
@@ -272,9 +279,11 @@ def test_default_scene_on_the_intel_runtime_matches_pocl(monkeypatch):
     # Same seed: the same random numbers, so the images agree up to float rounding (libm ulps).
     a, b = on_intel.render(spp=4, seed=3), on_pocl.render(spp=4, seed=3)
     assert np.abs(a.image - b.image).max() < 1e-3 * max(float(b.image.max()), 1.0)
-    # Independent seeds: equal within noise, block by block (64 blocks x 3 channels; |z| < 4.5 has a
-    # family-wise false alarm rate of about 0.1 %).
+    # Independent seeds: equal within noise, over the whole image (catches a 2 % bias) and block by block
+    # (64 blocks x 3 channels; |z| < 4.5 has a family-wise false alarm rate of about 0.1 %).
     a, b = on_intel.render(spp=8, seed=11), on_pocl.render(spp=8, seed=12)
+    whole = block_z(a, b, block=256)
+    assert np.abs(whole).max() < 4, f"whole-image z = {whole.ravel()}"
     z = block_z(a, b)
     assert np.abs(z).max() < 4.5, f"max |z| = {np.abs(z).max():.2f}"
-    assert 0.6 < (z ** 2).mean() < 1.6
+    assert 0.5 < (z ** 2).mean() < 2.0
