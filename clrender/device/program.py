@@ -8,9 +8,11 @@ source and options; PoCL's own disk cache (``POCL_CACHE_DIR``) makes a warm buil
 from __future__ import annotations
 
 import functools
+import warnings
 from pathlib import Path
 
 from ..errors import DeviceError
+from .intel_cpu import is_intel_cpu_runtime
 
 
 @functools.lru_cache(maxsize=None)
@@ -72,7 +74,12 @@ def build_program(ctx, source: str, defines: dict | None = None, fast_math: bool
     if prg is not None:
         return prg
     try:
-        prg = cl.Program(ctx, source).build(options=opts)
+        with warnings.catch_warnings():
+            # Intel's CPU runtime logs every successful build ("Compilation started ... Done."), which
+            # pyopencl would print as a CompilerWarning on every render; a failed build still raises.
+            if is_intel_cpu_runtime(ctx.devices[0].platform.name):
+                warnings.simplefilter("ignore", cl.CompilerWarning)
+            prg = cl.Program(ctx, source).build(options=opts)
     except cl.RuntimeError as exc:
         raise DeviceError(f"OpenCL program failed to build:\n{exc}") from exc
     if use_cache:
