@@ -6,30 +6,13 @@
 #ifndef CLRENDER_FILTER_H
 #define CLRENDER_FILTER_H
 #include "math.h"
+#include "gen/rfilter_dispatch.h"
 
+/* The filter's profile f(x) (filter_profile_eval: generated from the registered rfilter plugins,
+   kernels/filters/<prefix>.h), zero outside its radius. */
 INLINE float filter_eval_1d(__global const Camera* cam, float x) {
-    float r = cam->filter_radius;
-    float ax = fabs(x);
-    if (ax > r) return 0.0f;
-    switch (cam->filter_type) {
-    case FILTER_BOX: return 1.0f;
-    case FILTER_TENT: return maxf(0.0f, 1.0f - ax / r);
-    case FILTER_GAUSSIAN: {
-        float s = cam->filter_p0;
-        return maxf(0.0f, exp(-x * x / (2.0f * s * s)) - cam->filter_p2);
-    }
-    case FILTER_MITCHELL: {
-        float B = cam->filter_p0, C = cam->filter_p1;
-        float t = 2.0f * ax / r; /* Mitchell-Netravali is defined on [-2, 2] */
-        float t2 = t * t, t3 = t2 * t;
-        if (t < 1.0f)
-            return ((12.0f - 9.0f * B - 6.0f * C) * t3 + (-18.0f + 12.0f * B + 6.0f * C) * t2 + (6.0f - 2.0f * B)) * (1.0f / 6.0f);
-        if (t < 2.0f)
-            return ((-B - 6.0f * C) * t3 + (6.0f * B + 30.0f * C) * t2 + (-12.0f * B - 48.0f * C) * t + (8.0f * B + 24.0f * C)) * (1.0f / 6.0f);
-        return 0.0f;
-    }
-    }
-    return 0.0f;
+    if (fabs(x) > cam->filter_radius) return 0.0f;
+    return filter_profile_eval(cam, x);
 }
 
 /* The offset for u inside table bin `lo` (cdf[lo] <= u < cdf[lo+1]) and its density. */

@@ -74,10 +74,6 @@ class PerspectiveCamera:
         row["inv_aspect"] = self.height / self.width
         row["near_clip"], row["far_clip"] = self.near_clip, self.far_clip
         row["width"], row["height"] = self.width, self.height
-        f = self.filter
-        table = f.sampling_table()
-        row["filter_type"] = f.filter_type
-        row["filter_bins"] = len(table) - 1
-        row["filter_radius"] = f.radius
-        row["filter_p0"], row["filter_p1"], row["filter_p2"] = f.p0, f.p1, f.p2
+        table = self.filter.sampling_table()
+        self.filter.pack(row, table)
         return np.array([row]), table

@@ -52,6 +52,7 @@ class Kind:
     methods: tuple
     after: tuple = ()          # headers the generated file includes before the plugins'
     dispatched: bool = True    # False: no switch (integrators: one per program, chosen by -DINTEGRATOR)
+    type_field: str = "type"   # the row's tag field the switch reads
 
 
 BSDF = Kind(
@@ -99,7 +100,24 @@ INTEGRATOR = Kind(
             ("pad", "uint")),
     param_bytes=32, flags=(), dispatch_name="integrator", row="info", methods=(), dispatched=False)
 
-KINDS = {k.tag: k for k in (BSDF, EMITTER, INTEGRATOR)}
+# Reconstruction filters: their parameters are a union in the Camera row; the kernels evaluate the profile f(x)
+# (|x| <= radius) through filter_profile_eval (kernels/filter.h's sampling weights).
+RFILTER = Kind(
+    tag="rfilter", struct="Camera",
+    header=(("to_world", "float4", 4),   # columns of the camera-to-world matrix: x axis, y axis, z axis, origin
+            ("tan_half_fov", "float"),   # tan(fov/2), horizontal
+            ("inv_aspect", "float"),     # height / width
+            ("near_clip", "float"), ("far_clip", "float"),
+            ("width", "uint"), ("height", "uint"),
+            ("filter_type", "uint"),     # the filter's tag
+            ("filter_bins", "uint"),     # size of the filter's 1-D sampling table
+            ("filter_radius", "float")),
+    param_bytes=16, flags=(), dispatch_name="filter_profile", row="cam", type_field="filter_type",
+    methods=(Method("eval", "float", "__global const Camera* cam, float x", "cam, x", "return 0.0f;",
+                    required=True),),
+    after=("math.h",))
+
+KINDS = {k.tag: k for k in (BSDF, EMITTER, INTEGRATOR, RFILTER)}
 
 
 def _registry():
@@ -204,7 +222,7 @@ def dispatch_source(kind: Kind) -> str:
         out.append(f'#include "{cls.kernel}"')
     for m in kind.methods:
         out.append(f"INLINE {m.ret} {kind.dispatch_name}_{m.name}({m.params}) {{")
-        out.append(f"    switch ({kind.row}->type) {{")
+        out.append(f"    switch ({kind.row}->{kind.type_field}) {{")
         for tag, cls in enumerate(classes):
             if m.name in methods_of(cls, kind):
                 out.append(f"    case {tag}u: return {prefix_of(cls)}_{m.name}({m.args});")

@@ -18,22 +18,6 @@ _VECTORS = {"float4": ("<f4", 16, 16), "uint4": ("<u4", 16, 16)}
 NONE = 0xFFFFFFFF  # "no index" in uint fields (no emitter, no texture, ...)
 
 STRUCTS: dict[str, list[tuple]] = {
-    # Perspective camera + reconstruction filter (filter importance sampling, see filters/).
-    "Camera": [
-        ("to_world", "float4", 4),   # columns of the camera-to-world matrix: x axis, y axis, z axis, origin
-        ("tan_half_fov", "float"),   # tan(fov/2), horizontal
-        ("inv_aspect", "float"),     # height / width
-        ("near_clip", "float"),
-        ("far_clip", "float"),
-        ("width", "uint"),
-        ("height", "uint"),
-        ("filter_type", "uint"),
-        ("filter_bins", "uint"),     # size of the filter's 1-D sampling table
-        ("filter_radius", "float"),
-        ("filter_p0", "float"),      # gaussian: stddev; mitchell: B
-        ("filter_p1", "float"),      # mitchell: C
-        ("filter_p2", "float"),      # gaussian: exp(-r²/2σ²), subtracted so the weight reaches 0 at the radius
-    ],
     # One row per shape (a mesh or an analytic sphere).
     "Shape": [
         ("bsdf", "uint"),
@@ -66,12 +50,12 @@ SCENE_TABLES: list[tuple[str, str, str]] = [
 
 # Bsdf and Emitter rows are generated from the registered plugins (clrender/device/dispatch.py): the kind's
 # header fields, then a union `p` of every plugin's declared parameter struct.
-UNION_STRUCTS = ("Bsdf", "Emitter", "SceneInfo")  # SceneInfo: scene-wide numbers + the integrator's parameters
+# SceneInfo: scene-wide numbers + the integrator's parameters; Camera: the camera + its filter's parameters.
+UNION_STRUCTS = ("Camera", "Bsdf", "Emitter", "SceneInfo")
 
 
 # Type tags and flag bits, shared the same way (emitted as #defines).
 ENUMS: dict[str, int] = {
-    "FILTER_BOX": 0, "FILTER_TENT": 1, "FILTER_GAUSSIAN": 2, "FILTER_MITCHELL": 3,
     "SHAPE_HAS_NORMALS": 1, "SHAPE_HAS_UVS": 2, "SHAPE_SPHERE": 4,
     "TEXTURE_NONE": 0, "TEXTURE_CHECKERBOARD": 1,
 }

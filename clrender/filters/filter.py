@@ -14,9 +14,25 @@ TABLE_BINS = 256
 
 
 class Filter(abc.ABC):
-    filter_type = 0
+    """A filter plugin declares its kernel half (`kernel`: <prefix>_eval(cam, x) in kernels/filters/<prefix>.h,
+    reached through the generated filter_profile_eval) and the parameters it packs into the Camera row's union
+    (`PARAMS`, written by `fill`)."""
+    kernel = ""
+    PARAMS: list = []
     radius = 0.5
-    p0 = p1 = p2 = 0.0
+
+    def pack(self, row, table) -> None:
+        """Write the filter's fields of the Camera row (its sampling table has len(table) - 1 bins)."""
+        from ..device import dispatch
+
+        row["filter_type"] = dispatch.tag_of(type(self))
+        row["filter_bins"] = len(table) - 1
+        row["filter_radius"] = self.radius
+        if self.PARAMS:
+            self.fill(row[dispatch.member_of(type(self))])
+
+    def fill(self, p) -> None:
+        """Write the declared parameters into `p` (this filter's member of the Camera row's union)."""
 
     @abc.abstractmethod
     def eval(self, x: np.ndarray) -> np.ndarray:

@@ -9,7 +9,6 @@
 """
 import numpy as np
 
-from ..device.layout import ENUMS
 from ..errors import SceneError
 from ..scene.registry import register
 from .filter import Filter
@@ -18,7 +17,8 @@ from .validate import positive_radius
 
 @register("rfilter", "gaussian")
 class GaussianFilter(Filter):
-    filter_type = ENUMS["FILTER_GAUSSIAN"]
+    kernel = "filters/gaussian.h"
+    PARAMS = [("stddev", "float"), ("floor", "float")]
 
     def __init__(self, props=None, children=(), spec=None):
         if props is None:  # the camera's default filter
@@ -28,10 +28,12 @@ class GaussianFilter(Filter):
             self.stddev = float(props.get_float("stddev", 0.5))
             if not self.stddev > 0:
                 raise SceneError(f"stddev must be positive, got {self.stddev}", props.location("stddev"))
-        self.p0 = self.stddev
-        self.p2 = float(np.exp(-self.radius ** 2 / (2 * self.stddev ** 2)))
+        self.floor = float(np.exp(-self.radius ** 2 / (2 * self.stddev ** 2)))
 
     def eval(self, x):
         x = np.asarray(x, np.float64)
-        v = np.maximum(0.0, np.exp(-x * x / (2 * self.stddev ** 2)) - self.p2)
+        v = np.maximum(0.0, np.exp(-x * x / (2 * self.stddev ** 2)) - self.floor)
         return np.where(np.abs(x) <= self.radius, v, 0.0)
+
+    def fill(self, p):
+        p["stddev"], p["floor"] = self.stddev, self.floor

@@ -10,7 +10,6 @@
 """
 import numpy as np
 
-from ..device.layout import ENUMS
 from ..scene.registry import register
 from .filter import Filter
 from .validate import positive_radius
@@ -18,13 +17,13 @@ from .validate import positive_radius
 
 @register("rfilter", "mitchell")
 class MitchellFilter(Filter):
-    filter_type = ENUMS["FILTER_MITCHELL"]
+    kernel = "filters/mitchell.h"
+    PARAMS = [("B", "float"), ("C", "float")]
 
     def __init__(self, props, children, spec):
         self.radius = positive_radius(props, 2.0)
         self.B = float(props.get_float("B", 1.0 / 3.0))
         self.C = float(props.get_float("C", 1.0 / 3.0))
-        self.p0, self.p1 = self.B, self.C
 
     def eval(self, x):
         B, C = self.B, self.C
@@ -32,3 +31,6 @@ class MitchellFilter(Filter):
         near = ((12 - 9 * B - 6 * C) * t ** 3 + (-18 + 12 * B + 6 * C) * t ** 2 + (6 - 2 * B)) / 6
         far = ((-B - 6 * C) * t ** 3 + (6 * B + 30 * C) * t ** 2 + (-12 * B - 48 * C) * t + (8 * B + 24 * C)) / 6
         return np.where(t < 1, near, np.where(t < 2, far, 0.0))
+
+    def fill(self, p):
+        p["B"], p["C"] = self.B, self.C

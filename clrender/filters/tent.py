@@ -8,7 +8,6 @@
 """
 import numpy as np
 
-from ..device.layout import ENUMS
 from ..scene.registry import register
 from .filter import Filter
 from .validate import positive_radius
@@ -16,7 +15,7 @@ from .validate import positive_radius
 
 @register("rfilter", "tent")
 class TentFilter(Filter):
-    filter_type = ENUMS["FILTER_TENT"]
+    kernel = "filters/tent.h"
 
     def __init__(self, props, children, spec):
         self.radius = positive_radius(props, 1.0)
