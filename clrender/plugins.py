@@ -7,4 +7,5 @@ from .filters import box, gaussian, mitchell, tent  # noqa: F401
 from .samplers import independent  # noqa: F401
 from .bsdfs import checkerboard, dielectric, diffuse, microfacet, mirror  # noqa: F401
 from .emitters import area, constant, distant, distantdisk, point  # noqa: F401
-from .integrators import ao, av, illumination, normals, simple  # noqa: F401
+from .integrators import (ao, av, direct, direct_ems, direct_mats, direct_mis, normals, path_ems,  # noqa: F401
+                          path_mats, path_mis, simple, whitted)

@@ -1,0 +1,17 @@
+"""Nori's `direct`: every point light exactly, each with a shadow ray.
+
+```xml
+<integrator type="direct"/>
+```
+Kernel: kernels/integrators/direct.h.
+"""
+from ..scene.registry import register
+from .integrator import Integrator
+
+
+@register("integrator", "direct")
+class Direct(Integrator):
+    kernel = "direct"
+
+    def __init__(self, props, children, spec):
+        pass
