@@ -36,6 +36,7 @@ BVH_INLINE bool bvh_slab(float4 lo, float4 hi, float3 o, float3 inv, float tmin,
    shortened t culls the interior children of the same node. */
 BVH_INLINE bool bvh_traverse(__global const float4* nodes, __global const float4* prims, float3 o, float3 d,
                              float tmin, float tmax, Hit* hit, bool any_hit) {
+    BvhRay ray = bvh_ray(o, d);
     float3 inv = (float3)(bvh_safe_rcp(d.x), bvh_safe_rcp(d.y), bvh_safe_rcp(d.z));
     uint stack[BVH_STACK_SIZE];
     float stack_t[BVH_STACK_SIZE];
@@ -51,14 +52,14 @@ BVH_INLINE bool bvh_traverse(__global const float4* nodes, __global const float4
         bool hb = bvh_slab(blo, bhi, o, inv, tmin, hit->t, &tb);
         uint aref = as_uint(alo.w), bref = as_uint(blo.w);
         if (ha && (aref & BVH_LEAF_BIT)) {
-            if (bvh_isect_leaf(prims, aref & ~BVH_LEAF_BIT, as_uint(ahi.w), o, d, tmin, hit, any_hit)) {
+            if (bvh_isect_leaf(prims, aref & ~BVH_LEAF_BIT, as_uint(ahi.w), &ray, tmin, hit, any_hit)) {
                 found = true;
                 if (any_hit) return true;
             }
             ha = false;
         }
         if (hb && (bref & BVH_LEAF_BIT)) {
-            if (bvh_isect_leaf(prims, bref & ~BVH_LEAF_BIT, as_uint(bhi.w), o, d, tmin, hit, any_hit)) {
+            if (bvh_isect_leaf(prims, bref & ~BVH_LEAF_BIT, as_uint(bhi.w), &ray, tmin, hit, any_hit)) {
                 found = true;
                 if (any_hit) return true;
             }

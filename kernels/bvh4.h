@@ -30,6 +30,7 @@ BVH_INLINE float4 bvh4_max(float4 a, float4 b) { return a > b ? a : b; }
    has moved behind t are skipped. Any-hit queries do not sort. */
 BVH_INLINE bool bvh4_traverse(__global const float4* nodes, __global const float4* prims, float3 o, float3 d,
                               float tmin, float tmax, Hit* hit, bool any_hit) {
+    BvhRay ray = bvh_ray(o, d);
     /* bvh_safe_rcp of the three components with one vector division */
     float4 d4 = (float4)(d.x, d.y, d.z, 1.0f);
     int4 neg = as_int4(d4) < 0;
@@ -78,7 +79,7 @@ BVH_INLINE bool bvh4_traverse(__global const float4* nodes, __global const float
                 continue;
             }
         } else {
-            if (bvh_isect_leaf(prims, cur & BVH4_FIRST_MASK, ((cur >> BVH4_COUNT_SHIFT) & 15u) + 1u, o, d, tmin,
+            if (bvh_isect_leaf(prims, cur & BVH4_FIRST_MASK, ((cur >> BVH4_COUNT_SHIFT) & 15u) + 1u, &ray, tmin,
                                hit, any_hit)) {
                 found = true;
                 if (any_hit) return true;

@@ -2,7 +2,7 @@
    intersection routines (OpenCL C 1.2).
 
    Primitive table, 3 float4 per primitive in leaf order (clrender/accel/primitives.py):
-       triangle i: [v0.xyz, as_float(i)], [e1.xyz, 0], [e2.xyz, 0]      (e1 = v1 - v0, e2 = v2 - v0)
+       triangle i: [v0.xyz, as_float(i)], [v1.xyz, 0], [v2.xyz, 0]
        sphere j:   [centre.xyz, as_float(j | 0x80000000)], [radius, 0, 0, 0], [0, 0, 0, 0]
 
    Hits count for tmin < t < tmax, both sides of triangles. Ray directions need not be normalised.
@@ -29,22 +29,63 @@ BVH_INLINE float bvh_safe_rcp(float x) {
     return (x > 1e-30f || x < -1e-30f) ? 1.0f / x : (as_uint(x) >> 31 ? -1e30f : 1e30f);
 }
 
-/* Möller–Trumbore with precomputed edges; updates (t, u, v) when a hit lies in (tmin, *t). */
-BVH_INLINE bool bvh_isect_triangle(float4 p0, float4 e1, float4 e2, float3 o, float3 d, float tmin,
+/* The ray as the primitive tests see it: origin and direction (spheres), and the ray space of the watertight
+   triangle test, where the ray runs along +z from the origin: kz is the dominant axis of d, (kx, ky) the other
+   two, and a vertex p maps to (p[kx] - o[kx] - sx (p[kz] - o[kz]), p[ky] - o[ky] - sy (p[kz] - o[kz])) with
+   depth sz (p[kz] - o[kz]). */
+typedef struct {
+    float3 o, d;
+    float okx, oky, okz;   /* the origin's components along kx, ky, kz */
+    float sx, sy, sz;
+    int kx, ky, kz;
+} BvhRay;
+
+BVH_INLINE float bvh_pick(float4 p, int k) { return k == 0 ? p.x : (k == 1 ? p.y : p.z); }
+
+BVH_INLINE BvhRay bvh_ray(float3 o, float3 d) {
+    BvhRay r;
+    r.o = o;
+    r.d = d;
+    float ax = d.x < 0.0f ? -d.x : d.x, ay = d.y < 0.0f ? -d.y : d.y, az = d.z < 0.0f ? -d.z : d.z;
+    r.kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
+    r.kx = r.kz == 2 ? 0 : r.kz + 1;
+    r.ky = r.kx == 2 ? 0 : r.kx + 1;
+    float4 o4 = (float4)(o, 0.0f), d4 = (float4)(d, 0.0f);
+    r.okx = bvh_pick(o4, r.kx); r.oky = bvh_pick(o4, r.ky); r.okz = bvh_pick(o4, r.kz);
+    float dz = bvh_pick(d4, r.kz);
+    r.sz = 1.0f / dz;                 /* a zero direction gives inf/NaN here, and every test then misses */
+    r.sx = bvh_pick(d4, r.kx) * r.sz;
+    r.sy = bvh_pick(d4, r.ky) * r.sz;
+    return r;
+}
+
+/* Watertight ray/triangle test (Woop, Benthin, Wald 2013); updates (t, u, v) when a hit lies in (tmin, *t).
+   Watertight because (1) a vertex maps to the same ray-space point in every triangle that has it (the
+   vertices are stored, not edges), and (2) an edge's function a.x b.y - a.y b.x is computed from the same two
+   points on both sides of the edge, so the two results are exact negatives of each other, and its sign is
+   exact whenever it is not 0 (rounding is monotonic, so fl(ab) - fl(cd) cannot have the wrong sign). A
+   function that rounds to 0 counts as inside, where the paper would redo it in double (not available on
+   every OpenCL 1.2 device): a ray through an edge may hit both triangles, never neither. (2) needs the
+   products rounded separately, hence FP_CONTRACT OFF: an FMA would round one product and not the other.
+   -cl-fast-relaxed-math allows contraction and reassociation anyway and voids the guarantee. */
+BVH_INLINE bool bvh_isect_triangle(float4 p0, float4 p1, float4 p2, const BvhRay* r, float tmin,
                                    float* t, float* u, float* v) {
-    float px = d.y * e2.z - d.z * e2.y, py = d.z * e2.x - d.x * e2.z, pz = d.x * e2.y - d.y * e2.x;
-    float det = e1.x * px + e1.y * py + e1.z * pz;
-    if (det == 0.0f) return false;
+#pragma OPENCL FP_CONTRACT OFF
+    float az = bvh_pick(p0, r->kz) - r->okz, bz = bvh_pick(p1, r->kz) - r->okz, cz = bvh_pick(p2, r->kz) - r->okz;
+    float ax = bvh_pick(p0, r->kx) - r->okx - r->sx * az, ay = bvh_pick(p0, r->ky) - r->oky - r->sy * az;
+    float bx = bvh_pick(p1, r->kx) - r->okx - r->sx * bz, by = bvh_pick(p1, r->ky) - r->oky - r->sy * bz;
+    float cx = bvh_pick(p2, r->kx) - r->okx - r->sx * cz, cy = bvh_pick(p2, r->ky) - r->oky - r->sy * cz;
+    float e0 = cx * by - cy * bx;     /* edge p1 p2: weight of p0 */
+    float e1 = ax * cy - ay * cx;     /* edge p2 p0: weight of p1 */
+    float e2 = bx * ay - by * ax;     /* edge p0 p1: weight of p2 */
+    if ((e0 < 0.0f || e1 < 0.0f || e2 < 0.0f) && (e0 > 0.0f || e1 > 0.0f || e2 > 0.0f)) return false;
+    float det = e0 + e1 + e2;
+    float tt = (e0 * az + e1 * bz + e2 * cz) * r->sz;
+    float adet = det < 0.0f ? -det : det, att = det < 0.0f ? -tt : tt;
+    /* det = 0 (ray in the triangle's plane) or NaN fails here too */
+    if (!(att > tmin * adet && att < *t * adet)) return false;
     float inv = 1.0f / det;
-    float sx = o.x - p0.x, sy = o.y - p0.y, sz = o.z - p0.z;
-    float bu = (sx * px + sy * py + sz * pz) * inv;
-    if (bu < 0.0f || bu > 1.0f) return false;
-    float qx = sy * e1.z - sz * e1.y, qy = sz * e1.x - sx * e1.z, qz = sx * e1.y - sy * e1.x;
-    float bv = (d.x * qx + d.y * qy + d.z * qz) * inv;
-    if (bv < 0.0f || bu + bv > 1.0f) return false;
-    float tt = (e2.x * qx + e2.y * qy + e2.z * qz) * inv;
-    if (!(tt > tmin && tt < *t)) return false;
-    *t = tt; *u = bu; *v = bv;
+    *t = tt * inv; *u = e1 * inv; *v = e2 * inv;
     return true;
 }
 
@@ -70,7 +111,7 @@ BVH_INLINE bool bvh_isect_sphere(float4 c, float r, float3 o, float3 d, float tm
 }
 
 /* Intersects one leaf; with any_hit it stops at the first hit. */
-BVH_INLINE bool bvh_isect_leaf(__global const float4* prims, uint first, uint count, float3 o, float3 d,
+BVH_INLINE bool bvh_isect_leaf(__global const float4* prims, uint first, uint count, const BvhRay* r,
                                float tmin, Hit* hit, bool any_hit) {
     bool found = false;
     for (uint i = first; i < first + count; ++i) {
@@ -79,10 +120,10 @@ BVH_INLINE bool bvh_isect_leaf(__global const float4* prims, uint first, uint co
         uint id = as_uint(r0.w);
         bool h;
         if (id & BVH_SPHERE_BIT) {
-            h = bvh_isect_sphere(r0, p[1].x, o, d, tmin, &hit->t);
+            h = bvh_isect_sphere(r0, p[1].x, r->o, r->d, tmin, &hit->t);
             if (h) { hit->u = 0.0f; hit->v = 0.0f; }
         } else {
-            h = bvh_isect_triangle(r0, p[1], p[2], o, d, tmin, &hit->t, &hit->u, &hit->v);
+            h = bvh_isect_triangle(r0, p[1], p[2], r, tmin, &hit->t, &hit->u, &hit->v);
         }
         if (h) {
             hit->prim = id;

@@ -40,9 +40,23 @@ typedef struct {
     Frame sh;        /* shading frame, z = interpolated shading normal */
     float2 uv;       /* spheres: (0, 0) unless the shape's BSDF has a texture (the only reader of uv) */
     float t;
+    float3 po;       /* where rays leaving the surface start from, before the offset along ng (spawn_origin) */
+    float off;       /* how far they are pushed off the surface along ng */
     uint shape;
     uint tri;        /* triangle id, or NONE for spheres */
 } Intersection;
+
+/* Spawned rays start off the surface, on the side they leave to, and take tmin = 0, so they neither re-hit
+   their own surface nor step past a neighbouring one (an offset along the ray, as tmin was, skips every
+   surface within it: at a concave edge, the wall next to p). The origin is p pushed along ng by a bound on
+   the rounding errors of p and of the triangle test near t = 0, which are a few ulps of the largest
+   coordinate involved (p comes from barycentrics or a re-projection; the watertight test translates the
+   vertices to the ray's origin): SPAWN_OFFSET is 64 such ulps (4 was the least that passed
+   tests/test_watertight.py, 2 failed it). The same idea as Wächter and Binder (Ray Tracing Gems ch. 6) and
+   pbrt-v4, scaled by the triangle's vertices rather than by p, since p can be small on a large triangle.
+   Near an edge, p is first moved into its triangle by the same distance (Intersection.po): pushing along ng
+   alone leaves a point on a 90-degree concave edge on the neighbouring wall's plane. */
+#define SPAWN_OFFSET 3.814697265625e-06f   /* 64 * 2^-24 */
 
 #define SPHERE_FLAG 0x80000000u
 
@@ -57,6 +71,8 @@ INLINE bool scene_intersect(const SceneData* sd, const Ray* r, Intersection* its
         float3 p = r->o + r->d * h.t;
         float3 n = normalize3(p - s.xyz);
         its->p = s.xyz + n * s.w; /* re-project: the hit point lies on the sphere to float precision */
+        its->off = SPAWN_OFFSET * (max3(fabs(s.xyz)) + s.w);
+        its->po = its->p;
         its->ng = n;
         its->sh = frame_from_normal(n);
         uint shape = sd->sphere_shape[j];
@@ -75,8 +91,19 @@ INLINE bool scene_intersect(const SceneData* sd, const Ray* r, Intersection* its
     float b0 = 1.0f - h.u - h.v;
     float3 p0 = sd->positions[idx.x].xyz, p1 = sd->positions[idx.y].xyz, p2 = sd->positions[idx.z].xyz;
     its->p = p0 * b0 + p1 * h.u + p2 * h.v;
-    float3 ng = normalize3(cross3(p1 - p0, p2 - p0));
+    float3 c = cross3(p1 - p0, p2 - p0);
+    float a2 = len3(c);                          /* twice the area */
+    float3 ng = c * (1.0f / a2);
     its->ng = ng;
+    float off = SPAWN_OFFSET * maxf(max3(fabs(p0)), maxf(max3(fabs(p1)), max3(fabs(p2))));
+    its->off = off;
+    /* The spawn base: p moved into the triangle until it is `off` or more from every edge (barycentric
+       off * |edge| / a2 for the vertex across that edge), so that near a concave edge the origin is not on
+       or behind the neighbouring wall's plane, where p's rounding error alone can put it. */
+    float k = off / a2;
+    float w0 = maxf(b0, k * len3(p2 - p1)), w1 = maxf(h.u, k * len3(p0 - p2)), w2 = maxf(h.v, k * len3(p1 - p0));
+    float ws = w0 + w1 + w2;
+    its->po = ws > 0.0f && ws < INFINITY ? (p0 * w0 + p1 * w1 + p2 * w2) * (1.0f / ws) : its->p;
     uint flags = sd->shapes[idx.w].flags;
     float3 ns = ng;
     if (flags & SHAPE_HAS_NORMALS) {
@@ -99,7 +126,24 @@ INLINE bool scene_occluded(const SceneData* sd, float3 o, float3 d, float tmin, 
     return bvh_any_hit(sd->nodes, sd->prims, o, d, tmin, tmax);
 }
 
-/* A ray leaving p along d, offset so it does not re-hit its own surface. */
+/* The origin of a ray leaving the surface hit at `its` along d (see SPAWN_OFFSET). */
+INLINE float3 spawn_origin(const Intersection* its, float3 d) {
+    float3 o = its->ng * its->off;
+    return dot3(d, its->ng) < 0.0f ? its->po - o : its->po + o;
+}
+
+/* A ray leaving the surface hit at `its` along d. */
+INLINE Ray spawn_ray_from(const Intersection* its, float3 d) {
+    Ray r;
+    r.o = spawn_origin(its, d);
+    r.d = d;
+    r.tmin = 0.0f;
+    r.tmax = INFINITY;
+    return r;
+}
+
+/* A ray from a point p on no known surface, offset along the ray by ray_eps(p) instead (unlike spawn_ray_from,
+   this skips anything within ray_eps(p) of p). */
 INLINE Ray spawn_ray(float3 p, float3 d) {
     Ray r;
     r.o = p;

@@ -107,6 +107,7 @@ def _reference(P, ids, tri_i, sph_i, o, d, tmin, tmax):
         cand_t, cand_u, cand_v, cand_id, cand_flag = [], [], [], [], []
         if len(tri_i):
             v0, e1, e2 = P[tri_i, 0, :3][None], P[tri_i, 1, :3][None], P[tri_i, 2, :3][None]
+            e1, e2 = e1 - v0, e2 - v0               # rows 1 and 2 hold v1 and v2
             p = np.cross(dd, e2)
             det = np.sum(e1 * p, -1)
             with np.errstate(divide="ignore", invalid="ignore"):
@@ -347,7 +348,8 @@ def test_primitive_packing():
     p = pack_primitives(v0, v1, v2, sp, order).reshape(5, 3, 4)
     ids = p[:, 0, 3].view(np.uint32)
     assert list(ids) == [1 | 0x80000000, 0, 0x80000000, 2, 1]
-    assert np.allclose(p[1, 1, :3], (v1[0].astype(np.float32) - v0[0].astype(np.float32)))
+    assert np.array_equal(p[1, 1, :3], v1[0].astype(np.float32))
+    assert np.array_equal(p[3, 2, :3], v2[2].astype(np.float32))
     assert np.allclose(p[0, 0, :3], sp[1, :3]) and np.isclose(p[0, 1, 0], sp[1, 3])
     lo, hi = primitive_bounds(v0, v1, v2, sp)
     assert (lo[3] < sp[0, :3] - sp[0, 3] + 1e-6).all() and (hi[3] >= (sp[0, :3] + sp[0, 3]).astype(np.float32)).all()

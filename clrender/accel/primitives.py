@@ -7,11 +7,12 @@ kernel reads primitives in BVH leaf order from :func:`pack_primitives`, three ``
 ======== ================================ ================== ==============
 kind     row 0                            row 1              row 2
 ======== ================================ ================== ==============
-triangle ``v0.xyz, as_float(i)``          ``e1.xyz, 0``      ``e2.xyz, 0``
+triangle ``v0.xyz, as_float(i)``          ``v1.xyz, 0``      ``v2.xyz, 0``
 sphere   ``center.xyz, as_float(j|2^31)`` ``radius, 0, 0, 0`` ``0, 0, 0, 0``
 ======== ================================ ================== ==============
 
-with ``e1 = v1 - v0`` and ``e2 = v2 - v0`` (Möller–Trumbore needs only these). An empty table has shape
+in float32. The vertices themselves, not edges, so that a vertex shared by several triangles is the same
+float in each: the watertight test (kernels/bvh_common.h) relies on it. An empty table has shape
 (0, 4); OpenCL cannot allocate a zero-size buffer, so callers upload at least one (unused) row.
 """
 from __future__ import annotations
@@ -67,11 +68,9 @@ def pack_primitives(tri_v0, tri_v1, tri_v2, spheres, order):
     bits = out.view(np.uint32)
     tri = order < T
     ti = order[tri]
-    f0 = np.asarray(v0, np.float32)[ti]
-    # Edges from the float32 vertices, so the kernel's v0 + u*e1 + v*e2 matches the mesh it was given.
-    out[tri, 0, :3] = f0
-    out[tri, 1, :3] = np.asarray(v1, np.float32)[ti] - f0
-    out[tri, 2, :3] = np.asarray(v2, np.float32)[ti] - f0
+    out[tri, 0, :3] = np.asarray(v0, np.float32)[ti]
+    out[tri, 1, :3] = np.asarray(v1, np.float32)[ti]
+    out[tri, 2, :3] = np.asarray(v2, np.float32)[ti]
     bits[tri, 0, 3] = ti.astype(np.uint32)
     sj = order[~tri] - T
     out[~tri, 0, :3] = s[sj, :3]

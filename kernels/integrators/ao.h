@@ -5,5 +5,5 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     Intersection its;
     if (!scene_intersect(sd, &ray, &its)) return (float3)(1.0f);
     float3 d = to_world(&its.sh, square_to_cosine_hemisphere(next2d(smp)));
-    return scene_occluded(sd, its.p, d, ray_eps(its.p), INFINITY) ? (float3)(0.0f) : (float3)(1.0f);
+    return scene_occluded(sd, spawn_origin(&its, d), d, 0.0f, INFINITY) ? (float3)(0.0f) : (float3)(1.0f);
 }

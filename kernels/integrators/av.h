@@ -6,5 +6,5 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     if (!scene_intersect(sd, &ray, &its)) return (float3)(1.0f);
     float3 d = to_world(&its.sh, square_to_uniform_hemisphere(next2d(smp)));
     float length = sd->info->p.av.length;
-    return scene_occluded(sd, its.p, d, ray_eps(its.p), length) ? (float3)(0.0f) : (float3)(1.0f);
+    return scene_occluded(sd, spawn_origin(&its, d), d, 0.0f, length) ? (float3)(0.0f) : (float3)(1.0f);
 }

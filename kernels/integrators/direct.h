@@ -17,7 +17,7 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
         bq.wi = wi;
         bq.wo = to_local(&its.sh, q.wi);
         float3 f = bsdf_eval(b, &bq);
-        if (is_black(f) || light_occluded(sd, its.p, &q)) continue;
+        if (is_black(f) || light_occluded(sd, &its, &q)) continue;
         L += f * fabs(bq.wo.z) * le;
     }
     return L;

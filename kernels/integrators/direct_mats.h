@@ -10,7 +10,7 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     float3 w = bsdf_sample(b, &bq, next2d(smp));
     if (is_black(w)) return L;
     float3 d = to_world(&its.sh, bq.wo);
-    Ray r = spawn_ray(its.p, d);
+    Ray r = spawn_ray_from(&its, d);
     Intersection h;
     if (!scene_intersect(sd, &r, &h)) return L + w * escaped(sd, d);
     return L + w * hit_emission(sd, &h, d);

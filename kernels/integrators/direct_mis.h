@@ -15,7 +15,7 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     float3 d = to_world(&its.sh, bq.wo);
     bool discrete = bq.measure == MEASURE_DISCRETE;
     float pb = discrete ? 0.0f : bsdf_pdf(b, &bq);
-    Ray r = spawn_ray(its.p, d);
+    Ray r = spawn_ray_from(&its, d);
     Intersection h;
     if (!scene_intersect(sd, &r, &h)) {
         float3 le = escaped(sd, d);

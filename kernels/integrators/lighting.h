@@ -38,13 +38,17 @@ INLINE float hit_emitter_pdf(const SceneData* sd, float3 ref, const Intersection
     return scene_emitter_pdf(sd, e, &q);
 }
 
-/* Does anything block the segment from p toward q->wi before the light? */
-INLINE bool light_occluded(const SceneData* sd, float3 p, const EmitterQuery* q) {
-    float tmin = ray_eps(p);
-    float tmax = q->dist;
-    if (isfinite(tmax)) tmax = tmax * (1.0f - 1e-4f) - ray_eps(q->p);
-    if (!(tmax > tmin)) return false;
-    return scene_occluded(sd, p, q->wi, tmin, tmax);
+/* Does anything block the segment from the hit `its` to the light point q->p (or toward q->wi, for lights at
+   infinity)? The ray starts off the surface (spawn_origin) and aims at q->p from there, stopping short of
+   the light's own surface. */
+INLINE bool light_occluded(const SceneData* sd, const Intersection* its, const EmitterQuery* q) {
+    float3 o = spawn_origin(its, q->wi);
+    if (!isfinite(q->dist)) return scene_occluded(sd, o, q->wi, 0.0f, INFINITY);
+    float3 d = q->p - o;
+    float len = len3(d);
+    float tmax = len * (1.0f - 1e-4f) - ray_eps(q->p);
+    if (!(tmax > 0.0f)) return false;
+    return scene_occluded(sd, o, d * (1.0f / len), 0.0f, tmax);
 }
 
 /* One emitter sample at a non-delta vertex: f * cos * Le / pdf, times the MIS weight against BSDF
@@ -65,7 +69,7 @@ INLINE float3 sample_light(const SceneData* sd, const Intersection* its, __globa
     bq.uv = its->uv;
     float3 f = bsdf_eval(b, &bq);
     if (is_black(f)) return (float3)(0.0f);
-    if (light_occluded(sd, its->p, &q)) return (float3)(0.0f);
+    if (light_occluded(sd, its, &q)) return (float3)(0.0f);
     float w = 1.0f;
     if (mis && !q.delta) w = mis_balance(q.pdf, bsdf_pdf(b, &bq));
     return f * fabs(bq.wo.z) * le * w;

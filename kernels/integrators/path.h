@@ -59,7 +59,7 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
         after_delta = bq.measure == MEASURE_DISCRETE;
         prev_pdf = after_delta ? 0.0f : bsdf_pdf(b, &bq);
         prev_p = its.p;
-        ray = spawn_ray(its.p, to_world(&its.sh, bq.wo));
+        ray = spawn_ray_from(&its, to_world(&its.sh, bq.wo));
     }
     return L;
 }

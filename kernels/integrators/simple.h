@@ -9,6 +9,6 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     float3 wi = v * (1.0f / d);
     float c = dot3(wi, its.sh.n);
     if (c <= 0.0f) return (float3)(0.0f);
-    if (scene_occluded(sd, its.p, wi, ray_eps(its.p), d * (1.0f - 1e-4f))) return (float3)(0.0f);
+    if (scene_occluded(sd, spawn_origin(&its, wi), wi, 0.0f, d * (1.0f - 1e-4f))) return (float3)(0.0f);
     return energy * (c / (4.0f * M_PI_F_ * M_PI_F_ * d2));
 }

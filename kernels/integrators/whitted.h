@@ -15,7 +15,7 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
         float3 w = bsdf_sample(b, &bq, next2d(smp));
         if (is_black(w)) return L;
         beta *= w * (1.0f / 0.95f);
-        ray = spawn_ray(its.p, to_world(&its.sh, bq.wo));
+        ray = spawn_ray_from(&its, to_world(&its.sh, bq.wo));
     }
     return L;
 }
