@@ -5,6 +5,6 @@ from .shapes import obj, ply, sphere  # noqa: F401
 from .cameras import perspective  # noqa: F401
 from .filters import box, gaussian, mitchell, tent  # noqa: F401
 from .samplers import independent  # noqa: F401
-from .bsdfs import checkerboard, dielectric, diffuse, microfacet, mirror  # noqa: F401
+from .bsdfs import checkerboard, dielectric, diffuse, microfacet, mirror, uvtexture  # noqa: F401
 from .emitters import area, constant, distant, distantdisk, point  # noqa: F401
-from .integrators import ao, av, illumination, normals, simple  # noqa: F401
+from .integrators import ao, av, illumination, material, normals, simple  # noqa: F401
