@@ -57,7 +57,7 @@ UNION_STRUCTS = ("Camera", "Bsdf", "Emitter", "SceneInfo")
 # Type tags and flag bits, shared the same way (emitted as #defines).
 ENUMS: dict[str, int] = {
     "SHAPE_HAS_NORMALS": 1, "SHAPE_HAS_UVS": 2, "SHAPE_SPHERE": 4,
-    "TEXTURE_NONE": 0, "TEXTURE_CHECKERBOARD": 1,
+    "TEXTURE_NONE": 0, "TEXTURE_CHECKERBOARD": 1, "TEXTURE_UV": 2,
 }
 
 

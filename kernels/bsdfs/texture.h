@@ -2,7 +2,8 @@
    checkerboard_color). Row: texture = TEXTURE_CHECKERBOARD, tex[0] = value2, tex[1] = (delta_u, delta_v,
    scale_u, scale_v); the plugin's own colour parameter holds value1. value1 where
    floor(u/su - du) + floor(v/sv - dv) is even (delta is in cells; clrender/bsdfs/checkerboard.py derives this
-   from the ETH course's references). */
+   from the ETH course's references). TEXTURE_UV (ETH Nori's uvtexture) has no parameters: a colour made from
+   uv itself, base unused. */
 #ifndef CLRENDER_BSDFS_TEXTURE_H
 #define CLRENDER_BSDFS_TEXTURE_H
 #include "math.h"
@@ -15,6 +16,13 @@ INLINE float3 bsdf_texture(__global const Bsdf* b, float4 base, float2 uv) {
         /* parity of a sum of floats that are integers: fmod keeps it exact for any magnitude */
         float s = fabs(fmod(cu + cv, 2.0f));
         return s < 0.5f ? base.xyz : b->tex[0].xyz;
+    }
+    if (b->texture == TEXTURE_UV) {
+        /* (|u mod 1|, |v mod 1|, 1/2) under a ±20 % ripple of period 1/8 in u and v (clrender/bsdfs/uvtexture.py);
+           sinpi/cospi keep the phase exact where 16πu would round */
+        float su = sinpi(16.0f * uv.x), cu = cospi(16.0f * uv.x), sv = sinpi(16.0f * uv.y);
+        return (float3)(fabs(fmod(uv.x, 1.0f)) * (1.0f - 0.2f * su * sv),
+                        fabs(fmod(uv.y, 1.0f)) * (1.0f - 0.2f * cu * sv), 0.5f);
     }
     return base.xyz;
 }
