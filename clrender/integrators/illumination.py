@@ -22,6 +22,7 @@ from .integrator import NO_LIMIT, Integrator
 
 class _Illumination(Integrator):
     takes_max_depth = False
+    needs_emitter = True  # they see nothing but emitted light
 
     def __init__(self, props, children, spec):
         if self.takes_max_depth:

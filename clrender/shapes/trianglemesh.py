@@ -16,7 +16,14 @@ class TriangleMesh(Shape):
     def _load(self, props, children, spec, loader):
         filename = props.get_string("filename")
         to_world: Transform = props.get_transform("toWorld")
-        mesh = loader(filename, props.location("filename"))
+        where = props.location("filename")
+        try:
+            mesh = loader(filename, where)
+        except SceneError as e:
+            if e.location == where:
+                raise
+            # The error names the mesh file (and line); add where the scene asked for that file.
+            raise SceneError(f"in mesh {e}", where) from None
         mesh = mesh.transformed(to_world.matrix)
         mesh, dropped = mesh.drop_degenerate()
         if dropped:
