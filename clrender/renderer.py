@@ -2,8 +2,9 @@
 
 A pass adds `spp` samples to every pixel (the image is cut into fixed-size launches so each launch stays
 short). Samples are numbered globally, so the image is the same however the work is split into passes.
-Ctrl-C sets a flag that is checked between launches: the pass in flight finishes, the partial image keeps
-its true sample count; a second Ctrl-C aborts at once.
+Ctrl-C sets a flag that is checked between passes: the pass in flight finishes, the partial image keeps
+its true sample count; a second Ctrl-C aborts at once (the host polls the queue instead of blocking in
+clFinish, so Python's signal handler runs while the device works).
 """
 from __future__ import annotations
 
@@ -18,6 +19,8 @@ from . import __version__
 from .device.context import describe, get_context
 from .device.program import build_program
 from .film import Film
+from .interrupt import wait_for
+from .memcheck import check_film_fits
 from .pack import DEFAULT_BVH_WIDTH, pack_scene
 
 LOCAL_SIZE = 64              # one fixed launch shape: every new shape costs PoCL a fresh compile
@@ -89,6 +92,7 @@ class Renderer:
         self.ctx, self.queue = get_context(device)
         dev = self.ctx.devices[0]
         self.device_name = f"{dev.platform.name.strip()} / {dev.name.strip()}"
+        check_film_fits(scene, dev, self.count_rays)
         self.buffers = buffers if buffers is not None else pack_scene(scene)
         if self.buffers.bvh_width != DEFAULT_BVH_WIDTH:   # the default needs no define (same program as bench's)
             defines["BVH_WIDTH"] = self.buffers.bvh_width
@@ -128,6 +132,10 @@ class Renderer:
         spp = int(spp if spp is not None else self.scene.sample_count)
         if spp < 1:
             raise ValueError("spp must be at least 1")
+        if start_sample < 0 or start_sample + spp >= 2**32:
+            raise ValueError("sample numbers (start_sample + spp) must stay below 2^32")
+        if time_limit is not None and not (time_limit > 0 and np.isfinite(time_limit)):
+            raise ValueError(f"time_limit must be a positive finite number of seconds, got {time_limit}")
         n = self.n_pixels
         acc0 = np.zeros((n, 4), np.float32)
         acc1 = np.zeros((n, 4), np.float32)
@@ -159,7 +167,7 @@ class Renderer:
             for i, v in enumerate((0, min(self.launch_pixels, n), start_sample, 0, seed & 0xFFFFFFFF)):
                 k.set_arg(nargs + i, np.uint32(v))
             cl.enqueue_nd_range_kernel(self.queue, k, (self.global_size,), (LOCAL_SIZE,))
-            self.queue.finish()
+            wait_for(self.queue)
             self._warm = True
             self.build_seconds += time.perf_counter() - t0
             stats.build_seconds = self.build_seconds
@@ -178,7 +186,7 @@ class Renderer:
                         k.set_arg(nargs + 4, np.uint32(seed & 0xFFFFFFFF))
                         cl.enqueue_nd_range_kernel(self.queue, k, (self.global_size,), (LOCAL_SIZE,))
                         stats.launches += 1
-                    self.queue.finish()
+                    wait_for(self.queue)  # not queue.finish(): a second Ctrl-C must not wait for the pass
                     dt = time.perf_counter() - t0
                     done += batch
                     stats.passes += 1
