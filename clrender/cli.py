@@ -33,32 +33,29 @@ def _seconds(text: str) -> float:
 
 
 def cmd_render(args) -> int:
-    from .interrupt import CtrlC
     from .loader import load_scene
     from .output import output_paths
     from .renderer import Interrupted, Renderer
 
     t0 = time.perf_counter()
     out, png = output_paths(args.output, args.scene)  # before any work: an unwritable -o fails now
-    with CtrlC() as ctrl_c:
-        args.ctrl_c = ctrl_c
-        scene = load_scene(args.scene, **_defines(args.define))
-        ctrl_c.check()  # a Ctrl-C that a library swallowed still stops us
-        renderer = Renderer(scene, device=args.device)
-        ctrl_c.check()
-        st = renderer.buffers.stats
-        print(f"clrender: {args.scene}: {st['triangles']} triangles, {st['spheres']} spheres, "
-              f"{st['emitters']} emitters; BVH {st['bvh_build_seconds']:.2f} s; load "
-              f"{time.perf_counter() - t0:.2f} s; device {renderer.device_name}", file=sys.stderr)
-        progress = not args.quiet and (args.progress or sys.stderr.isatty())
-        try:
-            film = renderer.render(spp=args.spp, seed=args.seed, time_limit=args.time_limit, progress=progress)
-        except Interrupted:
-            print("clrender: aborted (second Ctrl-C); nothing written", file=sys.stderr)
-            _exit_now(args, 130)
-            return 130
-        film.write_exr(out)
-        film.write_png(png)
+    scene = load_scene(args.scene, **_defines(args.define))
+    args.ctrl_c.check()  # a Ctrl-C that a library swallowed still stops us
+    renderer = Renderer(scene, device=args.device)
+    args.ctrl_c.check()
+    st = renderer.buffers.stats
+    print(f"clrender: {args.scene}: {st['triangles']} triangles, {st['spheres']} spheres, "
+          f"{st['emitters']} emitters; BVH {st['bvh_build_seconds']:.2f} s; load {time.perf_counter() - t0:.2f} s; "
+          f"device {renderer.device_name}", file=sys.stderr)
+    progress = not args.quiet and (args.progress or sys.stderr.isatty())
+    try:
+        film = renderer.render(spp=args.spp, seed=args.seed, time_limit=args.time_limit, progress=progress)
+    except Interrupted:
+        print("clrender: aborted (second Ctrl-C); nothing written", file=sys.stderr)
+        _exit_now(args, 130)
+        return 130
+    film.write_exr(out)
+    film.write_png(png)
     s = film.stats
     rate = s.samples / s.seconds / 1e6 if s.seconds > 0 else 0.0
     msg = (f"clrender: wrote {out} and {png}: {film.spp} spp in {s.seconds:.2f} s "
@@ -184,8 +181,17 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    from .interrupt import CtrlC
+
+    # From the start: a Ctrl-C during the first imports must not be swallowed by a library's import guard.
+    with CtrlC() as ctrl_c:
+        return _main(argv, ctrl_c)
+
+
+def _main(argv, ctrl_c) -> int:
     logging.basicConfig(format="clrender: %(message)s", level=logging.WARNING)
     args = build_parser().parse_args(argv)
+    args.ctrl_c = ctrl_c
     if getattr(args, "spp", None) is not None and not 1 <= args.spp < 2**32:
         print("clrender: error: --spp must be between 1 and 4294967295", file=sys.stderr)
         return 2
@@ -195,8 +201,7 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         return _interrupted(args)
     except Exception as exc:
-        ctrl_c = getattr(args, "ctrl_c", None)
-        if ctrl_c is not None and ctrl_c.pressed:
+        if ctrl_c.pressed:
             # A library turned our KeyboardInterrupt into some other error: the cause is the Ctrl-C.
             return _interrupted(args)
         code = _report(exc)

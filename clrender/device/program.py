@@ -7,7 +7,11 @@ source and options; PoCL's own disk cache (``POCL_CACHE_DIR``) makes a warm buil
 """
 from __future__ import annotations
 
+import contextlib
 import functools
+import os
+import sys
+import tempfile
 from pathlib import Path
 
 from ..errors import DeviceError
@@ -46,6 +50,34 @@ def build_options(defines: dict | None = None, fast_math: bool = False) -> list[
     return opts
 
 
+@contextlib.contextmanager
+def _compiler_stderr():
+    """Hold back what the driver's compiler prints on file descriptor 2 during a build.
+
+    It is passed on after a successful build; after a failure the error (with the build log) says it all,
+    and after a Ctrl-C the compiler's "1 error generated." would only confuse."""
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError):
+        yield
+        return
+    with tempfile.TemporaryFile() as held:
+        os.dup2(held.fileno(), 2)
+        ok = False
+        try:
+            yield
+            ok = True
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            if ok:
+                held.seek(0)
+                text = held.read()
+                if text:
+                    os.write(2, text)
+
+
 _PROGRAMS: dict = {}
 
 
@@ -67,7 +99,8 @@ def build_program(ctx, source: str, defines: dict | None = None, fast_math: bool
     if prg is not None:
         return prg
     try:
-        prg = cl.Program(ctx, source).build(options=opts)
+        with _compiler_stderr():
+            prg = cl.Program(ctx, source).build(options=opts)
     except cl.RuntimeError as exc:
         raise DeviceError(f"OpenCL program failed to build:\n{exc}") from exc
     if use_cache:
