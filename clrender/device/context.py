@@ -144,7 +144,7 @@ def choose_device(spec: str | int | None = None):
     if s.lower() in ("cpu", "gpu"):
         want = cl.device_type.CPU if s.lower() == "cpu" else cl.device_type.GPU
         for p, d in devices:
-            if d.type & want:
+            if _is_only(d, want):
                 return p, d
         raise DeviceError(f"no {s.upper()} OpenCL device found; see `clrender devices`")
     for p, d in devices:
@@ -152,6 +152,14 @@ def choose_device(spec: str | int | None = None):
             return p, d
     names = ", ".join(f"[{i}] {describe(p, d)}" for i, (p, d) in enumerate(devices))
     raise DeviceError(f"no OpenCL device matches '{s}'; available: {names}")
+
+
+def _is_only(device, kind) -> bool:
+    """The device is of `kind` and of no other kind: a simulator such as Oclgrind, which reports itself as
+    CPU, GPU and accelerator at once, is neither `cpu` nor `gpu` (choose it by name)."""
+    cl = _cl()
+    kinds = cl.device_type.CPU | cl.device_type.GPU | cl.device_type.ACCELERATOR
+    return (device.type & kinds) == kind
 
 
 @functools.lru_cache(maxsize=None)
