@@ -17,6 +17,7 @@ import codecs
 import math
 import os
 import re
+import stat
 from dataclasses import dataclass, field
 from typing import Mapping
 from xml.parsers import expat
@@ -433,6 +434,8 @@ def parse_file(path, defines: Mapping[str, str] | None = None) -> PluginSpec:
     """Parse a Nori XML file. ``defines`` fill ``$name`` in attribute values (overriding <default>)."""
     path = os.fspath(path)
     try:
+        if not stat.S_ISREG(os.stat(path).st_mode):  # a FIFO or device would block or never end
+            raise SceneError(f"cannot read scene file '{path}': not a regular file")
         with open(path, "rb") as f:
             data = f.read()
     except OSError as e:
