@@ -195,6 +195,9 @@ def _main(argv, ctrl_c) -> int:
     if getattr(args, "spp", None) is not None and not 1 <= args.spp < 2**32:
         print("clrender: error: --spp must be between 1 and 4294967295", file=sys.stderr)
         return 2
+    if args.command == "render" and not 0 <= args.seed < 2**32:
+        print("clrender: error: --seed must be between 0 and 4294967295", file=sys.stderr)
+        return 2
     args.hard_exit = argv is None  # run as a program (not called from Python): may leave with os._exit
     try:
         return args.func(args)

@@ -114,10 +114,12 @@ def _atomic_write(path: Path, write) -> Path:
         os.close(fd)
         write(Path(tmp))
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         try:
             os.unlink(tmp)
         except OSError:
             pass
+        if isinstance(e, OSError):  # name the user's file, not our temporary one
+            raise OSError(e.errno, f"cannot write '{path}': {e.strerror or e}") from None
         raise
     return path

@@ -283,6 +283,8 @@ for value in ("nan", "inf", "-inf", "-1", "0", "abc", "1e999"):
 for value in ("0", "-5", "4294967296", "x"):
     case(f"option-spp-{value}", scene(), "--spp", argv=["--spp", value])
 case("option-seed-garbage", scene(), "--seed", argv=["--seed", "1.5"])
+case("option-seed-negative", scene(), "--seed", argv=["--seed", "-1"])
+case("option-seed-too-large", scene(), "--seed", argv=["--seed", "4294967296"])
 case("option-device-index", scene(), "device index 99", argv=["--device", "99"])
 case("option-device-name", scene(), "no-such-device", argv=["--device", "no-such-device"])
 case("option-define-malformed", scene(), "name=value", argv=["-D", "oops"])
