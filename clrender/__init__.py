@@ -9,11 +9,14 @@
 __version__ = "0.1.0"
 
 
-def load_scene(path, **defines):
-    """Load a Nori XML scene file (``defines`` fill ``$name`` placeholders)."""
+def load_scene(path, nori_dialect=None, **defines):
+    """Load a Nori XML scene file (``defines`` fill ``$name`` placeholders).
+
+    ``nori_dialect``: "upstream" (wjakob/nori, EPFL; the default) or "eth" (ETH Zürich, Dartmouth 2015):
+    they differ in the camera's x direction and in rotate axes. None reads $CLRENDER_NORI_DIALECT."""
     from .loader import load_scene as _load
 
-    return _load(path, **defines)
+    return _load(path, nori_dialect=nori_dialect, **defines)
 
 
 def render(scene, spp=None, seed=0, device=None, time_limit=None, progress=False):

@@ -82,7 +82,21 @@ def find_scenes_dir(scenes_dir=None) -> Path:
 
 def default_scenes(scenes_dir=None) -> list[Path]:
     d = find_scenes_dir(scenes_dir)
+    _generate_large_meshes(d)
     return [d / s for s in DEFAULT_SCENES if (d / s).is_file()]
+
+
+def _generate_large_meshes(d: Path) -> None:
+    """The large-mesh scene's PLYs are generated on demand by the checkout's scenes/build.py (not kept in git)."""
+    import subprocess
+    import sys
+
+    build = d / "build.py"
+    if build.is_file() and not (d / "largemesh" / "meshes" / "blob_1m.ply").is_file():
+        r = subprocess.run([sys.executable, str(build), "--large-meshes", "--out", str(d)], capture_output=True,
+                           text=True)
+        if r.returncode != 0:
+            raise ClrenderError(f"generating the large benchmark meshes with {build} failed:\n{r.stderr[-2000:]}")
 
 
 def _referenced_files(spec) -> list[tuple[str, Path]]:

@@ -39,7 +39,7 @@ def cmd_render(args) -> int:
 
     t0 = time.perf_counter()
     out, png = output_paths(args.output, args.scene)  # before any work: an unwritable -o fails now
-    scene = load_scene(args.scene, **_defines(args.define))
+    scene = load_scene(args.scene, nori_dialect=args.nori_dialect, **_defines(args.define))
     args.ctrl_c.check()  # a Ctrl-C that a library swallowed still stops us
     renderer = Renderer(scene, device=args.device)
     args.ctrl_c.check()
@@ -100,7 +100,13 @@ def cmd_devices(args) -> int:
 
 
 def cmd_bench(args) -> int:
+    import os
+
     from . import bench
+    from .scene.dialect import ENV_VAR, resolve
+
+    if args.nori_dialect:  # through the environment, so the cold-build child process reads the same
+        os.environ[ENV_VAR] = resolve(args.nori_dialect)
 
     if args.compare:
         if args.scenes:
@@ -131,6 +137,15 @@ def cmd_bench(args) -> int:
     return 1 if bad else 0
 
 
+def add_dialect_option(p) -> None:
+    from .scene.dialect import DIALECTS, ENV_VAR
+
+    p.add_argument("--nori-dialect", choices=DIALECTS, default=None,
+                   help=f"how to read Nori XML: upstream (wjakob/nori, EPFL; camera +x on the image's left, "
+                        f"rotate axes normalised) or eth (ETH Zürich, Dartmouth; +x on the right, axes as "
+                        f"written). Default: ${ENV_VAR}, else upstream")
+
+
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
 
@@ -149,6 +164,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     r.add_argument("--progress", action="store_true",
                    help="show the progress bar even when stderr is not a terminal (e.g. a log file)")
+    add_dialect_option(r)
     r.set_defaults(func=cmd_render)
     d = sub.add_parser("devices", help="list OpenCL platforms and devices")
     d.set_defaults(func=cmd_devices)
@@ -176,6 +192,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--scenes-dir", help="where the default set lives (default: ./scenes or a parent's)")
     b.add_argument("--no-cold", action="store_true", help="skip the cold-build subprocess")
     b.add_argument("-q", "--quiet", action="store_true", help="no progress messages")
+    add_dialect_option(b)
     b.set_defaults(func=cmd_bench)
     return ap
 

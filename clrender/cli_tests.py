@@ -12,6 +12,9 @@ def add_parsers(sub):
     t.add_argument("--seed", type=int, default=0)
     t.add_argument("--json", metavar="OUT", help="also write the results as JSON ('-' for stdout)")
     t.add_argument("--no-plots", action="store_true", help="do not write histogram PNGs for failing chi2 tests")
+    from .cli import add_dialect_option
+
+    add_dialect_option(t)
     t.set_defaults(func=cmd_test)
     w = sub.add_parser("warptest", help="chi-square test of one warping function")
     w.add_argument("warp", help="square, tent, disk, triangle, sphere, hemisphere, cosine_hemisphere, cone, beckmann")
@@ -26,7 +29,7 @@ def add_parsers(sub):
 def cmd_test(args) -> int:
     from .testing.nori import Runner, results_json
 
-    runner = Runner(device=args.device, seed=args.seed, plots=not args.no_plots)
+    runner = Runner(device=args.device, seed=args.seed, plots=not args.no_plots, nori_dialect=args.nori_dialect)
     results = []
     for f in args.files:
         print(f"{f}:")

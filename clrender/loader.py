@@ -9,12 +9,13 @@ from .scene.registry import create
 from .scene.xmlparser import parse_file
 
 
-def load_scene(path, **defines):
-    """Load a Nori XML scene; `defines` replace `$name` in attribute values (like `-D name=value`)."""
+def load_scene(path, nori_dialect: str | None = None, **defines):
+    """Load a Nori XML scene; `defines` replace `$name` in attribute values (like `-D name=value`).
+    `nori_dialect` is "upstream" (default) or "eth" (see clrender.scene.dialect)."""
     from . import plugins  # noqa: F401  (registers every plugin)
 
     path = Path(path)
-    spec = parse_file(str(path), {k: str(v) for k, v in defines.items()})
+    spec = parse_file(str(path), {k: str(v) for k, v in defines.items()}, nori_dialect=nori_dialect)
     if spec.tag != "scene":
         raise SceneError(f"expected a <scene> file, found <{spec.tag}> (use `clrender test` for test files)",
                          SourceLocation(str(path), spec.location.line, spec.location.col))

@@ -223,6 +223,7 @@ class Renderer:
             "spp": done, "seed": seed, "render_seconds": round(stats.seconds, 4), "device": self.device_name,
             "integrator": self.scene.integrator.kernel, "version": __version__,
             "interrupted": stats.interrupted, "dropped_samples": stats.dropped, "start_sample": start_sample,
+            "nori_dialect": getattr(self.scene, "nori_dialect", "upstream"),
         }
         if self.count_rays:
             tot = rays[:, :3].astype(np.uint64).sum(axis=0)

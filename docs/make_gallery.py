@@ -33,6 +33,9 @@ def main():
     ap.add_argument("--only", nargs="*", help="subset of scene paths")
     args = ap.parse_args()
     out = Path(args.out)
+    from clrender.bench import _generate_large_meshes
+
+    _generate_large_meshes(HERE)  # the 1 M-triangle PLY is generated on demand, not kept in git
     rows = []
     for rel, title in GALLERY:
         if args.only and rel not in args.only:

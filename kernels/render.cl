@@ -1,15 +1,6 @@
-/* Kernel entry points. The integrator is chosen at build time: the host passes -DINTEGRATOR=<name> and we
-   include kernels/integrators/<name>.h, which defines Li(scene, ray, sampler). */
-#include "math.h"
-#include "rng.h"
-#include "camera.h"
+/* The render kernel: the integrator chosen at build time (li.h) over every pixel, with the film's filter. */
+#include "li.h"
 #include "filter.h"
-#include "scene.h"
-
-#define STR_(x) #x
-#define STR(x) STR_(x)
-#define INTEGRATOR_HEADER(name) STR(integrators/name.h)
-#include INTEGRATOR_HEADER(INTEGRATOR)
 
 /* One pass: `spp` samples for each of `pixel_count` pixels starting at `pixel_offset`. Each work-item owns
    one pixel, so accumulation needs no atomics. Per pixel: acc0 = (sum wL, sum w), acc1 = (sum (wL)^2, n),

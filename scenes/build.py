@@ -2,16 +2,19 @@
 """Regenerate every clrender scene (XML) and mesh under scenes/, deterministically.
 
     python scenes/build.py [--out DIR] [--check]
+    python scenes/build.py --large-meshes     # only the large PLY meshes, if missing (they are not in git)
 
 Default output folder: the folder of this script (scenes/).  Everything is generated here from
 code (no third-party scene or mesh data): fixed float formatting, a fixed RNG seed, no timestamps,
-so the output is byte-for-byte reproducible (on a given platform/numpy; see scenes/README.md).
+so the XML and OBJ output is byte-for-byte reproducible; the large PLY meshes agree across CPUs to
+float rounding (numpy's vectorised sin may differ in a last bit), so they are generated on demand and
+compared by tolerance (see scenes/README.md).
 
 Conventions used by all scenes
 ------------------------------
-* World space is right-handed, +y is up.  Cameras use Nori's mirror convention:
-  ``<scale value="-1,1,1"/>`` before ``<lookat>`` so that, with Nori's perspective camera, the
-  viewer's left (cross(up, dir)) appears on the left of the image.  E.g. the Cornell box camera sits at
+* World space is right-handed, +y is up.  Scenes are written in the *upstream* Nori dialect (wjakob/nori,
+  clrender's default), whose camera shows camera +x on the image's left: a plain ``<lookat>`` (whose x
+  axis is the viewer's left, cross(up, dir)) gives the unmirrored image.  E.g. the Cornell box camera sits at
   +z looking toward -z: the red wall (x = -1) is on the image's left, the green wall (x = +1) on its right.
 * Every emitting mesh has ``vn`` normals pointing toward the part of the scene it lights (area
   emitters emit on the side of the shading normal).  Closed meshes (spheres, boxes) have outward
@@ -367,14 +370,12 @@ def lookat_matrix(origin, target, up):
 
 
 def camera_to_world(cam):
-    S = np.diag([-1.0, 1.0, 1.0, 1.0])
-    return lookat_matrix(cam["origin"], cam["target"], cam["up"]) @ S
+    return lookat_matrix(cam["origin"], cam["target"], cam["up"])
 
 
 def project(cam, pts):
-    """World points -> pixel coordinates (x right, y down) with Nori's perspective camera
-    (camera-space +x maps to the image's right in Nori's perspective.cpp: sx = (x/(z tan)+1)/2).
-    Returns (px, py, z_cam)."""
+    """World points -> pixel coordinates (x right, y down) with upstream Nori's perspective camera
+    (camera-space +x maps to the image's left: sx = (1 - x/(z tan))/2). Returns (px, py, z_cam)."""
     W, H = cam["width"], cam["height"]
     inv = np.linalg.inv(camera_to_world(cam))
     p = np.c_[np.asarray(pts, float), np.ones(len(pts))] @ inv.T
@@ -382,7 +383,7 @@ def project(cam, pts):
     aspect = W / H
     xn = p[:, 0] / (p[:, 2] * t)
     yn = p[:, 1] / (p[:, 2] * t)
-    sx = 0.5 * (xn + 1.0)
+    sx = 0.5 * (1.0 - xn)
     sy = 0.5 - 0.5 * aspect * yn
     return sx * W, sy * H, p[:, 2]
 
@@ -393,7 +394,7 @@ def camera_node(cam, rfilter=None):
         p_float("fov", cam["fov"]),
         p_int("width", cam["width"]),
         p_int("height", cam["height"]),
-        p_transform("toWorld", t_scale((-1, 1, 1)), t_lookat(cam["origin"], cam["target"], cam["up"])),
+        p_transform("toWorld", t_lookat(cam["origin"], cam["target"], cam["up"])),
         obj_("rfilter", rfilter) if rfilter else None,
     )
 
@@ -836,14 +837,54 @@ LARGE_SUN_DIR = (-0.5, 0.8, 0.35)  # toward the sun
 LARGE_LIGHT = dict(center=(1.5, 3.5, 1.5), half=0.5, radiance=6)
 
 
-def build_large(out):
+BLOBS = (("1m", BLOB_N_LARGE), ("100k", BLOB_N_SMALL))
+# Lowest vertex of each blob below its centre, to 3 decimals (what the XML needs; asserted when meshes are built).
+BLOB_LIFT = {"1m": 0.995, "100k": 0.995}
+
+
+def blob_ply_size(n):
+    """(vertices, faces) of the blob with subdivision n (checked before reusing a generated file)."""
+    nf = 20 * n * n
+    nv = 10 * n * n + 2
+    return nv, nf
+
+
+def write_blob(path, n):
+    V, N, F = blob(n)
+    lift = -float(V[:, 1].min())
+    assert abs(lift - BLOB_LIFT[{BLOB_N_LARGE: "1m", BLOB_N_SMALL: "100k"}[n]]) < 6e-4, lift
+    write_ply(path, V, N, F, comment="clrender scenes/build.py: displaced geodesic sphere, %d triangles" % len(F))
+
+
+def ensure_large_meshes(out=HERE, force=False):
+    """Generate the large blob PLYs under out/largemesh/meshes unless a complete one is already there
+    (they are tens of MB, so they are generated on demand rather than kept in git). Returns the paths."""
+    paths = []
+    for tag, n in BLOBS:
+        p = Path(out) / "largemesh" / "meshes" / ("blob_%s.ply" % tag)
+        paths.append(p)
+        if not force and p.is_file():
+            nv, nf = blob_ply_size(n)
+            with open(p, "rb") as f:
+                head = f.read(512)
+            if (b"element vertex %d\n" % nv) in head and (b"element face %d\n" % nf) in head:
+                end = head.index(b"end_header\n") + len(b"end_header\n")
+                if p.stat().st_size == end + 24 * nv + 13 * nf:
+                    continue
+        p.parent.mkdir(parents=True, exist_ok=True)
+        tmp = p.with_name(p.name + ".tmp")
+        write_blob(tmp, n)
+        WRITTEN.pop()
+        os.replace(tmp, p)
+    return paths
+
+
+def build_large(out, meshes=True):
     d = out / "largemesh"
-    lift = {}
-    for tag, n in (("1m", BLOB_N_LARGE), ("100k", BLOB_N_SMALL)):
-        V, N, F = blob(n)
-        lift[tag] = -float(V[:, 1].min())
-        write_ply(d / "meshes" / ("blob_%s.ply" % tag), V, N, F,
-                  comment="clrender scenes/build.py: displaced geodesic sphere, %d triangles" % len(F))
+    lift = dict(BLOB_LIFT)
+    if meshes:
+        for tag, n in BLOBS:
+            write_blob(d / "meshes" / ("blob_%s.ply" % tag), n)
     write_obj(d / "meshes" / "ground.obj", *rect_xz(-10, 10, -10, 10, 0.0, up=True))
     g = LARGE_LIGHT
     (cx, cy, cz), h = g["center"], g["half"]
@@ -868,7 +909,8 @@ def build_large(out):
     common = ["A lumpy 'blob' (geodesic sphere displaced along the normal by seeded sinusoids, radius",
               "about 1 +- 0.15, smooth float32 vertex normals, binary little-endian PLY) resting on a",
               "ground plane, lit by a distantdisk sun (thetaA 5, radiance 40, high up, from the left and",
-              "slightly in front) and a 1 x 1 area light (front right, radiance 6).  320 x 240, fov 40."]
+              "slightly in front) and a 1 x 1 area light (front right, radiance 6).  320 x 240, fov 40.",
+              "The blob PLYs are not kept in git: running python scenes/build.py generates them."]
     write_xml(d / "largemesh_normals.xml",
               ["Large mesh (1,003,520 triangles), integrator 'normals'."] + common +
               ["", "Correct image: a smooth, bumpy ball coloured by |normal| (green top, red/blue sides),",
@@ -1069,7 +1111,7 @@ def sanity_checks(out):
 # --------------------------------------------------------------------------------------------------
 
 
-def build(out):
+def build(out, large_meshes=True):
     out = Path(out)
     WRITTEN.clear()
     build_shared(out)
@@ -1078,7 +1120,7 @@ def build(out):
     build_delta(out)
     build_glass(out)
     build_furnace(out)
-    build_large(out)
+    build_large(out, large_meshes)
     build_sun(out)
     return sorted(p.relative_to(out).as_posix() for p in WRITTEN)
 
@@ -1087,8 +1129,14 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default=str(HERE), help="output folder (default: scenes/)")
     ap.add_argument("--check", action="store_true", help="run numerical sanity checks afterwards")
+    ap.add_argument("--large-meshes", action="store_true",
+                    help="only generate the large PLY meshes (if missing) under --out")
     a = ap.parse_args(argv)
     t0 = time.time()
+    if a.large_meshes:
+        for p in ensure_large_meshes(a.out):
+            print("%s (%.1f MB)" % (p, p.stat().st_size / 1e6))
+        return
     files = build(a.out)
     total = sum(os.path.getsize(Path(a.out) / f) for f in files)
     print("wrote %d files (%.1f MB) to %s in %.1f s" % (len(files), total / 1e6, a.out, time.time() - t0))

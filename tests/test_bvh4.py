@@ -129,5 +129,8 @@ def test_renders_agree_for_both_widths():
     a, b = films[2], films[4]
     assert a.stats.rays == b.stats.rays or abs(a.stats.rays_total - b.stats.rays_total) < 1e-4 * a.stats.rays_total
     ia, ib = np.asarray(a.image), np.asarray(b.image)
-    same = np.all(ia == ib, axis=-1)
-    assert same.mean() > 0.999, f"only {same.mean():.4f} of the pixels are identical"
+    # Equal up to float rounding of the per-pixel sums: the pass loop sizes its passes from measured times, so
+    # the two renders may add their 4 samples in different groupings (this test once failed on exact equality
+    # whenever the timing of the first pass changed, e.g. with another test run before it).
+    same = np.all(np.abs(ia - ib) <= 1e-5 * np.maximum(np.abs(ia), np.abs(ib)) + 1e-7, axis=-1)
+    assert same.mean() > 0.999, f"only {same.mean():.4f} of the pixels agree"

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from bigmesh import write_grid_ply
 from clrender.film import read_exr
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -20,15 +21,16 @@ SCENE = f"""<scene>
   <integrator type="ao"/>
   <camera type="perspective"><integer name="width" value="{W}"/><integer name="height" value="{H}"/>
     <transform name="toWorld"><lookat origin="0,1.5,4" target="0,0.5,0" up="0,1,0"/></transform></camera>
-  <mesh type="ply"><string name="filename" value="{ROOT / 'scenes/largemesh/meshes/blob_100k.ply'}"/></mesh>
-  <mesh type="obj"><string name="filename" value="{ROOT / 'scenes/largemesh/meshes/ground.obj'}"/></mesh>
+  <mesh type="ply"><string name="filename" value="grid.ply"/></mesh>
 </scene>
 """
 
 
 def _start(tmp_path, out, spp):
     scene = tmp_path / "s.xml"
-    scene.write_text(SCENE)
+    if not scene.exists():
+        write_grid_ply(tmp_path / "grid.ply")  # 100k triangles: the load and BVH build take a while
+        scene.write_text(SCENE)
     return subprocess.Popen([sys.executable, "-m", "clrender.cli", "render", str(scene), "-q", "--spp", str(spp),
                              "-o", str(out)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             env=dict(os.environ, PYTHONPATH=str(ROOT)))

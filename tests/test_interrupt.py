@@ -5,20 +5,21 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
+from bigmesh import write_grid_ply
 
-ROOT = Path(__file__).resolve().parents[1]
 
 
-def _scene(tmp_path, w=16, h=16, mesh="blob_100k.ply"):
+def _scene(tmp_path, w=16, h=16, mesh="grid.ply"):
+    if mesh == "grid.ply":
+        write_grid_ply(tmp_path / mesh)  # 100k triangles: the load and BVH build take a while
     p = tmp_path / "s.xml"
     p.write_text(f"""<scene>
   <integrator type="path_mis"/>
   <camera type="perspective"><integer name="width" value="{w}"/><integer name="height" value="{h}"/>
     <transform name="toWorld"><lookat origin="0,1.5,4" target="0,0.5,0" up="0,1,0"/></transform></camera>
-  <mesh type="ply"><string name="filename" value="{ROOT / 'scenes/largemesh/meshes' / mesh}"/>
+  <mesh type="ply"><string name="filename" value="{mesh}"/>
     <emitter type="area"><color name="radiance" value="1"/></emitter></mesh>
 </scene>
 """)
@@ -50,7 +51,8 @@ def test_ctrl_c_while_starting_or_loading(tmp_path, delay):
 
 def test_ctrl_c_during_the_kernel_build(tmp_path):
     # A fresh PoCL cache makes the build take seconds; the small scene loads in well under a second.
-    scene = _scene(tmp_path, mesh="../meshes/ground.obj").read_text().replace('type="ply"', 'type="obj"')
+    (tmp_path / "quad.obj").write_text("v -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nf 1 2 3 4\n")
+    scene = _scene(tmp_path, mesh="quad.obj").read_text().replace('type="ply"', 'type="obj"')
     (tmp_path / "s.xml").write_text(scene)
     status, err, after, out = _run(tmp_path, tmp_path / "s.xml", [2.5], ["--spp", "1"],
                                    env={"POCL_CACHE_DIR": str(tmp_path / "cold-cache")})

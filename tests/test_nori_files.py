@@ -59,3 +59,38 @@ def test_warptest(tmp_path, warp, param, capsys):
         "--samples", "400000", "--plot", str(tmp_path / "w.png")]
     assert main(args) == 0, capsys.readouterr().out
     assert (tmp_path / "w.png").exists()
+
+
+def test_t_statistic_floors_the_variance_as_nori():
+    """t = |mean - ref| · sqrt(n / max(var, 1e-5)): a deterministic estimator passes when right, fails when off."""
+    from clrender.testing.nori import t_test
+
+    assert t_test(0.25, 0.0, 100000, 0.25, 0.01)[0]
+    assert t_test(0.25 + 1e-6, 0.0, 100000, 0.25, 0.01)[0]       # t = 0.1
+    assert not t_test(0.25 + 1e-4, 0.0, 100000, 0.25, 0.01)[0]   # t = 10
+    assert not t_test(0.26, 0.04, 100000, 0.25, 0.01)[0]          # t = 15.8 from the real variance
+
+
+def test_scene_samples_cover_the_image_without_a_filter(tmp_path, capsys):
+    """Nori's scene ttest draws film positions over [0,W)x[0,H) only, never a filter footprint: a light that
+    is just outside the image contributes exactly 0 (a filtered render of the pixel would see it), and a
+    deterministic 0 passes thanks to the variance floor."""
+    p = tmp_path / "outside.xml"
+    p.write_text(f'''<test type="ttest"><string name="references" value="0"/><integer name="sampleCount" value="20000"/>
+        <scene><integrator type="path_mis"/>
+            <camera type="perspective"><integer name="width" value="1"/><integer name="height" value="1"/>
+                <float name="fov" value="10"/><rfilter type="gaussian"/></camera>
+            <mesh type="obj"><string name="filename" value="{NORI / 'light_down.obj'}"/>
+                <transform name="toWorld"><translate value="0.6, 0, 1"/></transform>
+                <emitter type="area"><color name="radiance" value="10"/></emitter></mesh>
+        </scene></test>''')
+    assert main(["test", str(p)]) == 0, capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "estimate 0 " in out
+    # The same scene as a render: its gaussian filter reaches past the pixel and sees the light.
+    import clrender
+    from clrender.scene.registry import create
+    from clrender.scene.xmlparser import parse_file
+
+    scene = create(parse_file(str(p)).children[0])
+    assert clrender.render(scene, spp=4096).image.mean() > 0.01

@@ -13,6 +13,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from bigmesh import write_grid_ply
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "scenes"
@@ -43,7 +44,7 @@ CASES = [
     pytest.param("mis/mis_path_mis.xml", None, marks=slow),            # microfacet
     pytest.param("sun/sun_path_mis.xml", None, marks=slow),            # distant disk
     pytest.param("furnace/furnace_env_path_mis.xml", None, marks=slow),  # constant environment
-    pytest.param("largemesh/mesh100k_normals.xml", None, marks=slow),  # a deep BVH
+    pytest.param("grid", None, marks=slow),  # a deep BVH
     ("simple", None),
 ]
 
@@ -85,6 +86,12 @@ def test_kernels_are_clean_under_oclgrind(tmp_path, scene, integrator):
     if scene == "simple":
         path = tmp_path / "simple.xml"
         path.write_text(SIMPLE)
+    elif scene == "grid":
+        write_grid_ply(tmp_path / "grid.ply", n=100)
+        path = tmp_path / "grid.xml"
+        path.write_text(SIMPLE.replace('type="simple"', 'type="normals"').replace(
+            str(SCENES / "largemesh" / "meshes" / "ground.obj"), "grid.ply").replace('type="obj"', 'type="ply"')
+            .replace('<point name="position" value="0, 0.5, 2"/><color name="energy" value="50"/>', ""))
     proc, report = _run_under_oclgrind(tmp_path, [str(path), integrator or ""])
     assert proc.returncode == 0, proc.stderr
     assert "rendered 2" in proc.stdout

@@ -13,3 +13,39 @@ def test_every_package_is_listed():
     found = {".".join(p.parent.relative_to(ROOT).parts) for p in (ROOT / "clrender").rglob("__init__.py")}
     assert found - listed == set(), f"packages missing from setup.cfg: {sorted(found - listed)}"
     assert "clrender.kernels" in listed
+
+
+# Import name -> distribution name, for the modules whose names differ.
+_DIST = {"PIL": "Pillow", "OpenEXR": "OpenEXR", "pocl_binary_distribution": "pocl-binary-distribution"}
+# Imported only inside a feature that names its extra when the module is missing.
+_OPTIONAL = {"matplotlib": "plot", "dask": "cluster", "distributed": "cluster"}
+
+
+def test_every_runtime_import_is_a_dependency():
+    """A shipped command must not die with ModuleNotFoundError after a plain `pip install .` (it once did for
+    scipy in `clrender test`): every third-party module clrender imports is in install_requires or is an
+    optional feature's module."""
+    import ast
+    import re
+    import sys
+
+    cfg = configparser.ConfigParser()
+    cfg.read(ROOT / "setup.cfg")
+    required = {re.split(r"[<>=!~\s\[]", ln.strip())[0].lower()
+                for ln in cfg["options"]["install_requires"].splitlines() if ln.strip() and not ln.strip().startswith("#")}
+    missing = {}
+    for path in (ROOT / "clrender").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                names = [node.module]
+            else:
+                continue
+            for name in names:
+                top = name.split(".")[0]
+                if top in sys.stdlib_module_names or top == "clrender" or top in _OPTIONAL:
+                    continue
+                if _DIST.get(top, top).lower() not in required:
+                    missing.setdefault(top, str(path.relative_to(ROOT)))
+    assert not missing, f"imported but not in install_requires: {missing}"

@@ -6,7 +6,8 @@ import pytest
 
 import clrender
 
-SCENES = sorted((Path(__file__).resolve().parents[1] / "scenes").rglob("*.xml"))
+SCENES_DIR = Path(__file__).resolve().parents[1] / "scenes"
+SCENES = sorted(SCENES_DIR.rglob("*.xml"))
 BIG = {"largemesh_normals.xml", "largemesh_path_mis.xml"}
 
 
@@ -17,8 +18,20 @@ def _params():
                            marks=marks)
 
 
+@pytest.fixture(scope="module")
+def build_module():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("scenes_build", SCENES_DIR / "build.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
 @pytest.mark.parametrize("path", list(_params()))
-def test_scene_renders(path):
+def test_scene_renders(path, build_module):
+    if path.parent.name == "largemesh":  # its PLY meshes are generated on demand, not kept in git
+        build_module.ensure_large_meshes(SCENES_DIR)
     scene = clrender.load_scene(path)
     cam = scene.camera
     scale = 32 / max(cam.width, cam.height)

@@ -130,7 +130,6 @@ def test_inverse():
 
 
 @pytest.mark.parametrize("ops, line, col, fragment", [
-    ('<lookat origin="0,0,0" target="0,5,0" up="0,1,0"/>', 3, 1, "parallel"),
     ('<lookat origin="1,1,1" target="1,1,1" up="0,1,0"/>', 3, 1, "target equals origin"),
     ('  <rotate axis="0,0,0" angle="10"/>', 3, 3, "zero length"),
     ('<scale value="1,0,1"/>', 3, 1, "singular"),
@@ -141,6 +140,13 @@ def test_degenerate_ops_are_located(ops, line, col, fragment):
         xml_transform(ops)
     assert e.value.location.line == line and e.value.location.col == col
     assert fragment in str(e.value)
+
+
+def test_parallel_lookat_is_nori_degenerate_frame():
+    """Nori accepts an up parallel to the view: left = newUp = 0 (a warning, not an error)."""
+    m = xml_transform('<lookat origin="0,0,0" target="0,5,0" up="0,1,0"/>').matrix
+    np.testing.assert_array_equal(m[:3, :2], 0.0)
+    np.testing.assert_allclose(m[:3, 2], [0, 1, 0])
 
 
 @pytest.mark.parametrize("ops, expected", [

@@ -1,4 +1,4 @@
-"""Nori's perspective camera.
+"""Nori's perspective camera, in either dialect of the format (clrender/scene/dialect.py).
 
 ```xml
 <camera type="perspective">
@@ -8,18 +8,28 @@
     <float name="nearClip" value="1e-4"/>     <!-- default 1e-4 -->
     <float name="farClip" value="1e4"/>       <!-- default 1e4 -->
     <transform name="toWorld">                <!-- default identity: at the origin looking down +z -->
-        <scale value="-1,1,1"/>               <!-- Nori has no built-in mirror: +x is on the image's left -->
         <lookat origin="0,0,-5" target="0,0,0" up="0,1,0"/>
     </transform>
     <rfilter type="gaussian"/>                <!-- default gaussian, radius 2, stddev 0.5 -->
 </camera>
 ```
+A film position (sx, sy) in [0,1]² (top-left origin) maps to camera space through the inverse of
+S·T·P, P Nori's perspective projection (cot of half the horizontal fov, near and far clip):
+- upstream dialect: S = diag(-0.5, -0.5·aspect, 1), T = translate(-1, -1/aspect, 0): camera +x appears on
+  the image's **left** (as in Mitsuba), so a plain `lookat` (whose x column is "left") is unmirrored;
+- eth dialect: S = diag(0.5, -0.5·aspect, 1), T = translate(1, -1/aspect, 0): camera +x on the **right**;
+  those scenes put `<scale value="-1,1,1"/>` before `<lookat>`.
+Both are the same camera up to the sign of camera x, so the row packs toWorld's x column negated for
+upstream and the kernel (kernels/camera.h) computes the eth form. A `lookat` whose `up` is parallel to
+the viewing direction leaves toWorld with zero x and y columns; as in Nori, every ray then leaves along
+the viewing direction.
 """
 import numpy as np
 
 from ..device import layout
 from ..errors import SceneError
 from ..filters.gaussian import GaussianFilter
+from ..scene.dialect import mirrors_camera_x
 from ..scene.registry import register
 
 
@@ -42,8 +52,12 @@ class PerspectiveCamera:
         if not 0 <= self.near_clip < self.far_clip:
             raise SceneError(f"need 0 <= nearClip < farClip, got {self.near_clip}, {self.far_clip}",
                              props.location("nearClip"))
-        if abs(np.linalg.det(self.to_world.matrix[:3, :3])) < 1e-12:
-            raise SceneError("camera toWorld is singular", props.location("toWorld"))
+        m = self.to_world.matrix
+        if not np.all(np.isfinite(m)):
+            raise SceneError("camera toWorld has NaN or infinite entries", props.location("toWorld"))
+        if np.linalg.norm(m[:3, 2]) < 1e-12:
+            raise SceneError("camera toWorld maps the viewing direction (+z) to zero", props.location("toWorld"))
+        self.mirror_x = mirrors_camera_x(spec.dialect) if spec is not None else True
         if len(children) > 1:
             raise SceneError("a camera takes at most one <rfilter>", children[1].spec.location)
         self.filter = children[0] if children else GaussianFilter()
@@ -54,6 +68,8 @@ class PerspectiveCamera:
         m = self.to_world.matrix
         for i in range(4):
             row["to_world"][i, :3] = m[:3, i]
+        if self.mirror_x:
+            row["to_world"][0, :3] *= -1.0
         row["tan_half_fov"] = np.tan(np.radians(self.fov) / 2)
         row["inv_aspect"] = self.height / self.width
         row["near_clip"], row["far_clip"] = self.near_clip, self.far_clip

@@ -24,6 +24,7 @@ class Scene:
 
     def __init__(self, props, children, spec):
         self.location = spec.location
+        self.nori_dialect = spec.dialect
         self.shapes = []
         self.emitters = []
         self.camera = self.integrator = self.sampler = None

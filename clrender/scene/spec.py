@@ -14,7 +14,7 @@ OBJECT_TAGS = ("scene", "mesh", "bsdf", "emitter", "camera", "integrator", "samp
 @dataclass(eq=False)
 class PluginSpec:
     """One object element: its tag, ``type`` (``"scene"`` for ``<scene>``), optional ``name``,
-    properties, nested objects in document order, and where its start tag is."""
+    properties, nested objects in document order, where its start tag is, and the dialect it was read in."""
 
     tag: str
     type: str
@@ -22,6 +22,8 @@ class PluginSpec:
     props: PropertyList
     children: list["PluginSpec"] = field(default_factory=list)
     location: SourceLocation | None = None
+    #: the Nori dialect the file was read in ("upstream" or "eth"; see clrender.scene.dialect)
+    dialect: str = "upstream"
 
     def describe(self) -> str:
         """How errors refer to this object, e.g. ``<bsdf type="diffuse">``."""

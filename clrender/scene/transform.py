@@ -62,22 +62,35 @@ class Transform:
         return Transform(np.diag([*s, 1.0]), inverse=np.diag([*(1.0 / s), 1.0]))
 
     @staticmethod
-    def rotate(axis, angle_degrees: float) -> "Transform":
-        """Right-handed rotation about ``axis`` (normalised here) by ``angle_degrees``."""
+    def rotate(axis, angle_degrees: float, normalize: bool = True) -> "Transform":
+        """Right-handed rotation about ``axis`` by ``angle_degrees``.
+
+        ``normalize=False`` uses the axis as written, as Eigen's ``AngleAxis`` does when it is given an
+        unnormalised axis (the ETH/Dartmouth Nori forks): R = c·I + s·[k]x + (1 - c)·k·kᵀ, which is then
+        not a rotation but is what those renderers compute."""
         k = _as_vec3(axis, "rotate axis")
         n = np.linalg.norm(k)
         if not np.isfinite(n) or n < _EPS:
             raise ValueError("rotate axis has zero length")
-        k = k / n
-        theta = np.radians(float(angle_degrees))
+        theta = float(angle_degrees)
+        if not np.isfinite(theta):
+            raise ValueError(f"rotate angle must be a finite number, got {angle_degrees}")
+        unit = abs(n - 1.0) < 1e-12
+        if normalize:
+            k = k / n
+        theta = np.radians(theta)
         c, s = np.cos(theta), np.sin(theta)
         kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
         r = c * np.eye(3) + s * kx + (1.0 - c) * np.outer(k, k)
         m = np.eye(4)
         m[:3, :3] = r
-        inv = np.eye(4)
-        inv[:3, :3] = r.T  # rotations are orthonormal: the transpose is exact
-        return Transform(m, inverse=inv)
+        if normalize or unit:
+            inv = np.eye(4)
+            inv[:3, :3] = r.T  # rotations are orthonormal: the transpose is exact
+            return Transform(m, inverse=inv)
+        if abs(np.linalg.det(r)) < 1e-12:
+            raise ValueError("rotate with this unnormalised axis gives a singular matrix")
+        return Transform(m)
 
     @staticmethod
     def from_rows(values) -> "Transform":
@@ -92,8 +105,12 @@ class Transform:
         return Transform(m)
 
     @staticmethod
-    def lookat(origin, target, up) -> "Transform":
-        """Camera-to-world frame: columns [left, newUp, dir, origin] (Nori's convention)."""
+    def lookat(origin, target, up, warnings: list | None = None) -> "Transform":
+        """Camera-to-world frame: columns [left, newUp, dir, origin] (Nori's convention).
+
+        An ``up`` that is zero or parallel to the viewing direction gives left = newUp = 0, as Nori computes
+        it (Eigen's ``normalized()`` leaves a zero vector unchanged): a camera with such a frame sends every
+        ray along ``dir``, and a course test file relies on that. A message is appended to ``warnings``."""
         o = _as_vec3(origin, "lookat origin")
         t = _as_vec3(target, "lookat target")
         u = _as_vec3(up, "lookat up")
@@ -103,14 +120,18 @@ class Transform:
             raise ValueError("lookat target equals origin (no viewing direction)")
         d = d / dn
         un = np.linalg.norm(u)
-        if un < _EPS:
-            raise ValueError("lookat up has zero length")
-        left = np.cross(u / un, d)
+        left = np.cross(u / un, d) if un >= _EPS else np.zeros(3)
         ln = np.linalg.norm(left)
         if ln < 1e-6:
-            raise ValueError("lookat up is parallel to the viewing direction")
-        left = left / ln
-        new_up = np.cross(d, left)
+            if warnings is not None:
+                warnings.append("lookat 'up' is zero or parallel to the viewing direction: the frame has no "
+                                "left/up axes (as in Nori), so a camera using it sends every ray along the "
+                                "viewing direction")
+            left = np.zeros(3)
+            new_up = np.zeros(3)
+        else:
+            left = left / ln
+            new_up = np.cross(d, left)
         m = np.eye(4)
         m[:3, 0] = left
         m[:3, 1] = new_up

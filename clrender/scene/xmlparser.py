@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import bisect
 import codecs
+import logging
 import math
 import os
 import re
@@ -25,11 +26,14 @@ from xml.parsers import expat
 import numpy as np
 
 from ..errors import SceneError, SourceLocation
+from . import dialect as _dialect
 from .properties import PROPERTY_TAGS, PropertyList
 from .spec import OBJECT_TAGS, PluginSpec, describe
 from .transform import Transform
 
 __all__ = ["parse_file", "parse_string", "OBJECT_TAGS", "PROPERTY_TAGS", "OP_TAGS"]
+
+log = logging.getLogger("clrender")
 
 OP_TAGS = ("translate", "scale", "rotate", "lookat", "matrix")
 ROOT_TAGS = ("scene", "test")
@@ -194,8 +198,9 @@ def _read_tree(src: _Source, expat_encoding: str | None) -> _Elem:
 # Pass two: element tree -> PluginSpec
 # --------------------------------------------------------------------------------------------------
 class _Builder:
-    def __init__(self, src: _Source, defines: Mapping[str, str] | None, base_dir: str):
+    def __init__(self, src: _Source, defines: Mapping[str, str] | None, base_dir: str, dialect: str):
         self.src = src
+        self.dialect = dialect
         self.user_defines = {str(k): str(v) for k, v in (defines or {}).items()}
         self.defines: dict[str, str] = dict(self.user_defines)
         self.base_dir = base_dir
@@ -342,7 +347,7 @@ class _Builder:
             raise SceneError(f"unknown test type '{type_name}'; known: {', '.join(TEST_TYPES)}",
                              self.attr_loc(el, "type"))
         props = PropertyList(describe(el.tag, type_name), el.loc)
-        spec = PluginSpec(el.tag, type_name, name, props, [], el.loc)
+        spec = PluginSpec(el.tag, type_name, name, props, [], el.loc, self.dialect)
         for c in el.children:
             if c.tag in OBJECT_TAGS:
                 spec.children.append(self.build_object(c))
@@ -397,10 +402,14 @@ class _Builder:
             elif op.tag == "rotate":
                 axis = self.numbers(op, "axis", a["axis"], (3,))
                 angle = self.one_float(op, "angle", a["angle"])
-                step = self.checked(op, Transform.rotate, axis, angle)
+                step = self.checked(op, Transform.rotate, axis, angle,
+                                    _dialect.normalizes_rotate_axis(self.dialect))
             else:
                 vs = [self.numbers(op, k, a[k], (3,)) for k in ("origin", "target", "up")]
-                step = self.checked(op, Transform.lookat, *vs)
+                warnings: list[str] = []
+                step = self.checked(op, Transform.lookat, *vs, warnings)
+                for w in warnings:
+                    log.warning("%s: %s", op.loc, w)
             self.no_children(op)
             result = step @ result  # Nori: each op is left-multiplied onto what came before
         return result
@@ -416,7 +425,9 @@ class _Builder:
 # --------------------------------------------------------------------------------------------------
 # Public entry points
 # --------------------------------------------------------------------------------------------------
-def _parse_bytes(data: bytes, filename: str, defines, base_dir: str, force_encoding: str | None) -> PluginSpec:
+def _parse_bytes(data: bytes, filename: str, defines, base_dir: str, force_encoding: str | None,
+                 nori_dialect: str | None = None) -> PluginSpec:
+    dialect = _dialect.resolve(nori_dialect)
     data, declared, blanked = _prepare(data)
     encoding = force_encoding or declared
     if encoding is not None:
@@ -427,11 +438,12 @@ def _parse_bytes(data: bytes, filename: str, defines, base_dir: str, force_encod
                              SourceLocation(filename, 1, 1)) from None
     src = _Source(data, filename, encoding)
     root = _read_tree(src, encoding if (force_encoding or blanked) else None)
-    return _Builder(src, defines, base_dir).build_root(root)
+    return _Builder(src, defines, base_dir, dialect).build_root(root)
 
 
-def parse_file(path, defines: Mapping[str, str] | None = None) -> PluginSpec:
-    """Parse a Nori XML file. ``defines`` fill ``$name`` in attribute values (overriding <default>)."""
+def parse_file(path, defines: Mapping[str, str] | None = None, nori_dialect: str | None = None) -> PluginSpec:
+    """Parse a Nori XML file. ``defines`` fill ``$name`` in attribute values (overriding <default>);
+    ``nori_dialect`` is ``upstream`` or ``eth`` (see :mod:`clrender.scene.dialect`; None: the default)."""
     path = os.fspath(path)
     try:
         if not stat.S_ISREG(os.stat(path).st_mode):  # a FIFO or device would block or never end
@@ -440,11 +452,11 @@ def parse_file(path, defines: Mapping[str, str] | None = None) -> PluginSpec:
             data = f.read()
     except OSError as e:
         raise SceneError(f"cannot read scene file '{path}': {e.strerror or e}") from None
-    return _parse_bytes(data, path, defines, os.path.dirname(os.path.abspath(path)), None)
+    return _parse_bytes(data, path, defines, os.path.dirname(os.path.abspath(path)), None, nori_dialect)
 
 
 def parse_string(text: str | bytes, filename: str = "<string>", defines: Mapping[str, str] | None = None,
-                 base_dir: str | None = None) -> PluginSpec:
+                 base_dir: str | None = None, nori_dialect: str | None = None) -> PluginSpec:
     """Parse XML text. Relative filenames resolve against ``base_dir``, else the folder of
     ``filename`` if that names a real path, else the current directory."""
     if base_dir is None:
@@ -453,5 +465,5 @@ def parse_string(text: str | bytes, filename: str = "<string>", defines: Mapping
         else:
             base_dir = os.path.dirname(os.path.abspath(filename))
     if isinstance(text, str):
-        return _parse_bytes(text.encode("utf-8"), filename, defines, base_dir, "UTF-8")
-    return _parse_bytes(text, filename, defines, base_dir, None)
+        return _parse_bytes(text.encode("utf-8"), filename, defines, base_dir, "UTF-8", nori_dialect)
+    return _parse_bytes(text, filename, defines, base_dir, None, nori_dialect)

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import logging
 
+import numpy as np
+
 from ..errors import SceneError
 from ..scene.transform import Transform
 from .shape import Shape
@@ -16,6 +18,11 @@ class TriangleMesh(Shape):
     def _load(self, props, children, spec, loader):
         filename = props.get_string("filename")
         to_world: Transform = props.get_transform("toWorld")
+        m = to_world.matrix
+        if not np.all(np.isfinite(m)) or abs(np.linalg.det(m[:3, :3])) < 1e-300:
+            raise SceneError("mesh toWorld is singular or not finite (e.g. a lookat whose up is parallel to "
+                             "its viewing direction): points cannot be mapped to world space",
+                             props.location("toWorld"))
         where = props.location("filename")
         try:
             mesh = loader(filename, where)

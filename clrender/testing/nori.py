@@ -7,10 +7,11 @@ over all references of the file.
 - emitter children (a `point`, `distantdisk`, ... emitter, or a `mesh` with an `area` emitter): the weights
   radiance/pdf of `sample()` seen from the reference point (0, 0, d) for each of `distances` (default: the
   origin only), in emitter-major order.
-- `scene` children: one reference per scene; each sample is the radiance estimate at a uniformly random
-  image position (we render every pixel with the same number of samples and a box filter of one pixel).
-  The per-sample luminance variance is bounded by the per-channel variances (exact for grey scenes), which
-  can only make the test more conservative.
+- `scene` children: one reference per scene; as in Nori, each sample is a film position drawn uniformly over
+  the whole image [0,W)×[0,H) (no reconstruction filter, no pixel footprint) and the luminance of Li along
+  its camera ray (kernels/image_samples.cl).
+The t statistic is Nori's: t = |mean − ref| · sqrt(n / max(var, 1e-5)) with var the sample variance, so an
+estimator that is deterministic (a point light seen through a pinhole) passes when it is right.
 chi2test: for each `bsdf`, `testCount` incident directions (cosine-distributed, from --seed), samples binned
 on the sphere (`resolution` cos θ bins × 2·resolution φ bins) against the integral of `pdf()` over each
 cell, small cells pooled, Šidák-corrected over testCount × BSDFs. A failing case writes its observed and
@@ -119,14 +120,16 @@ def _describe_plugin(obj) -> str:
     return f'{spec.tag} "{spec.type}"' + (f" ({', '.join(parts)})" if parts else "")
 
 
-def _ttest(values_mean, values_std_err, reference, alpha_corrected, dof):
+#: Nori's floor on the sample variance in its t statistic (hypothesis.cpp)
+VARIANCE_FLOOR = 1e-5
+
+
+def t_test(mean: float, variance: float, n: int, reference: float, alpha_corrected: float):
+    """Nori's two-sided Student's t-test of a sample mean against a reference: (passed, p-value)."""
     from scipy import stats
 
-    if values_std_err == 0:
-        ok = abs(values_mean - reference) <= 1e-5 * max(1.0, abs(reference))
-        return ok, 1.0 if ok else 0.0
-    t = (values_mean - reference) / values_std_err
-    p = float(2 * stats.t.sf(abs(t), dof))
+    t = abs(mean - reference) * math.sqrt(n / max(variance, VARIANCE_FLOOR))
+    p = float(2 * stats.t.sf(t, max(n - 1, 1)))
     return p >= alpha_corrected, p
 
 
@@ -180,9 +183,11 @@ __kernel void emitter_sample_batch(SCENE_ARGS, uint e, float4 ref, uint n, uint 
 class Runner:
     """Runs test files on one device and collects CaseResults."""
 
-    def __init__(self, device=None, seed: int = 0, plots: bool = True):
+    def __init__(self, device=None, seed: int = 0, plots: bool = True, nori_dialect: str | None = None):
         from ..device.context import get_context
+        from ..scene.dialect import resolve
 
+        self.dialect = resolve(nori_dialect)
         self.ctx, self.queue = get_context(device)
         self.seed = seed
         self.plots = plots
@@ -194,7 +199,7 @@ class Runner:
         from ..scene.xmlparser import parse_file
 
         path = Path(path)
-        spec = parse_file(str(path))
+        spec = parse_file(str(path), nori_dialect=self.dialect)
         if spec.tag != "test":
             raise SceneError(f"expected a <test> file, found <{spec.tag}> (use `clrender render` for scenes)",
                              SourceLocation(str(path), spec.location.line, spec.location.col))
@@ -237,8 +242,9 @@ class Runner:
         bad = int(np.isnan(lum).sum())
         lum = np.nan_to_num(lum)
         m = float(lum.mean())
-        se = float(lum.std(ddof=1) / math.sqrt(len(lum))) if len(lum) > 1 else 0.0
-        ok, p = _ttest(m, se, ref, a, len(lum) - 1)
+        var = float(lum.var(ddof=1)) if len(lum) > 1 else 0.0
+        se = math.sqrt(var / len(lum))
+        ok, p = t_test(m, var, len(lum), ref, a)
         if bad:
             ok = False
         return CaseResult(str(path), kind, what, ok, p, ref, m, se,
@@ -268,35 +274,35 @@ class Runner:
         return out[:, :3].astype(np.float64)
 
     def _scene_case(self, path, scene, n, ref, a):
-        from ..filters.box import BoxFilter
-        from ..renderer import Renderer
+        lum = self._image_samples(scene, n) @ LUM
+        what = f"scene with {scene.integrator.kernel} ({scene.width}×{scene.height}, {n} image samples)"
+        return self._tcase(path, "scene", what, lum, ref, a)
 
-        box = BoxFilter.__new__(BoxFilter)
-        box.radius = 0.5
-        scene.camera.filter = box
-        npix = scene.width * scene.height
-        spp = max(2, -(-n // npix))
-        film = Renderer(scene, device=self._device_spec()).render(spp=spp, seed=self.seed)
-        lum = film.image.astype(np.float64).reshape(-1, 3) @ LUM
-        m = float(lum.mean())
-        # Per pixel: variance of its mean, per channel; the luminance's is at most (sum_k c_k sd_k)^2.
-        sd = np.sqrt(film.variance().reshape(-1, 3)) @ LUM
-        se = float(np.sqrt(np.sum(sd ** 2)) / npix)
-        dof = int(film.count.sum()) - 1
-        ok, p = _ttest(m, se, ref, a, dof)
-        what = f"scene with {scene.integrator.kernel} ({scene.width}×{scene.height}, {spp} spp)"
-        if film.metadata.get("dropped_samples"):
-            ok = False
-        return CaseResult(str(path), "scene", what, ok, p, ref, m, se)
+    def _image_samples(self, scene, n):
+        """Li (RGB, float64) of `n` camera rays through uniform positions over the whole image."""
+        import pyopencl as cl
 
-    def _device_spec(self):
-        d = self.ctx.devices[0]
-        from ..device.context import list_devices
+        from ..device.program import build_program
+        from ..pack import DEFAULT_BVH_WIDTH, pack_scene
 
-        for i, (_, dd) in enumerate(list_devices()):
-            if dd.int_ptr == d.int_ptr:
-                return str(i)
-        return None
+        b = pack_scene(scene)
+        defines = {"INTEGRATOR": scene.integrator.kernel}
+        if b.bvh_width != DEFAULT_BVH_WIDTH:
+            defines["BVH_WIDTH"] = b.bvh_width
+        k = cl.Kernel(build_program(self.ctx, '#include "image_samples.cl"\n', defines=defines), "image_samples")
+        mf = cl.mem_flags
+        ro = mf.READ_ONLY | mf.COPY_HOST_PTR
+        bufs = [cl.Buffer(self.ctx, ro, hostbuf=np.ascontiguousarray(x)) for x in b.scene_arrays()]
+        bufs.append(cl.Buffer(self.ctx, ro, hostbuf=b.camera))
+        chunk = 1 << 16  # short launches; one fixed shape so PoCL compiles it once
+        d_out = cl.Buffer(self.ctx, mf.WRITE_ONLY, chunk * 16)
+        out = np.empty((n, 4), np.float32)
+        for s in range(0, n, chunk):
+            m = min(chunk, n - s)
+            k(self.queue, (chunk,), (64,), *bufs, d_out, np.uint32(s), np.uint32(m), np.uint32(self.seed))
+            cl.enqueue_copy(self.queue, out[s:s + m], d_out)
+        self.queue.finish()
+        return out[:, :3].astype(np.float64)
 
     # -- chi2test -------------------------------------------------------------------------------------
     def _chi2(self, path, test: Chi2TestFile) -> list[CaseResult]:
