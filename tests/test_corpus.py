@@ -266,6 +266,9 @@ case("ply-no-faces", {"s.xml": mesh("ply", "m.ply"), "m.ply": ply("ascii", 3, 0,
 case("ply-property-before-element", {"s.xml": mesh("ply", "m.ply"),
                                      "m.ply": b"ply\nformat ascii 1.0\nproperty float x\nend_header\n"},
      ("s.xml:7:", "m.ply:3"))
+case("ply-ascii-short-line", {"s.xml": mesh("ply", "m.ply"),
+                              "m.ply": ply("ascii", 3, 1, b" 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")},  # found by fuzzing
+     ("s.xml:7:", "m.ply", "do not match the header"))
 case("ply-dev-zero", mesh("ply", "/dev/zero"), ("s.xml:7:", "device file"))
 
 # ---- several broken meshes: one error names them all ------------------------------------------------------------

@@ -10,7 +10,7 @@ import signal
 import struct
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from clrender.errors import ClrenderError, SceneError
@@ -188,6 +188,7 @@ PLY_TOKENS = ["element", "property", "list", "float", "double", "uchar", "int", 
 
 @fuzz
 @given(data=st.one_of(mutated(GOOD_BIN, PLY_TOKENS), mutated(GOOD_ASCII, PLY_TOKENS)))
+@example(data=GOOD_ASCII.replace(b"end_header\n0 0 0", b"end_header\n 0 0"))  # found by a long run: ragged rows
 def test_fuzz_ply_mutations(tmp_path, data):
     from clrender.shapes.plyfile import load_ply
 

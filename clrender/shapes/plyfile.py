@@ -43,6 +43,14 @@ def load_ply(path, location: SourceLocation | None = None) -> MeshData:
     except Exception as e:  # trimesh raises assorted types for malformed files
         raise SceneError(f"cannot parse PLY file: {type(e).__name__}: {e}", here) from None
 
+    try:
+        return _mesh_from(vertex, polygons, here)
+    except (ValueError, TypeError, IndexError, OverflowError) as e:
+        # e.g. an ASCII line with fewer numbers than the header promises: trimesh hands back ragged rows
+        raise SceneError(f"PLY data do not match the header ({type(e).__name__}: {e})", here) from None
+
+
+def _mesh_from(vertex, polygons, here: SourceLocation) -> MeshData:
     names = set(_field_names(vertex))
     if not {"x", "y", "z"} <= names:
         raise SceneError("PLY vertex element lacks x/y/z properties", here)
