@@ -1,6 +1,7 @@
 """Ctrl-C in every phase of `clrender render`: "interrupted", exit status 130, no traceback, and an image
 only when the passes had started (the partial image); a second Ctrl-C aborts at once."""
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -68,9 +69,13 @@ def test_second_ctrl_c_during_a_long_pass(tmp_path):
                              "--spp", "100000", "--progress"], stderr=subprocess.PIPE, text=True)
     seen = ""
     start = time.time()
-    while "rendering" not in seen and time.time() - start < 120:
-        seen += proc.stderr.read(1)
-    time.sleep(0.5)
+    # Wait for the progress bar's first count ("| 1/100000"): the passes have begun (not the warm-up launch).
+    while not re.search(r"\| [1-9][0-9]*/100000", seen) and time.time() - start < 300:
+        c = proc.stderr.read(1)
+        if not c:
+            break
+        seen += c
+    time.sleep(0.3)
     proc.send_signal(signal.SIGINT)
     time.sleep(0.1)
     proc.send_signal(signal.SIGINT)
