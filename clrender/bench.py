@@ -130,41 +130,23 @@ def scene_hash(path, spec=None) -> str:
     return h.hexdigest()
 
 
-def _set_prop(props, name, tag, value):
-    props._props.pop(name, None)
-    props.add(name, tag, value)
-
-
 def load_bench_scene(path, integrator: str | None = None, width: int | None = None, height: int | None = None):
-    """Parse + instantiate a scene, optionally with another integrator or resolution.
-    Returns (scene, spec, seconds)."""
-    from . import plugins  # noqa: F401
-    from .errors import SceneError
-    from .scene.properties import PropertyList
-    from .scene.registry import create
-    from .scene.spec import PluginSpec
-    from .scene.xmlparser import parse_file
+    """Load a scene as `clrender render` does (clrender.load_scene), optionally with another integrator (made by
+    the registry, as if the file named it) or resolution. Returns (scene, spec, seconds)."""
+    from .loader import load_scene
+    from .scene.registry import instantiate
 
     t0 = time.perf_counter()
-    spec = parse_file(str(path))
-    if spec.tag != "scene":
-        raise SceneError(f"{path}: expected a <scene> file, found <{spec.tag}>")
-    if integrator:
-        for i, c in enumerate(spec.children):
-            if c.tag == "integrator" and c.type != integrator:
-                props = PropertyList(f'<integrator type="{integrator}">', c.location)
-                if integrator == "av":  # the one integrator with a required property: the scene's size
-                    props.add("length", "float", 1.0)
-                spec.children[i] = PluginSpec("integrator", integrator, None, props, [], c.location)
-    if width or height:
-        for c in spec.children:
-            if c.tag == "camera":
-                if width:
-                    _set_prop(c.props, "width", "integer", int(width))
-                if height:
-                    _set_prop(c.props, "height", "integer", int(height))
-    scene = create(spec)
-    return scene, spec, time.perf_counter() - t0
+    scene = load_scene(path)
+    if integrator and scene.integrator.spec.type != integrator:
+        # av is the one integrator with a required property: the length scale of the scene
+        props = {"length": ("float", 1.0)} if integrator == "av" else {}
+        scene.integrator = instantiate("integrator", integrator, props, scene.integrator.spec.location)
+    if width:
+        scene.camera.width = int(width)
+    if height:
+        scene.camera.height = int(height)
+    return scene, scene.spec, time.perf_counter() - t0
 
 
 # ------------------------------------------------------------------------------------------------------------
@@ -220,13 +202,15 @@ def _first_launch(ctx, queue, program, global_size: int, local_size: int) -> flo
     nothing runs; PoCL compiles the work-group function for this shape)."""
     import pyopencl as cl
 
+    from .device.kernelargs import KernelArgs
+
     k = cl.Kernel(program, "render_pass")
+    args = KernelArgs(k)
     dummy = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, 256)
-    nbuf = k.num_args - 5
-    for i in range(nbuf):
-        k.set_arg(i, dummy)
-    for j, v in enumerate((0, 0, 0, 1, 0)):
-        k.set_arg(nbuf + j, np.uint32(v))
+    counts = ("pixel_offset", "pixel_count", "sample_offset", "spp", "seed")
+    args.set(**{n: dummy for n in args.names() if n not in counts})
+    args.set(pixel_offset=np.uint32(0), pixel_count=np.uint32(0), sample_offset=np.uint32(0), spp=np.uint32(1),
+             seed=np.uint32(0))
     t0 = time.perf_counter()
     cl.enqueue_nd_range_kernel(queue, k, (global_size,), (local_size,))
     queue.finish()
@@ -426,7 +410,7 @@ def bench_one(prepared, dev: dict, *, spp=16, repeat=3, seed=0, reference=None, 
     say(f"{row['scene']} on {dev['name']}: building")
     r = Renderer(scene, device=dev["spec"], buffers=buffers, fast_math=fast_math)
     row["upload_seconds"] = r.upload_seconds
-    defines = {"INTEGRATOR": scene.integrator.kernel}
+    defines = r.defines  # exactly the program the renderer runs (integrator, BVH width, ...)
     build = {"first_build_seconds": r.build_seconds}
     if cold:
         c = cold_build(dev["spec"], defines, r.global_size, LOCAL_SIZE, fast_math)

@@ -92,10 +92,14 @@ def cmd_devices(args) -> int:
               f"max work-group {d.max_work_group_size}")
         why = build_check(p, d)
         print("      builds kernels: yes" if why is None else f"      builds kernels: NO ({why})")
+    from .device import intel_cpu
+
+    if (intel_cpu.state or {}).get("problem"):
+        print(f"Intel's OpenCL CPU runtime is not listed: {intel_cpu.state['problem']}")
     if not devices:
         print("no OpenCL devices found")
         return 1
-    print("(* = default; choose with --device INDEX | cpu | gpu | name substring)")
+    print("(* = default; choose with --device INDEX | cpu | gpu | intel | name substring)")
     return 0
 
 

@@ -15,7 +15,7 @@ import numpy as np
 from .accel.bvh import build_bvh
 from .accel.bvh4 import Bvh4Unsupported, collapse_bvh4
 from .accel.primitives import pack_primitives, primitive_bounds
-from .device import layout
+from .device import dispatch, layout
 from .device.layout import ENUMS, NONE
 from .filters.filter import with_guide
 
@@ -24,19 +24,9 @@ log = logging.getLogger("clrender")
 
 @dataclass
 class SceneBuffers:
-    nodes: np.ndarray
-    prims: np.ndarray
-    positions: np.ndarray
-    normals: np.ndarray
-    uvs: np.ndarray
-    tri_index: np.ndarray
-    spheres: np.ndarray
-    sphere_shape: np.ndarray
-    shapes: np.ndarray
-    bsdfs: np.ndarray
-    emitters: np.ndarray
-    emitter_cdf: np.ndarray
-    info: np.ndarray
+    """The packed scene: one numpy array per table of layout.SCENE_TABLES (``buffers.emitters``, ...), the camera
+    row and the filter's sampling table."""
+    tables: dict
     camera: np.ndarray
     filter_cdf: np.ndarray
     stats: dict = field(default_factory=dict)
@@ -44,12 +34,20 @@ class SceneBuffers:
     #: kernels as BVH_WIDTH
     bvh_width: int = 4
 
-    #: order of the SCENE_ARGS kernel arguments
-    SCENE_ARGS = ("nodes", "prims", "positions", "normals", "uvs", "tri_index", "spheres", "sphere_shape",
-                  "shapes", "bsdfs", "emitters", "emitter_cdf", "info")
+    def __post_init__(self):
+        names = [n for n, _, _ in layout.SCENE_TABLES]
+        if list(self.tables) != names:
+            raise ValueError(f"scene tables must be {names}, got {list(self.tables)}")
+
+    def __getattr__(self, name):
+        tables = self.__dict__.get("tables", {})
+        if name in tables:
+            return tables[name]
+        raise AttributeError(name)
 
     def scene_arrays(self):
-        return [getattr(self, n) for n in self.SCENE_ARGS]
+        """The tables in kernel-argument order (SCENE_ARGS)."""
+        return list(self.tables.values())
 
     @property
     def nbytes(self) -> int:
@@ -172,16 +170,16 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     info["n_tris"] = len(tris)
     info["n_spheres"] = len(sph)
     info["n_emitters"] = len(emitter_rows)
+    flag_infinite = 1 << dispatch.EMITTER.flags.index("INFINITE")
+    infinite = np.array([i for i, r in enumerate(emitter_rows) if r["flags"] & flag_infinite], np.uint32)
+    info["n_infinite"] = len(infinite)
     if len(lo):
         bmin, bmax = lo.min(axis=0), hi.max(axis=0)
         c = (bmin + bmax) / 2
         info["bounds_center"][0] = [*c, max(float(np.linalg.norm(bmax - c)), 1e-6)]
     else:
         info["bounds_center"][0] = [0, 0, 0, 1]
-    integ = scene.integrator
-    info["iparams"][0] = integ.iparams()
-    info["max_depth"] = integ.max_depth
-    info["rr_depth"] = integ.rr_depth
+    scene.integrator.pack(info[0])
     camera, filter_cdf = scene.camera.pack()
     filter_cdf = with_guide(filter_cdf)     # + the guide that render.cl's filter_sample_guided reads
     emitters = np.array(emitter_rows, layout.dtype("Emitter")) if emitter_rows else layout.zeros("Emitter")
@@ -192,10 +190,10 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
         "bvh_width": bvh_width,
         "bvh_build_seconds": float(t_bvh), "pack_seconds": float(time.perf_counter() - t0),
     }
-    return SceneBuffers(
+    tables = dict(
         nodes=_nonempty(nodes), prims=_nonempty(prims), positions=_nonempty(positions),
         normals=_nonempty(normals), uvs=_nonempty(uvs), tri_index=_nonempty(tri_index),
         spheres=_nonempty(sph), sphere_shape=_nonempty(np.asarray(sphere_shape, np.uint32)),
         shapes=_nonempty(shape_rows), bsdfs=np.array(bsdf_rows, layout.dtype("Bsdf")) if bsdf_rows
-        else layout.zeros("Bsdf"), emitters=emitters, emitter_cdf=cdf, info=info, camera=camera,
-        filter_cdf=filter_cdf, stats=stats, bvh_width=bvh_width)
+        else layout.zeros("Bsdf"), emitters=emitters, emitter_cdf=cdf, infinite=_nonempty(infinite), info=info)
+    return SceneBuffers(tables=tables, camera=camera, filter_cdf=filter_cdf, stats=stats, bvh_width=bvh_width)

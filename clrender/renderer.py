@@ -17,6 +17,7 @@ import numpy as np
 
 from . import __version__
 from .device.context import describe, get_context
+from .device.kernelargs import KernelArgs
 from .device.program import build_program
 from .film import Film
 from .interrupt import wait_for
@@ -26,6 +27,15 @@ from .pack import DEFAULT_BVH_WIDTH, pack_scene
 LOCAL_SIZE = 64              # one fixed launch shape: every new shape costs PoCL a fresh compile
 MAX_LAUNCH_PIXELS = 1 << 16  # pixels per launch; a pass over a larger image is several launches
 TARGET_LAUNCH_SECONDS = 0.2  # keeps progress, Ctrl-C and time limits responsive
+
+
+def render_defines(scene, buffers, extra: dict | None = None) -> dict:
+    """The -D defines of a program over `buffers`: the scene's integrator (if a scene is given) and the BVH layout
+    the packer chose (the default needs no define)."""
+    defines = {} if scene is None else {"INTEGRATOR": scene.integrator.kernel}
+    if buffers.bvh_width != DEFAULT_BVH_WIDTH:
+        defines["BVH_WIDTH"] = buffers.bvh_width
+    return {**defines, **(extra or {})}
 
 
 class Interrupted(Exception):
@@ -94,19 +104,19 @@ class Renderer:
         self.device_name = f"{dev.platform.name.strip()} / {dev.name.strip()}"
         check_film_fits(scene, dev, self.count_rays)
         self.buffers = buffers if buffers is not None else pack_scene(scene)
-        if self.buffers.bvh_width != DEFAULT_BVH_WIDTH:   # the default needs no define (same program as bench's)
-            defines["BVH_WIDTH"] = self.buffers.bvh_width
         t0 = time.perf_counter()
-        self.program = build_program(self.ctx, '#include "render.cl"\n',
-                                     defines={"INTEGRATOR": scene.integrator.kernel, **defines},
+        #: the -D defines of the render program (`clrender bench` times builds of this very program)
+        self.defines = render_defines(scene, self.buffers, defines)
+        self.program = build_program(self.ctx, '#include "render.cl"\n', defines=self.defines,
                                      fast_math=fast_math)
         self.kernel = cl.Kernel(self.program, "render_pass")
+        self.args = KernelArgs(self.kernel)
         self.build_seconds = time.perf_counter() - t0
         t0 = time.perf_counter()
         mf = cl.mem_flags
         ro = mf.READ_ONLY | mf.COPY_HOST_PTR
         b = self.buffers
-        self._scene_bufs = [cl.Buffer(self.ctx, ro, hostbuf=np.ascontiguousarray(a)) for a in b.scene_arrays()]
+        self._scene_bufs = {n: cl.Buffer(self.ctx, ro, hostbuf=np.ascontiguousarray(a)) for n, a in b.tables.items()}
         self._camera = cl.Buffer(self.ctx, ro, hostbuf=b.camera)
         self._filter = cl.Buffer(self.ctx, ro, hostbuf=b.filter_cdf)
         self.width, self.height = scene.width, scene.height
@@ -148,10 +158,8 @@ class Renderer:
         rays = np.zeros((n if self.count_rays else 1, 4), np.uint32)
         d_rays = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=rays)
         k = self.kernel
-        args = self._scene_bufs + [self._camera, self._filter, d_acc0, d_acc1, d_bad, d_rays]
-        for i, a in enumerate(args):
-            k.set_arg(i, a)
-        nargs = len(args)
+        args = self.args.set_scene(self._scene_bufs)
+        args.set(cam=self._camera, filter_cdf=self._filter, acc0=d_acc0, acc1=d_acc1, bad=d_bad, rays=d_rays)
         stats = RenderStats(build_seconds=self.build_seconds, upload_seconds=self.upload_seconds)
         bar = None
         if progress:
@@ -164,8 +172,8 @@ class Renderer:
             # PoCL compiles the work-group function at the first launch of a shape (0.3-2 s): do it with a
             # launch that adds no samples, so timings, pass sizes and the ETA are those of the render.
             t0 = time.perf_counter()
-            for i, v in enumerate((0, min(self.launch_pixels, n), start_sample, 0, seed & 0xFFFFFFFF)):
-                k.set_arg(nargs + i, np.uint32(v))
+            args.set(pixel_offset=np.uint32(0), pixel_count=np.uint32(min(self.launch_pixels, n)),
+                     sample_offset=np.uint32(start_sample), spp=np.uint32(0), seed=np.uint32(seed & 0xFFFFFFFF))
             cl.enqueue_nd_range_kernel(self.queue, k, (self.global_size,), (LOCAL_SIZE,))
             wait_for(self.queue)
             self._warm = True
@@ -179,11 +187,9 @@ class Renderer:
                     t0 = time.perf_counter()
                     for off in range(0, n, self.launch_pixels):
                         cnt = min(self.launch_pixels, n - off)
-                        k.set_arg(nargs + 0, np.uint32(off))
-                        k.set_arg(nargs + 1, np.uint32(cnt))
-                        k.set_arg(nargs + 2, np.uint32(start_sample + done))
-                        k.set_arg(nargs + 3, np.uint32(batch))
-                        k.set_arg(nargs + 4, np.uint32(seed & 0xFFFFFFFF))
+                        args.set(pixel_offset=np.uint32(off), pixel_count=np.uint32(cnt),
+                                 sample_offset=np.uint32(start_sample + done), spp=np.uint32(batch),
+                                 seed=np.uint32(seed & 0xFFFFFFFF))
                         cl.enqueue_nd_range_kernel(self.queue, k, (self.global_size,), (LOCAL_SIZE,))
                         stats.launches += 1
                     wait_for(self.queue)  # not queue.finish(): a second Ctrl-C must not wait for the pass

@@ -1,5 +1,8 @@
-/* Emitters: one query record, per-type sample/pdf/eval (kernels/emitters/<type>.h), a switch that dispatches on
-   the row's type tag, and scene-level light selection (a uniform choice among the N emitters).
+/* Emitters: the query record (emitters/common.h), per-plugin sample/pdf/eval (kernels/emitters/<prefix>.h) reached
+   through switches generated from the registered plugins (gen/emitter_dispatch.h: emitter_row_sample/pdf/eval,
+   see clrender/device/dispatch.py), and scene-level light selection (a uniform choice among the N emitters).
+   Kernels test the row's flags (EMITTER_DELTA, EMITTER_INFINITE, EMITTER_SURFACE), never its type; infinite
+   emitters are also listed in the `infinite` index table.
 
    Measures. pdf values are solid-angle densities of wi at ref, except for delta lights (point, distant),
    whose pdf is the discrete 1 (delta = 1); emitter_pdf() of a delta light is 0 (no ray can hit it).
@@ -14,35 +17,8 @@
    directional lights (p is then only a far-away point along wi, outside the scene's bounding sphere). */
 #ifndef CLRENDER_EMITTER_H
 #define CLRENDER_EMITTER_H
-#include "math.h"
-#include "warp.h"
-#include "frame.h"
-#include "scene.h"
 
-typedef struct {
-    float3 ref;   /* reference point (the shading point) */
-    float3 p;     /* point on the emitter (for infinite/directional lights: ref + wi * far) */
-    float3 n;     /* emitter shading normal at p (area lights): decides the emitting side */
-    float3 wi;    /* unit direction from ref toward the light */
-    float dist;   /* shadow-ray length (INFINITY for infinite and directional lights) */
-    float pdf;    /* solid-angle pdf of wi for this emitter (discrete 1 for delta lights) */
-    uint delta;   /* 1 if the emitter is a delta light */
-    /* additions to the agreed API: */
-    float3 ng;    /* geometric normal at p (area lights): used for the area -> solid angle Jacobian */
-    uint emitter; /* index of the emitter that produced the sample (NONE if unknown) */
-} EmitterQuery;
-
-/* A point well outside the scene's bounding sphere, seen from ref along a unit direction. */
-INLINE float emitter_far(const SceneData* sd, float3 ref) {
-    float4 b = sd->info->bounds_center;
-    return 2.0f * (len3(ref - b.xyz) + b.w) + 1.0f;
-}
-
-#include "emitters/area.h"
-#include "emitters/point.h"
-#include "emitters/distantdisk.h"
-#include "emitters/distant.h"
-#include "emitters/constant.h"
+#include "gen/emitter_dispatch.h"
 
 /* Fill a query from a surface hit seen from ref (for emitter_pdf/emitter_eval of a BSDF-sampled ray). */
 INLINE void emitter_query_from_hit(EmitterQuery* q, float3 ref, const Intersection* its) {
@@ -72,45 +48,24 @@ INLINE void emitter_query_from_direction(const SceneData* sd, EmitterQuery* q, f
     q->emitter = NONE;
 }
 
-INLINE bool emitter_is_infinite(uint type) { return type == EMITTER_DISTANTDISK || type == EMITTER_CONSTANT; }
-INLINE bool emitter_is_delta(uint type) { return type == EMITTER_POINT || type == EMITTER_DISTANT; }
-
 /* Sample a direction toward emitter e from q->ref; returns radiance / pdf (0 if the sample carries nothing,
    e.g. it sees the back of a one-sided area light; q->pdf is still the density of the sampled wi). */
 INLINE float3 emitter_sample(const SceneData* sd, uint e, EmitterQuery* q, float2 u) {
     __global const Emitter* em = &sd->emitters[e];
     q->emitter = e;
-    q->delta = 0u;
-    switch (em->type) {
-    case EMITTER_AREA: return area_sample(sd, em, q, u);
-    case EMITTER_POINT: return point_sample(sd, em, q, u);
-    case EMITTER_DISTANTDISK: return distantdisk_sample(sd, em, q, u);
-    case EMITTER_DISTANT: return distant_sample(sd, em, q, u);
-    case EMITTER_CONSTANT: return constant_sample(sd, em, q, u);
-    default: q->pdf = 0.0f; q->dist = 0.0f; return (float3)(0.0f);
-    }
+    q->delta = (em->flags & EMITTER_DELTA) ? 1u : 0u;
+    return emitter_row_sample(sd, em, q, u);
 }
 
-/* Solid-angle pdf with which emitter_sample(e) would produce q->wi (and, for meshes, the point q->p). */
+/* Solid-angle pdf with which emitter_sample(e) would produce q->wi (and, for meshes, the point q->p); 0 for delta
+   lights, whose headers define no pdf: no direction has a density. */
 INLINE float emitter_pdf(const SceneData* sd, uint e, const EmitterQuery* q) {
-    __global const Emitter* em = &sd->emitters[e];
-    switch (em->type) {
-    case EMITTER_AREA: return area_pdf(sd, em, q);
-    case EMITTER_DISTANTDISK: return distantdisk_pdf(sd, em, q);
-    case EMITTER_CONSTANT: return constant_pdf(sd, em, q);
-    default: return 0.0f; /* delta lights: no direction has a density */
-    }
+    return emitter_row_pdf(sd, &sd->emitters[e], q);
 }
 
 /* Radiance leaving the emitter toward ref along -q->wi. */
 INLINE float3 emitter_eval(const SceneData* sd, uint e, const EmitterQuery* q) {
-    __global const Emitter* em = &sd->emitters[e];
-    switch (em->type) {
-    case EMITTER_AREA: return area_eval(sd, em, q);
-    case EMITTER_DISTANTDISK: return distantdisk_eval(sd, em, q);
-    case EMITTER_CONSTANT: return constant_eval(sd, em, q);
-    default: return (float3)(0.0f);
-    }
+    return emitter_row_eval(sd, &sd->emitters[e], q);
 }
 
 /* ---------------------------------------------------------------------------------- scene-level selection */
@@ -136,32 +91,26 @@ INLINE float scene_emitter_pdf(const SceneData* sd, uint e, const EmitterQuery* 
     return n ? emitter_pdf(sd, e, q) / (float)n : 0.0f;
 }
 
-/* Radiance of an escaping ray (direction d): the sum over the infinite emitters. */
+/* Radiance of an escaping ray (direction d): the sum over the infinite emitters (an index list, so an escaped
+   ray visits only those). */
 INLINE float3 scene_eval_environment(const SceneData* sd, float3 d) {
-    uint n = sd->info->n_emitters;
+    uint n = sd->info->n_infinite;
     float3 L = (float3)(0.0f);
     EmitterQuery q;
-    q.wi = d;
-    for (uint e = 0u; e < n; ++e) {
-        __global const Emitter* em = &sd->emitters[e];
-        if (em->type == EMITTER_DISTANTDISK) L += distantdisk_eval(sd, em, &q);
-        else if (em->type == EMITTER_CONSTANT) L += constant_eval(sd, em, &q);
-    }
+    q.wi = d;  /* all an infinite emitter's eval reads */
+    for (uint i = 0u; i < n; ++i) L += emitter_row_eval(sd, &sd->emitters[sd->infinite[i]], &q);
     return L;
 }
 
 /* Light-selection pdf of an escaping direction: sum over infinite emitters of (1/N) pdf_e(d). */
 INLINE float scene_environment_pdf(const SceneData* sd, float3 d) {
-    uint n = sd->info->n_emitters;
+    uint n = sd->info->n_infinite;
     float pdf = 0.0f;
     EmitterQuery q;
-    q.wi = d;
-    for (uint e = 0u; e < n; ++e) {
-        __global const Emitter* em = &sd->emitters[e];
-        if (em->type == EMITTER_DISTANTDISK) pdf += distantdisk_pdf(sd, em, &q);
-        else if (em->type == EMITTER_CONSTANT) pdf += constant_pdf(sd, em, &q);
-    }
-    return n ? pdf / (float)n : 0.0f;
+    q.wi = d;  /* all an infinite emitter's pdf reads */
+    for (uint i = 0u; i < n; ++i) pdf += emitter_row_pdf(sd, &sd->emitters[sd->infinite[i]], &q);
+    uint total = sd->info->n_emitters;
+    return total ? pdf / (float)total : 0.0f;
 }
 
 /* Radiance leaving the hit surface toward the viewer (wo_world points at the viewer); 0 if the shape does
@@ -170,8 +119,11 @@ INLINE float3 area_emitter_Le(const SceneData* sd, const Intersection* its, floa
     uint e = sd->shapes[its->shape].emitter;
     if (e == NONE) return (float3)(0.0f);
     __global const Emitter* em = &sd->emitters[e];
-    if (em->type != EMITTER_AREA) return (float3)(0.0f);
-    return dot3(its->sh.n, wo_world) > 0.0f ? em->radiance.xyz : (float3)(0.0f);
+    if (!(em->flags & EMITTER_SURFACE)) return (float3)(0.0f);
+    EmitterQuery q;
+    q.n = its->sh.n;
+    q.wi = -wo_world;
+    return emitter_row_eval(sd, em, &q);
 }
 
 #endif

@@ -18,24 +18,9 @@
 #error "BVH_WIDTH must be 2 or 4"
 #endif
 
-typedef struct {
-    __global const float4* nodes;
-    __global const float4* prims;
-    __global const float4* positions;   /* per vertex, xyz */
-    __global const float4* normals;     /* per vertex, xyz (meshes with SHAPE_HAS_NORMALS) */
-    __global const float2* uvs;         /* per vertex (meshes with SHAPE_HAS_UVS) */
-    __global const uint4* tri_index;    /* i0, i1, i2, shape */
-    __global const float4* spheres;     /* centre xyz, radius */
-    __global const uint* sphere_shape;
-    __global const Shape* shapes;
-    __global const Bsdf* bsdfs;
-    __global const Emitter* emitters;
-    __global const float* emitter_cdf;  /* area emitters' triangle CDFs, back to back */
-    __global const SceneInfo* info;
-#ifdef CLRENDER_COUNT_RAYS
-    uint n_closest, n_shadow;           /* rays traced by this work-item (benchmark builds only) */
-#endif
-} SceneData;
+/* SceneData (the scene's tables), SCENE_ARGS (the kernel-argument list of a scene: every entry point that needs
+   the scene takes it first, and the host sets each table by its name s_<table>) and SCENE_INIT (gathers the
+   arguments into a SceneData) are generated from clrender/device/layout.py's SCENE_TABLES. */
 
 /* Ray counting for `clrender bench`: built with -DCLRENDER_COUNT_RAYS, scene_intersect/scene_occluded count
    their queries in the (private) SceneData. The queries take a const SceneData*, so the counters are reached
@@ -48,22 +33,6 @@ typedef struct {
 #define COUNT_RAY(sd, field) ((void)0)
 #define SCENE_INIT_COUNTERS(sd) ((void)0)
 #endif
-
-/* The kernel-argument list of a scene, and the code that gathers it into a SceneData. Every kernel entry
-   point that needs the scene takes SCENE_ARGS first, so the host sets them the same way everywhere. */
-#define SCENE_ARGS \
-    __global const float4* s_nodes, __global const float4* s_prims, __global const float4* s_positions, \
-    __global const float4* s_normals, __global const float2* s_uvs, __global const uint4* s_tri_index, \
-    __global const float4* s_spheres, __global const uint* s_sphere_shape, __global const Shape* s_shapes, \
-    __global const Bsdf* s_bsdfs, __global const Emitter* s_emitters, __global const float* s_emitter_cdf, \
-    __global const SceneInfo* s_info
-#define SCENE_INIT(sd) \
-    SceneData sd; \
-    sd.nodes = s_nodes; sd.prims = s_prims; sd.positions = s_positions; sd.normals = s_normals; \
-    sd.uvs = s_uvs; sd.tri_index = s_tri_index; sd.spheres = s_spheres; sd.sphere_shape = s_sphere_shape; \
-    sd.shapes = s_shapes; sd.bsdfs = s_bsdfs; sd.emitters = s_emitters; sd.emitter_cdf = s_emitter_cdf; \
-    sd.info = s_info; \
-    SCENE_INIT_COUNTERS(sd)
 
 typedef struct {
     float3 p;        /* hit point */

@@ -25,9 +25,7 @@ Conventions used by all scenes
 import argparse
 import math
 import os
-import sys
 import time
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
@@ -359,18 +357,11 @@ def blob(n):
 # camera model (Nori's perspective camera) for numerical sanity checks
 
 
-def lookat_matrix(origin, target, up):
-    origin = np.asarray(origin, float)
-    d = normalize(np.asarray(target, float) - origin)
-    left = normalize(np.cross(normalize(up), d))
-    new_up = np.cross(d, left)
-    M = np.eye(4)
-    M[:3, 0], M[:3, 1], M[:3, 2], M[:3, 3] = left, new_up, d, origin
-    return M
-
-
 def camera_to_world(cam):
-    return lookat_matrix(cam["origin"], cam["target"], cam["up"])
+    """The camera's toWorld as clrender computes a <lookat> (one camera model, not a copy)."""
+    from clrender.scene.transform import Transform
+
+    return np.array(Transform.lookat(cam["origin"], cam["target"], cam["up"]).matrix)
 
 
 def project(cam, pts):
@@ -969,52 +960,22 @@ def build_sun(out):
 # --------------------------------------------------------------------------------------------------
 # checks (used by --check and tests/test_scenes_build.py)
 
-OBJECT_TAGS = {"scene", "mesh", "bsdf", "emitter", "camera", "integrator", "sampler", "rfilter"}
-PROPERTY_TAGS = {"boolean", "integer", "float", "string", "point", "vector", "color", "transform"}
-TRANSFORM_OPS = {"translate": {"value"}, "scale": {"value"}, "rotate": {"axis", "angle"},
-                 "matrix": {"value"}, "lookat": {"origin", "target", "up"}}
-PLUGINS = {
-    "mesh": {"obj", "ply", "sphere"},
-    "bsdf": {"diffuse", "mirror", "dielectric", "microfacet"},
-    "emitter": {"area", "point", "distantdisk", "distant", "constant"},
-    "camera": {"perspective"},
-    "rfilter": {"gaussian", "box", "tent", "mitchell"},
-    "sampler": {"independent"},
-    "integrator": {"normals", "av", "ao", "simple", "direct", "whitted", "direct_ems", "direct_mats",
-                   "direct_mis", "path_mats", "path_ems", "path_mis"},
-}
-
-
 def check_xml(path):
-    """Tags/attributes restricted to the allowed set; referenced files exist."""
+    """The file is what clrender reads: its own strict parser (tags, attributes, numbers), every plugin type
+    known to clrender's registry, and every referenced file present."""
+    from clrender import plugins  # noqa: F401  (registers every plugin)
+    from clrender.scene.registry import lookup
+    from clrender.scene.xmlparser import parse_file
+
     path = Path(path)
-    root = ET.parse(path).getroot()
-    assert root.tag == "scene", path
-
-    def walk(el):
-        t = el.tag
-        if t in OBJECT_TAGS:
-            exp = set() if t == "scene" else {"type"}
-            assert set(el.attrib) == exp, (path, t, el.attrib)
-            if t != "scene":
-                assert el.get("type") in PLUGINS[t], (path, t, el.get("type"))
-            for c in el:
-                walk(c)
-        elif t in PROPERTY_TAGS:
-            if t == "transform":
-                assert set(el.attrib) == {"name"}, (path, el.attrib)
-                for op in el:
-                    assert op.tag in TRANSFORM_OPS and set(op.attrib) == TRANSFORM_OPS[op.tag], (path, op.tag)
-            else:
-                assert set(el.attrib) == {"name", "value"}, (path, t, el.attrib)
-                assert len(el) == 0
-                if t == "string" and el.get("name") == "filename":
-                    assert (path.parent / el.get("value")).is_file(), (path, el.get("value"))
-        else:
-            raise AssertionError("%s: unexpected tag %s" % (path, t))
-
-    walk(root)
-    return root
+    spec = parse_file(str(path))
+    assert spec.tag == "scene", path
+    for s in spec.walk():
+        if s.tag != "scene":
+            lookup(s.tag, s.type, s.location)
+        if s.props.has("filename"):
+            assert Path(s.props.get_string("filename")).is_file(), (path, s.props.raw("filename"))
+    return spec
 
 
 def read_obj(path):

@@ -5,6 +5,9 @@ import pytest
 
 # Keep PoCL's kernel cache inside the work tree (CI, and so tests never touch ~/.cache).
 os.environ.setdefault("POCL_CACHE_DIR", str(Path(__file__).resolve().parents[1] / ".pocl-cache"))
+# Likewise the OpenCL vendors folder clrender writes when the intel-cpu extra is installed.
+os.environ.setdefault("CLRENDER_ICD_DIR",
+                      str(Path(__file__).resolve().parents[1] / ".pocl-cache" / "opencl-vendors"))
 
 
 @pytest.fixture(scope="session")

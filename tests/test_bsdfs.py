@@ -9,7 +9,6 @@ import pytest
 from scipy import stats
 
 from clrender import plugins  # noqa: F401  (registers the plugins)
-from clrender.device import layout
 from clrender.device.layout import ENUMS
 from clrender.errors import SceneError
 from clrender.scene.registry import create
@@ -27,33 +26,35 @@ INT_IOR, EXT_IOR = 1.5046, 1.000277
 
 
 # ------------------------------------------------------------------------------------------- rows
+# Rows are always built by the plugins themselves (from XML), never by hand.
+def plugin_row(xml):
+    import clrender.plugins  # noqa: F401
+
+    spec = parse_string(f"<scene>{xml}</scene>", "row.xml")
+    return create(next(s for s in spec.walk() if s.tag == "bsdf")).pack()
+
+
+def _c(v):
+    return ", ".join(repr(float(x)) for x in np.broadcast_to(np.asarray(v, np.float64), (3,)))
+
+
 def row_diffuse(albedo):
-    r = layout.zeros("Bsdf")[0]
-    r["type"] = ENUMS["BSDF_DIFFUSE"]
-    r["color"][:3] = albedo
-    return r
+    return plugin_row(f'<bsdf type="diffuse"><color name="albedo" value="{_c(albedo)}"/></bsdf>')
 
 
 def row_microfacet(alpha, kd, int_ior=INT_IOR, ext_ior=EXT_IOR):
-    kd = np.broadcast_to(np.asarray(kd, np.float64), (3,))
-    r = layout.zeros("Bsdf")[0]
-    r["type"] = ENUMS["BSDF_MICROFACET"]
-    r["color"][:3] = kd
-    r["params"] = (alpha, int_ior, ext_ior, 1.0 - kd.max())
-    return r
+    return plugin_row(f'<bsdf type="microfacet"><float name="alpha" value="{alpha!r}"/><color name="kd" '
+                      f'value="{_c(kd)}"/><float name="intIOR" value="{int_ior!r}"/>'
+                      f'<float name="extIOR" value="{ext_ior!r}"/></bsdf>')
 
 
 def row_mirror():
-    r = layout.zeros("Bsdf")[0]
-    r["type"] = ENUMS["BSDF_MIRROR"]
-    return r
+    return plugin_row('<bsdf type="mirror"/>')
 
 
 def row_dielectric(int_ior=INT_IOR, ext_ior=EXT_IOR):
-    r = layout.zeros("Bsdf")[0]
-    r["type"] = ENUMS["BSDF_DIELECTRIC"]
-    r["params"][:2] = (int_ior, ext_ior)
-    return r
+    return plugin_row(f'<bsdf type="dielectric"><float name="intIOR" value="{int_ior!r}"/>'
+                      f'<float name="extIOR" value="{ext_ior!r}"/></bsdf>')
 
 
 def wi_at(theta_deg):
@@ -444,7 +445,7 @@ def test_checkerboard_texture(ctx, queue):
 def test_checkerboard_on_microfacet(ctx, queue):
     bsdf = _bsdf_from(CHECKER_XML.format(kind="microfacet", name="kd", extra=""))
     row = bsdf.pack()
-    assert abs(row["params"][3] - (1 - 0.8)) < 1e-6
+    assert abs(row["microfacet"]["ks"] - (1 - 0.8)) < 1e-6
     _, _, alb = bsdf_pdf_eval_batch(ctx, queue, row, (0, 0, 1), [[0, 0, 1], [0, 0, 1]],
                                     uv=np.array([[0.1, 0.0], [0.35, 0.0]]), with_albedo=True)
     np.testing.assert_allclose(alb, [[0.8, 0.1, 0.1], [0.1, 0.2, 0.7]], rtol=1e-6)

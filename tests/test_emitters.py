@@ -15,7 +15,8 @@ import pyopencl as cl
 import pytest
 from scipy import stats
 
-from clrender.device.layout import ENUMS, NONE
+from clrender.device.dispatch import flag_defines as layout_flags
+from clrender.device.layout import NONE
 from clrender.device.program import build_program
 from clrender.errors import SceneError
 from clrender.loader import load_scene
@@ -84,8 +85,7 @@ __kernel void pdf_dirs(SCENE_ARGS, uint e, uint mode, uint n, __global const flo
     if (i >= n) return;
     SCENE_INIT(sd);
     float3 ref = ref4[0].xyz, d = dirs[i].xyz;
-    uint type = sd.emitters[e].type;
-    if (emitter_is_infinite(type)) {
+    if (sd.emitters[e].flags & EMITTER_INFINITE) {
         EmitterQuery q;
         emitter_query_from_direction(&sd, &q, ref, d);
         out[i] = emitter_pdf(&sd, e, &q);
@@ -463,7 +463,7 @@ def test_weight_is_eval_over_pdf(scenes, case):
     np.testing.assert_allclose(s["w"], expect, rtol=2e-4, atol=1e-6)
     assert np.any(s["w"] > 0)
     row = scenes[stem].b.emitters[e]
-    if row["type"] == ENUMS["EMITTER_AREA"]:
+    if row["flags"] & layout_flags()["EMITTER_SURFACE"]:
         # the sampled point lies at p = ref + dist * wi, and a ray traced along wi reports the same pdf
         np.testing.assert_allclose(s["dist"], np.linalg.norm(s["p"] - refs, axis=1), rtol=1e-4)
         seen = s["pdf_hit"] >= 0
@@ -494,7 +494,7 @@ def test_area_light_is_one_sided_by_shading_normal(scenes):
     """The ceiling light's vn point down (-y); its winding normal points up. Below it: radiance; above: none."""
     d = scenes["ceiling"]
     row = d.b.emitters[0]
-    L = row["radiance"][:3]
+    L = row["area"]["radiance"][:3]
     below = d.hit_le([0.3, 1.0, 0.1], np.array([[0, 1, 0], [0.1, 1, 0.05]], np.float32))
     above = d.hit_le([0.3, 3.0, 0.1], np.array([[0, -1, 0], [0.1, -1, 0.05]], np.float32))
     assert np.all(below[:, 3] == 1) and np.all(above[:, 3] == 1)
@@ -502,8 +502,8 @@ def test_area_light_is_one_sided_by_shading_normal(scenes):
     np.testing.assert_allclose(above[:, :3], 0)
     s = d.sample(0, [0.3, 3.0, 0.1], np.random.default_rng(1).random((256, 2), dtype=np.float32))
     assert np.all(s["w"] == 0) and np.all(s["pdf"] > 0)
-    # total area in radiance.w
-    assert row["radiance"][3] == pytest.approx(0.8, rel=1e-6)
+    # total area
+    assert row["area"]["area"] == pytest.approx(0.8, rel=1e-6)
 
 
 # ---------------------------------------------------------------------------------------------- delta lights
@@ -524,7 +524,7 @@ def test_point_light_inverse_square(scenes):
                                rtol=1e-4)
     # a delta light has no density for any direction and is never seen by a ray
     assert np.all(s["pdf_again"] == 0) and np.all(s["eval"] == 0)
-    np.testing.assert_allclose(d.b.emitters[0]["radiance"][:3], power / (4 * np.pi), rtol=1e-6)
+    np.testing.assert_allclose(d.b.emitters[0]["point"]["intensity"][:3], power / (4 * np.pi), rtol=1e-6)
 
 
 def test_distant_light(scenes):
@@ -594,12 +594,12 @@ def test_environment_sum_and_pdf(scenes):
 def test_distantdisk_axis_points_toward_the_light(scenes):
     """The sun scenes assume toWorld turns local +z toward the light (scenes/README.md)."""
     row = scenes["sun"].b.emitters[0]
-    axis = row["params"][2][:3]
+    axis = row["distantdisk"]["frame"][2][:3]
     np.testing.assert_allclose(axis, np.array([-0.45, 0.75, 0.5]) / np.linalg.norm([-0.45, 0.75, 0.5]), atol=1e-4)
     s = scenes["sun"].sample(0, [0, 1, 0], np.random.default_rng(0).random((4096, 2), dtype=np.float32))
     ang = np.degrees(np.arccos(np.clip(s["wi"] @ axis, -1, 1)))
     assert ang.max() <= 6.0 + 1e-3 and ang.max() > 5.5
-    frame = np.stack([row["params"][k][:3] for k in range(3)])
+    frame = row["distantdisk"]["frame"][:, :3]
     np.testing.assert_allclose(frame @ frame.T, np.eye(3), atol=1e-6)
 
 
@@ -634,5 +634,10 @@ def test_plugin_flags_and_rows(tmp_path):
     (tmp_path / "s.xml").write_text(HEADER + '<emitter type="distantdisk"><color name="radiance" value="2"/>'
                                     '<float name="thetaA" value="180"/></emitter></scene>\n')
     row = pack_scene(load_scene(tmp_path / "s.xml")).emitters[0]
-    assert row["type"] == ENUMS["EMITTER_DISTANTDISK"]
-    np.testing.assert_allclose(row["params"][3][:3], [-1, 2, 1 / (4 * np.pi)], rtol=1e-6, atol=1e-7)
+    from clrender.device.dispatch import tag_of
+
+    assert row["type"] == tag_of(DistantDiskEmitter)
+    assert row["flags"] == layout_flags()["EMITTER_INFINITE"]
+    p = row["distantdisk"]
+    np.testing.assert_allclose([p["cos_max"], p["one_minus_cos"], p["pdf"]], [-1, 2, 1 / (4 * np.pi)], rtol=1e-6,
+                               atol=1e-7)

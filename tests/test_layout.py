@@ -7,38 +7,50 @@ from clrender.device import layout
 from clrender.device.program import build_program
 
 
-def _probe_source():
+def _entries():
+    """(label, C expression of the offset or size, expected value) for every struct, field and plugin member."""
+    from clrender.device.dispatch import KINDS
+
+    out = []
+    for name, fields in layout.STRUCTS.items():
+        dt = layout.dtype(name)
+        out.append((f"sizeof {name}", f"sizeof({name})", dt.itemsize))
+        out.extend((f"{name}.{f[0]}", f"OFFSET({name}, {f[0]})", dt.fields[f[0]][1]) for f in fields)
+    for name in layout.UNION_STRUCTS:
+        kind = next(k for k in KINDS.values() if k.struct == name)
+        dt = layout.dtype(name)
+        out.append((f"sizeof {name}", f"sizeof({name})", dt.itemsize))
+        header = [f[0] for f in kind.header]
+        out.extend((f"{name}.{f}", f"OFFSET({name}, {f})", dt.fields[f][1]) for f in header)
+        for member in dt.names:
+            if member in header:
+                continue
+            sub, base = dt.fields[member][:2]
+            for f in sub.names:
+                out.append((f"{name}.p.{member}.{f}", f"OFFSET({name}, p.{member}.{f})", base + sub.fields[f][1]))
+    return out
+
+
+def _probe_source(entries):
     # OpenCL C has no offsetof: take the address of the field of a struct at address 0.
     lines = ["#define OFFSET(T, f) ((uint)(ulong)(&(((__global T*)0)->f)))",
-             "__kernel void probe(__global uint* out) {", "    uint i = 0;"]
-    for name, fields in layout.STRUCTS.items():
-        lines.append(f"    out[i++] = (uint)sizeof({name});")
-        for f in fields:
-            lines.append(f"    out[i++] = OFFSET({name}, {f[0]});")
+             "__kernel void probe(__global uint* out) {"]
+    lines += [f"    out[{i}] = (uint)({expr});" for i, (_, expr, _) in enumerate(entries)]
     lines.append("}")
     return "\n".join(lines)
 
 
-def _expected():
-    out = []
-    for name, fields in layout.STRUCTS.items():
-        dt = layout.dtype(name)
-        out.append(dt.itemsize)
-        out.extend(dt.fields[f[0]][1] for f in fields)
-    return np.array(out, np.uint32)
-
-
 def test_struct_layouts_match_device(ctx, queue):
-    prg = build_program(ctx, _probe_source())
-    exp = _expected()
+    entries = _entries()
+    assert any(".p.microfacet.alpha" in e[0] for e in entries) and any(".p.area.radiance" in e[0] for e in entries)
+    prg = build_program(ctx, _probe_source(entries))
+    exp = np.array([e[2] for e in entries], np.uint32)
     out = np.zeros(len(exp), np.uint32)
     buf = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, out.nbytes)
     prg.probe(queue, (1,), None, buf)
     cl.enqueue_copy(queue, out, buf)
     queue.finish()
-    labels = [f"{n}.size" if j == 0 else f"{n}.{fields[j - 1][0]}"
-              for n, fields in layout.STRUCTS.items() for j in range(len(fields) + 1)]
-    mismatches = [(lab, int(e), int(o)) for lab, e, o in zip(labels, exp, out) if e != o]
+    mismatches = [(lab, int(e), int(o)) for (lab, _, e), o in zip(entries, out) if e != o]
     assert not mismatches, f"host/device layout differs (name, host, device): {mismatches}"
 
 
@@ -52,7 +64,7 @@ def test_float3_is_refused():
 
 
 def test_vectors_are_16_byte_aligned():
-    for name in layout.STRUCTS:
+    for name in layout.STRUCTS:  # (plugin parameter structs: their float4 offsets are probed above)
         dt = layout.dtype(name)
         for field, (sub, off, *_) in dt.fields.items():
             if {f[0]: f[1] for f in layout.STRUCTS[name]}[field] in ("float4", "uint4"):

@@ -41,7 +41,7 @@ def test_broken_bsdf_fails_chi2_with_histograms(tmp_path, capsys, monkeypatch):
         import numpy as np
 
         rows = np.array(rows, copy=True)
-        rows["params"][..., 0] *= 1.3  # the pdf of a rougher surface than the one sampled
+        rows["microfacet"]["alpha"] *= 1.3  # the pdf of a rougher surface than the one sampled
         return real(ctx, queue, rows, wi, wo, **kw)
 
     monkeypatch.setattr(K, "bsdf_pdf_eval_batch", wrong_pdf)

@@ -98,7 +98,7 @@ def test_regeneration_is_deterministic(tmp_path):
     assert all((a / f).read_bytes() == (b / f).read_bytes() for f in small)
 
 
-def test_sanity_checks_on_committed_scenes():
+def test_sanity_checks_on_committed_scenes(large_meshes):
     assert _load_build().sanity_checks(SCENES)
 
 

@@ -22,8 +22,8 @@ direct illumination over each pixel footprint (4·10⁵ rays) gives 0.13223 / 0.
 against the references 0.132254 / 0.125814 / 0.362340 / 0.181265 with the rule above, while delta in uv
 units ((u - du)/su) gives 0.1214 / 0.1449 for the plane cases (8 % and 15 % off); the sphere cases (delta
 0) confirm the uv convention and the parity (value1 on even cells).
-Packed into the owning BSDF's row: texture = TEXTURE_CHECKERBOARD, color = value1, tex[0] = value2,
-tex[1] = (delta_u, delta_v, scale_u, scale_v).
+Packed into the owning BSDF's row header: texture = TEXTURE_CHECKERBOARD, tex[0] = value2,
+tex[1] = (delta_u, delta_v, scale_u, scale_v); value1 takes the place of the BSDF's own colour parameter.
 """
 import numpy as np
 
@@ -58,11 +58,12 @@ class CheckerboardColor:
         even = (np.mod(c, 2) == 0)[..., None]
         return np.where(even, self.value1, self.value2)
 
-    def fill(self, row) -> None:
+    def fill(self, row) -> np.ndarray:
+        """Write the texture into a BSDF row's header; returns value1, for the BSDF's colour parameter."""
         row["texture"] = self.texture_type
-        row["color"][:3] = self.value1
         row["tex"][0][:3] = self.value2
         row["tex"][1] = (*self.delta, *self.scale)
+        return self.value1
 
 
 def texture_child(children, name: str, owner: str):

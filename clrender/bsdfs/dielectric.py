@@ -7,9 +7,8 @@ otherwise; refracted radiance is scaled by (eta_from / eta_to)². A delta BSDF.
     <float name="extIOR" value="1.000277"/>   <!-- outside, default 1.000277 (air) -->
 </bsdf>
 ```
-Bsdf row: params = (intIOR, extIOR, 0, 0).
+Bsdf row (kernels/bsdfs/dielectric.h): p.dielectric = (int_ior, ext_ior).
 """
-from ..device.layout import ENUMS
 from ..scene.registry import register
 from .bsdf import Bsdf
 from .ior import read_iors
@@ -17,11 +16,13 @@ from .ior import read_iors
 
 @register("bsdf", "dielectric")
 class Dielectric(Bsdf):
-    bsdf_type = ENUMS["BSDF_DIELECTRIC"]
-    is_delta = True
+    kernel = "bsdfs/dielectric.h"
+    PARAMS = [("int_ior", "float"), ("ext_ior", "float")]
+    FLAGS = ("DELTA",)
+    METHODS = ("sample",)
 
     def __init__(self, props, children, spec):
         self.int_ior, self.ext_ior = read_iors(props)
 
-    def fill(self, row):
-        row["params"][:2] = (self.int_ior, self.ext_ior)
+    def fill(self, p, row):
+        p["int_ior"], p["ext_ior"] = self.int_ior, self.ext_ior

@@ -6,11 +6,11 @@
 </bsdf>
 ```
 ETH variant: a nested `<texture type="checkerboard_color" name="albedo">` replaces the albedo colour
-(see checkerboard.py). Bsdf row: color = albedo (or the texture's lanes).
+(see checkerboard.py). Bsdf row (kernels/bsdfs/diffuse.h): p.diffuse.albedo (or the texture's value1, with
+the texture in the row's header).
 """
 import numpy as np
 
-from ..device.layout import ENUMS
 from ..errors import SceneError
 from ..scene.registry import register
 from .bsdf import Bsdf
@@ -19,7 +19,10 @@ from .checkerboard import texture_child
 
 @register("bsdf", "diffuse")
 class Diffuse(Bsdf):
-    bsdf_type = ENUMS["BSDF_DIFFUSE"]
+    kernel = "bsdfs/diffuse.h"
+    PARAMS = [("albedo", "float4")]
+    FLAGS = ("DIFFUSE",)
+    METHODS = ("eval", "pdf", "sample", "albedo")
     children = ("texture",)
 
     def __init__(self, props, children, spec):
@@ -38,7 +41,5 @@ class Diffuse(Bsdf):
         obj.spec = None
         return obj
 
-    def fill(self, row):
-        row["color"][:3] = self.albedo
-        if self.texture is not None:
-            self.texture.fill(row)
+    def fill(self, p, row):
+        p["albedo"][:3] = self.albedo if self.texture is None else self.texture.fill(row)

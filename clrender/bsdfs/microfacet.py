@@ -14,11 +14,11 @@ rational fit. Sampling picks the specular lobe with probability ks; the pdf is t
 ```
 A nested `<texture type="checkerboard_color" name="kd">` may replace kd (then ks = 1 - the largest
 component of either texture colour).
-Bsdf row: color = kd (or the texture's lanes); params = (alpha, intIOR, extIOR, ks).
+Bsdf row (kernels/bsdfs/microfacet.h): p.microfacet = kd (or the texture's value1, with the texture in the
+row's header), alpha, int_ior, ext_ior, ks.
 """
 import numpy as np
 
-from ..device.layout import ENUMS
 from ..errors import SceneError
 from ..scene.registry import register
 from .bsdf import Bsdf
@@ -28,7 +28,10 @@ from .ior import read_iors
 
 @register("bsdf", "microfacet")
 class Microfacet(Bsdf):
-    bsdf_type = ENUMS["BSDF_MICROFACET"]
+    kernel = "bsdfs/microfacet.h"
+    PARAMS = [("kd", "float4"), ("alpha", "float"), ("int_ior", "float"), ("ext_ior", "float"), ("ks", "float")]
+    FLAGS = ("DIFFUSE", "GLOSSY")
+    METHODS = ("eval", "pdf", "sample", "albedo")
     children = ("texture",)
 
     def __init__(self, props, children, spec):
@@ -48,8 +51,6 @@ class Microfacet(Bsdf):
                 raise SceneError("a kd texture must stay within [0, 1]", getattr(self.texture.spec, "location", None))
             self.ks = 1.0 - self.texture.max_value()
 
-    def fill(self, row):
-        row["color"][:3] = self.kd
-        row["params"] = (self.alpha, self.int_ior, self.ext_ior, self.ks)
-        if self.texture is not None:
-            self.texture.fill(row)
+    def fill(self, p, row):
+        p["kd"][:3] = self.kd if self.texture is None else self.texture.fill(row)
+        p["alpha"], p["int_ior"], p["ext_ior"], p["ks"] = self.alpha, self.int_ior, self.ext_ior, self.ks

@@ -4,15 +4,15 @@
 <bsdf type="mirror"/>
 ```
 """
-from ..device.layout import ENUMS
 from ..scene.registry import register
 from .bsdf import Bsdf
 
 
 @register("bsdf", "mirror")
 class Mirror(Bsdf):
-    bsdf_type = ENUMS["BSDF_MIRROR"]
-    is_delta = True
+    kernel = "bsdfs/mirror.h"
+    FLAGS = ("DELTA",)
+    METHODS = ("sample",)
 
     def __init__(self, props, children, spec):
         pass

@@ -1,20 +1,28 @@
 """OpenCL platform/device listing and choice.
 
 A device is chosen by a SPEC: an index into ``list_devices()`` ("0"), ``cpu`` or ``gpu`` (the first of that
-kind), or a case-insensitive substring of "platform / device" names. The default is a PoCL CPU device that
-can actually compile kernels (newest PoCL first), falling back to any such CPU device, then the first device.
+kind), ``intel`` (Intel's OpenCL CPU runtime, below), or a case-insensitive substring of "platform / device"
+names. The default is a PoCL CPU device that can actually compile kernels (newest PoCL first), falling back to
+Intel's CPU runtime, then to any such CPU device, then the first device.
 
 Why "can actually compile": PoCL asks its LLVM for the host CPU's name and passes it to clang. PoCL 3.0 (the
 pocl-binary-distribution wheel, LLVM 14) does not know CPUs newer than its LLVM (e.g. AMD Zen 5, family 1Ah),
 gets "generic", and clang rejects that: every build fails with "unknown target CPU 'generic'". PoCL >= 3.1
-(e.g. Debian/Ubuntu's pocl-opencl-icd) reads POCL_LLVM_CPU_NAME, which we set for such CPUs.
+(e.g. Debian/Ubuntu's pocl-opencl-icd) reads POCL_LLVM_CPU_NAME, which we set for such CPUs; the wheel's
+PoCL 3.0 has no such option. Where no PoCL compiles, Intel's OpenCL CPU runtime from PyPI (the ``intel-cpu``
+extra, see ``intel_cpu.py``) is the fallback: a PoCL that compiles > Intel's CPU runtime > any other CPU
+device. The SPEC ``intel`` names that runtime (a name substring would also match PoCL's "pthread-Intel(R)
+Xeon" device on Intel hosts). Its platform is listed after all others, so indices and ``cpu`` keep meaning
+what they meant before the extra was installed.
 """
 from __future__ import annotations
 
 import functools
 import os
+import warnings
 
 from ..errors import DeviceError
+from . import intel_cpu
 
 
 def _host_cpu_override() -> str | None:
@@ -51,6 +59,7 @@ def _cl():
         cpu = _host_cpu_override()
         if cpu:
             os.environ["POCL_LLVM_CPU_NAME"] = cpu
+    intel_cpu.prepare()
     import pyopencl as cl
 
     return cl
@@ -63,6 +72,8 @@ def list_devices():
         platforms = cl.get_platforms()
     except cl.LogicError as exc:  # no ICD / no platform at all
         raise DeviceError(f"no OpenCL platform found ({exc}); install pocl-binary-distribution") from exc
+    # sorted() is stable: the Intel CPU runtime goes last, everything else keeps the loader's order.
+    platforms = sorted(platforms, key=lambda p: intel_cpu.is_intel_cpu_runtime(p.name))
     out = []
     for p in platforms:
         try:
@@ -87,7 +98,9 @@ def _build_check(device_key) -> str | None:
     for p, d in list_devices():
         if (p.name, d.name, d.int_ptr) == device_key:
             try:
-                cl.Program(cl.Context([d]), _PROBE_SRC).build()
+                with warnings.catch_warnings():  # a chatty build log (Intel's runtime) is not a failure
+                    warnings.simplefilter("ignore", cl.CompilerWarning)
+                    cl.Program(cl.Context([d]), _PROBE_SRC).build()
                 return None
             except cl.Error as exc:
                 lines = [ln.strip() for ln in str(exc).splitlines() if "error" in ln.lower()]
@@ -99,10 +112,22 @@ def build_check(platform, device) -> str | None:
     return _build_check((platform.name, device.name, device.int_ptr))
 
 
-_UNKNOWN_CPU_HINT = (
-    "PoCL cannot compile for this CPU (its LLVM does not know it). Install a newer PoCL, e.g. "
-    "`sudo apt-get install pocl-opencl-icd` (Debian/Ubuntu, PoCL >= 3.1); clrender finds it and sets "
-    "POCL_LLVM_CPU_NAME for you. See `clrender devices`.")
+def _unknown_cpu_hint() -> str:
+    st = intel_cpu.state or {}
+    if not st.get("installed"):
+        intel = (f"install Intel's OpenCL CPU runtime from PyPI, no root needed: `{intel_cpu.EXTRA_HINT}` "
+                 "(clrender then uses it by itself)")
+    elif st.get("problem"):
+        intel = f"Intel's OpenCL CPU runtime did not load: {st['problem']}"
+    else:
+        intel = "Intel's OpenCL CPU runtime (installed) did not build either, see above"
+    return ("PoCL cannot compile for this CPU (its LLVM does not know it). Either " + intel + "; or install "
+            "a newer PoCL, e.g. `sudo apt-get install pocl-opencl-icd` (Debian/Ubuntu, PoCL >= 3.1), which "
+            "clrender prefers and sets POCL_LLVM_CPU_NAME for. See `clrender devices`.")
+
+
+def _is_intel_cpu(cl, p, d) -> bool:
+    return intel_cpu.is_intel_cpu_runtime(p.name) and bool(d.type & cl.device_type.CPU)
 
 
 def _pocl_version(platform) -> tuple:
@@ -124,16 +149,18 @@ def choose_device(spec: str | int | None = None):
         pocl = [(p, d) for p, d in devices
                 if "portable computing language" in p.name.lower() and d.type & cl.device_type.CPU]
         pocl.sort(key=lambda pd: _pocl_version(pd[0]), reverse=True)
-        others = [(p, d) for p, d in devices if d.type & cl.device_type.CPU and (p, d) not in pocl]
+        intel = [(p, d) for p, d in devices if _is_intel_cpu(cl, p, d)]
+        others = [(p, d) for p, d in devices  # a real CPU: not the Oclgrind simulator (see _is_only)
+                  if _is_only(d, cl.device_type.CPU) and (p, d) not in pocl and (p, d) not in intel]
         problems = []
-        for p, d in pocl + others:
+        for p, d in pocl + intel + others:
             why = build_check(p, d)
             if why is None:
                 return p, d
             problems.append(f"{describe(p, d)}: {why}")
         if any("unknown target cpu" in w.lower() for w in problems):
             raise DeviceError("no CPU OpenCL device can compile kernels here (" + "; ".join(problems) + "). "
-                              + _UNKNOWN_CPU_HINT)
+                              + _unknown_cpu_hint())
         return devices[0]
     s = str(spec).strip()
     if s.isdigit():
@@ -141,6 +168,14 @@ def choose_device(spec: str | int | None = None):
         if i >= len(devices):
             raise DeviceError(f"device index {i} out of range: {len(devices)} device(s); see `clrender devices`")
         return devices[i]
+    if s.lower() == "intel":
+        for p, d in devices:
+            if _is_intel_cpu(cl, p, d):
+                return p, d
+        st = intel_cpu.state or {}
+        why = st.get("problem") or ("" if st.get("installed") else f"install it with `{intel_cpu.EXTRA_HINT}`")
+        raise DeviceError(f"Intel's OpenCL CPU runtime is not available ({why or 'its platform did not load'}); "
+                          "see `clrender devices`")
     if s.lower() in ("cpu", "gpu"):
         want = cl.device_type.CPU if s.lower() == "cpu" else cl.device_type.GPU
         for p, d in devices:

@@ -34,18 +34,6 @@ STRUCTS: dict[str, list[tuple]] = {
         ("filter_p1", "float"),      # mitchell: C
         ("filter_p2", "float"),      # gaussian: exp(-r²/2σ²), subtracted so the weight reaches 0 at the radius
     ],
-    # Scene-wide numbers and the integrator's parameters.
-    "SceneInfo": [
-        ("n_prims", "uint"),
-        ("n_tris", "uint"),
-        ("n_spheres", "uint"),
-        ("n_emitters", "uint"),
-        ("bounds_center", "float4"),  # xyz: centre of the scene's bounding sphere, w: its radius
-        ("iparams", "float4", 2),     # integrator-specific (av: length; simple: position, energy; ...)
-        ("max_depth", "uint"),        # path length limit (0xFFFFFFFF: none)
-        ("rr_depth", "uint"),         # Russian roulette starts at this depth
-        ("pad", "uint", 2),
-    ],
     # One row per shape (a mesh or an analytic sphere).
     "Shape": [
         ("bsdf", "uint"),
@@ -55,35 +43,37 @@ STRUCTS: dict[str, list[tuple]] = {
         ("count", "uint"),            # meshes: triangle count; spheres: 1
         ("pad", "uint", 3),
     ],
-    # One row per BSDF; the meaning of the float4 lanes is the plugin's (see kernels/bsdfs/*.h).
-    "Bsdf": [
-        ("type", "uint"),
-        ("texture", "uint"),          # TEXTURE_* kind replacing `color`, or 0
-        ("pad", "uint", 2),
-        ("color", "float4"),          # albedo / kd
-        ("params", "float4"),
-        ("tex", "float4", 2),         # texture parameters
-    ],
-    # One row per emitter; lanes as documented in kernels/emitters/*.h.
-    "Emitter": [
-        ("type", "uint"),
-        ("shape", "uint"),            # area: the emitting shape
-        ("cdf_offset", "uint"),       # area: offset of its triangle-area CDF in the emitter_cdf table
-        ("count", "uint"),            # area: triangle count
-        ("radiance", "float4"),       # radiance / power / irradiance (rgb); w: plugin-specific
-        ("params", "float4", 4),
-    ],
 }
+# The scene's tables, in kernel-argument order: (name, element type, what it holds). The kernels' SceneData
+# struct, its SCENE_ARGS argument list (each table is the argument s_<name>) and SCENE_INIT are generated from
+# this list; clrender.pack.SceneBuffers holds one numpy array per entry, and the host sets them by name.
+SCENE_TABLES: list[tuple[str, str, str]] = [
+    ("nodes", "float4", "BVH nodes (2- or 4-wide layout, see BVH_WIDTH)"),
+    ("prims", "float4", "primitives in BVH leaf order (triangles as three float4, spheres)"),
+    ("positions", "float4", "per vertex, xyz"),
+    ("normals", "float4", "per vertex, xyz (meshes with SHAPE_HAS_NORMALS)"),
+    ("uvs", "float2", "per vertex (meshes with SHAPE_HAS_UVS)"),
+    ("tri_index", "uint4", "i0, i1, i2, shape"),
+    ("spheres", "float4", "centre xyz, radius"),
+    ("sphere_shape", "uint", "the shape of each sphere"),
+    ("shapes", "Shape", "one row per shape"),
+    ("bsdfs", "Bsdf", "one row per BSDF"),
+    ("emitters", "Emitter", "one row per emitter"),
+    ("emitter_cdf", "float", "surface emitters' triangle-area CDFs, back to back"),
+    ("infinite", "uint", "indices of the infinite emitters (info->n_infinite of them)"),
+    ("info", "SceneInfo", "scene-wide numbers and the integrator's parameters"),
+]
+
+# Bsdf and Emitter rows are generated from the registered plugins (clrender/device/dispatch.py): the kind's
+# header fields, then a union `p` of every plugin's declared parameter struct.
+UNION_STRUCTS = ("Bsdf", "Emitter", "SceneInfo")  # SceneInfo: scene-wide numbers + the integrator's parameters
 
 
 # Type tags and flag bits, shared the same way (emitted as #defines).
 ENUMS: dict[str, int] = {
     "FILTER_BOX": 0, "FILTER_TENT": 1, "FILTER_GAUSSIAN": 2, "FILTER_MITCHELL": 3,
     "SHAPE_HAS_NORMALS": 1, "SHAPE_HAS_UVS": 2, "SHAPE_SPHERE": 4,
-    "BSDF_DIFFUSE": 0, "BSDF_MIRROR": 1, "BSDF_DIELECTRIC": 2, "BSDF_MICROFACET": 3,
     "TEXTURE_NONE": 0, "TEXTURE_CHECKERBOARD": 1,
-    "EMITTER_AREA": 0, "EMITTER_POINT": 1, "EMITTER_DISTANTDISK": 2, "EMITTER_DISTANT": 3,
-    "EMITTER_CONSTANT": 4,
 }
 
 
@@ -113,18 +103,83 @@ def _layout(fields):
     return names, formats, offsets, itemsize, c_lines
 
 
-@functools.lru_cache(maxsize=None)
-def dtype(struct: str) -> np.dtype:
-    names, formats, offsets, itemsize, _ = _layout(STRUCTS[struct])
+def _signature() -> tuple:
+    from .dispatch import signature
+
+    return signature()
+
+
+def _plain_dtype(fields) -> np.dtype:
+    names, formats, offsets, itemsize, _ = _layout(fields)
     return np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": itemsize})
+
+
+@functools.lru_cache(maxsize=None)
+def _union_layout(struct: str, sig: tuple):
+    """(numpy dtype, C text) of a plugin row: header fields, then the union `p` of the plugins' parameters."""
+    from .dispatch import KINDS, member_of, params_struct, plugins
+
+    kind = next(k for k in KINDS.values() if k.struct == struct)
+    names, formats, offsets, size, c_lines = _layout(kind.header)
+    union_off = (size + 15) // 16 * 16
+    c_types, members = [], []
+    for cls in plugins(kind.tag):
+        if not getattr(cls, "PARAMS", None):
+            continue  # e.g. a mirror: nothing to store (C has no empty structs)
+        p_names, p_formats, p_offsets, p_size, p_lines = _layout(cls.PARAMS)
+        if p_size > kind.param_bytes:
+            raise ValueError(f"{cls.__qualname__}: its parameters take {p_size} bytes; a {struct} row has room "
+                             f"for {kind.param_bytes}")
+        sub = np.dtype({"names": p_names, "formats": p_formats, "offsets": p_offsets, "itemsize": p_size})
+        names.append(member_of(cls))
+        formats.append(sub)
+        offsets.append(union_off)
+        c_types.append("typedef struct {\n" + "\n".join(p_lines) + f"\n}} {params_struct(cls)};")
+        members.append(f"        {params_struct(cls)} {member_of(cls)};")
+    dt = np.dtype({"names": names, "formats": formats, "offsets": offsets,
+                   "itemsize": union_off + kind.param_bytes})
+    c = "\n".join(c_types) + "\ntypedef struct {\n" + "\n".join(c_lines) + "\n    union {\n" + "\n".join(members)
+    c += f"\n        float4 _size[{kind.param_bytes // 16}];  /* fixes the row size whatever is registered */"
+    c += f"\n    }} p;\n}} {struct};"
+    return dt, c
+
+
+def _scene_tables_c() -> str:
+    fields = [f"    __global const {t}* {n};  /* {what} */" for n, t, what in SCENE_TABLES]
+    out = ["typedef struct {", *fields,
+           "#ifdef CLRENDER_COUNT_RAYS",
+           "    uint n_closest, n_shadow;  /* rays traced by this work-item (benchmark builds only) */",
+           "#endif", "} SceneData;"]
+    args = ", ".join(f"__global const {t}* s_{n}" for n, t, _ in SCENE_TABLES)
+    init = " ".join(f"sd.{n} = s_{n};" for n, _, _ in SCENE_TABLES)
+    out.append(f"#define SCENE_ARGS {args}")
+    out.append(f"#define SCENE_INIT(sd) SceneData sd; {init} SCENE_INIT_COUNTERS(sd)")
+    return "\n".join(out)
+
+
+def dtype(struct: str) -> np.dtype:
+    if struct in UNION_STRUCTS:
+        return _union_layout(struct, _signature())[0]
+    return _plain_dtype_cached(struct)
+
+
+@functools.lru_cache(maxsize=None)
+def _plain_dtype_cached(struct: str) -> np.dtype:
+    return _plain_dtype(STRUCTS[struct])
 
 
 def zeros(struct: str, n: int = 1) -> np.ndarray:
     return np.zeros(n, dtype(struct))
 
 
-@functools.lru_cache(maxsize=None)
 def c_header() -> str:
+    return _c_header(_signature())
+
+
+@functools.lru_cache(maxsize=None)
+def _c_header(sig: tuple) -> str:
+    from .dispatch import flag_defines
+
     out = ["#ifndef CLRENDER_TYPES_GEN", "#define CLRENDER_TYPES_GEN",
            "/* generated from clrender/device/layout.py: do not edit */"]
     for name, fields in STRUCTS.items():
@@ -132,7 +187,11 @@ def c_header() -> str:
         out.append("typedef struct {")
         out.extend(lines)
         out.append(f"}} {name};")
+    for name in UNION_STRUCTS:
+        out.append(_union_layout(name, sig)[1])
+    out.append(_scene_tables_c())
     out.append(f"#define NONE 0x{NONE:08X}u")
     out.extend(f"#define {k} {v}u" for k, v in ENUMS.items())
+    out.extend(f"#define {k} {v}u" for k, v in flag_defines().items())
     out.append("#endif")
     return "\n".join(out) + "\n"

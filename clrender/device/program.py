@@ -12,9 +12,11 @@ import functools
 import os
 import sys
 import tempfile
+import warnings
 from pathlib import Path
 
 from ..errors import DeviceError
+from .intel_cpu import is_intel_cpu_runtime
 
 
 @functools.lru_cache(maxsize=None)
@@ -42,7 +44,12 @@ def pyopencl_include_dir() -> Path:
 
 
 def build_options(defines: dict | None = None, fast_math: bool = False) -> list[str]:
-    opts = ["-I", str(kernels_dir()), "-I", str(pyopencl_include_dir()), "-cl-std=CL1.2"]
+    from .dispatch import generated_include_dir
+
+    # kernels/, the dispatch headers generated from the registered plugins (gen/*.h), Random123
+    # -cl-kernel-arg-info: the host sets arguments by name (clrender/device/kernelargs.py)
+    opts = ["-I", str(kernels_dir()), "-I", generated_include_dir(), "-I", str(pyopencl_include_dir()),
+            "-cl-std=CL1.2", "-cl-kernel-arg-info"]
     if fast_math:
         opts.append("-cl-fast-relaxed-math")
     for k, v in sorted((defines or {}).items()):
@@ -99,7 +106,11 @@ def build_program(ctx, source: str, defines: dict | None = None, fast_math: bool
     if prg is not None:
         return prg
     try:
-        with _compiler_stderr():
+        with warnings.catch_warnings(), _compiler_stderr():
+            # Intel's CPU runtime logs every successful build ("Compilation started ... Done."), which
+            # pyopencl would print as a CompilerWarning on every render; a failed build still raises.
+            if is_intel_cpu_runtime(ctx.devices[0].platform.name):
+                warnings.simplefilter("ignore", cl.CompilerWarning)
             prg = cl.Program(ctx, source).build(options=opts)
     except cl.RuntimeError as exc:
         raise DeviceError(f"OpenCL program failed to build:\n{exc}") from exc

@@ -10,11 +10,11 @@ on it; the area density is converted to solid angle with dist² / |cos at the li
     </emitter>
 </mesh>
 ```
-Emitter row: radiance.xyz = radiance, radiance.w = total area; cdf_offset/count = its triangles' area CDF.
+Emitter row (kernels/emitters/area.h): p.area.radiance.xyz = radiance, p.area.area = total area;
+cdf_offset/count = its triangles' area CDF.
 """
 import numpy as np
 
-from ..device.layout import ENUMS
 from ..errors import SceneError
 from ..scene.registry import register
 from .emitter import Emitter, nonnegative_color
@@ -22,14 +22,15 @@ from .emitter import Emitter, nonnegative_color
 
 @register("emitter", "area")
 class AreaEmitter(Emitter):
-    emitter_type = ENUMS["EMITTER_AREA"]
-    is_area = True
+    kernel = "emitters/area.h"
+    PARAMS = [("radiance", "float4"), ("area", "float")]
+    FLAGS = ("SURFACE",)
 
     def __init__(self, props, children, spec):
         self.radiance = nonnegative_color(props, "radiance")
 
-    def fill(self, row, ctx, shape):
-        row["radiance"][:3] = self.radiance
+    def fill(self, p, row, ctx, shape):
+        p["radiance"][:3] = self.radiance
         if shape.is_sphere:
             area = shape.area()
             row["count"] = 1
@@ -43,4 +44,4 @@ class AreaEmitter(Emitter):
             cdf[-1] = 1.0
             row["count"] = len(areas)
             row["cdf_offset"] = ctx.add_cdf(cdf)
-        row["radiance"][3] = area
+        p["area"] = area

@@ -8,11 +8,11 @@ A delta light: it is reached only by explicit sampling, never by a ray.
     <color name="irradiance" value="1, 1, 1"/>         <!-- required: E in W/m² (a single number is grey) -->
 </emitter>
 ```
-Emitter row (kernels/emitters/distant.h): radiance.xyz = E; params[0].xyz = the unit direction of travel.
+Emitter row (kernels/emitters/distant.h): p.distant.irradiance.xyz = E; p.distant.direction.xyz = the unit
+direction of travel.
 """
 import numpy as np
 
-from ..device.layout import ENUMS
 from ..errors import SceneError
 from ..scene.registry import register
 from .emitter import Emitter, nonnegative_color
@@ -20,8 +20,10 @@ from .emitter import Emitter, nonnegative_color
 
 @register("emitter", "distant")
 class DistantEmitter(Emitter):
-    emitter_type = ENUMS["EMITTER_DISTANT"]
-    is_delta = True
+    kernel = "emitters/distant.h"
+    PARAMS = [("irradiance", "float4"), ("direction", "float4")]
+    FLAGS = ("DELTA",)
+    METHODS = ("sample",)
 
     def __init__(self, props, children, spec):
         d = np.asarray(props.get_vector("direction"), np.float64)
@@ -31,6 +33,6 @@ class DistantEmitter(Emitter):
         self.direction = d / n
         self.irradiance = nonnegative_color(props, "irradiance")
 
-    def fill(self, row, ctx, shape):
-        row["radiance"][:3] = self.irradiance
-        row["params"][0][:3] = self.direction
+    def fill(self, p, row, ctx, shape):
+        p["irradiance"][:3] = self.irradiance
+        p["direction"][:3] = self.direction

@@ -14,12 +14,11 @@ The cone is about local +z, and toWorld turns local +z toward the light: directi
 directions from the scene TO the light (with the identity, the sun is straight up the +z axis). Only the
 rotation of toWorld is used (translation is ignored; a scale is removed by orthonormalising).
 
-Emitter row (kernels/emitters/distantdisk.h): radiance.xyz = radiance; params[0..2].xyz = world images of
-local x, y, z; params[3] = (cos θA, 1 − cos θA, 1 / (2π (1 − cos θA)), 0).
+Emitter row (kernels/emitters/distantdisk.h): p.distantdisk: radiance.xyz; frame[0..2].xyz = world images of
+local x, y, z; cos_max = cos θA, one_minus_cos = 1 − cos θA, pdf = 1 / (2π (1 − cos θA)).
 """
 import numpy as np
 
-from ..device.layout import ENUMS
 from ..errors import SceneError
 from ..scene.registry import register
 from .emitter import Emitter, nonnegative_color
@@ -27,8 +26,10 @@ from .emitter import Emitter, nonnegative_color
 
 @register("emitter", "distantdisk")
 class DistantDiskEmitter(Emitter):
-    emitter_type = ENUMS["EMITTER_DISTANTDISK"]
-    is_infinite = True
+    kernel = "emitters/distantdisk.h"
+    PARAMS = [("radiance", "float4"), ("frame", "float4", 3), ("cos_max", "float"), ("one_minus_cos", "float"),
+              ("pdf", "float")]
+    FLAGS = ("INFINITE",)
 
     def __init__(self, props, children, spec):
         self.radiance = nonnegative_color(props, "radiance")
@@ -55,11 +56,11 @@ class DistantDiskEmitter(Emitter):
         """Unit direction from the scene toward the light (the cone's axis)."""
         return self.frame[2]
 
-    def fill(self, row, ctx, shape):
+    def fill(self, p, row, ctx, shape):
         t = np.radians(self.theta_a)
         cos_a = np.cos(t)
         one_minus_cos = 2.0 * np.sin(t / 2.0) ** 2   # no cancellation for small cones
-        row["radiance"][:3] = self.radiance
+        p["radiance"][:3] = self.radiance
         for k in range(3):
-            row["params"][k][:3] = self.frame[k]
-        row["params"][3] = [cos_a, one_minus_cos, 1.0 / (2.0 * np.pi * one_minus_cos), 0.0]
+            p["frame"][k][:3] = self.frame[k]
+        p["cos_max"], p["one_minus_cos"], p["pdf"] = cos_a, one_minus_cos, 1.0 / (2.0 * np.pi * one_minus_cos)

@@ -1,27 +1,45 @@
-"""What the emitter plugins share: one row of the Emitter table (kernels/emitter.h dispatches on its type)."""
+"""What the emitter plugins share: one row of the Emitter table.
+
+A plugin declares its kernel half (`kernel`, reached through the switches generated into
+gen/emitter_dispatch.h), its parameter struct (`PARAMS`), its capabilities (`FLAGS`: DELTA, INFINITE, SURFACE)
+and the methods its header defines (`METHODS`; `sample` is required; delta lights define no pdf/eval); see
+clrender/device/dispatch.py. `fill(p, row, ctx, shape)` writes its parameters into `p` (= its member of the
+row's union) and, for surface emitters, the row's shape fields.
+"""
 from __future__ import annotations
 
 import numpy as np
 
-from ..device import layout
+from ..device import dispatch, layout
 from ..errors import SceneError
 
 
 class Emitter:
-    emitter_type = 0
-    is_area = False
-    is_delta = False
-    is_infinite = False
+    kernel: str = ""
+    PARAMS: list = []
+    FLAGS: tuple = ()
+    METHODS: tuple = ("sample", "pdf", "eval")
+
+    is_area = is_delta = is_infinite = False
+
+    def __init_subclass__(cls, **kw):
+        # The host asks the same declared flags the kernels test.
+        super().__init_subclass__(**kw)
+        cls.is_area = "SURFACE" in cls.FLAGS
+        cls.is_delta = "DELTA" in cls.FLAGS
+        cls.is_infinite = "INFINITE" in cls.FLAGS
 
     def pack(self, ctx, shape_index, shape, shape_row) -> np.void:
+        cls = type(self)
         row = layout.zeros("Emitter")[0]
-        row["type"] = self.emitter_type
+        row["type"] = dispatch.tag_of(cls)
+        row["flags"] = dispatch.flags_of(cls)
         row["shape"] = shape_index
-        self.fill(row, ctx, shape)
+        self.fill(row[dispatch.member_of(cls)] if cls.PARAMS else None, row, ctx, shape)
         return row
 
-    def fill(self, row, ctx, shape) -> None:
-        """Write the plugin's parameters into its Emitter row."""
+    def fill(self, p, row, ctx, shape) -> None:
+        """Write the plugin's parameters into its member `p` of the row's union."""
 
 
 def nonnegative_color(props, name, default=None):

@@ -7,12 +7,10 @@ I = Φ / (4π) in every direction; a surface at distance d receives I cosθ / d�
     <color name="power" value="100, 100, 100"/>  <!-- required: flux Φ in watts (a single number is grey) -->
 </emitter>
 ```
-Emitter row (kernels/emitters/point.h): radiance.xyz = I = Φ/(4π); params[0].xyz = position;
-params[1].xyz = Φ.
+Emitter row (kernels/emitters/point.h): p.point: intensity.xyz = I = Φ/(4π); position.xyz; power.xyz = Φ.
 """
 import numpy as np
 
-from ..device.layout import ENUMS
 from ..errors import SceneError
 from ..scene.registry import register
 from .emitter import Emitter, nonnegative_color
@@ -20,8 +18,10 @@ from .emitter import Emitter, nonnegative_color
 
 @register("emitter", "point")
 class PointEmitter(Emitter):
-    emitter_type = ENUMS["EMITTER_POINT"]
-    is_delta = True
+    kernel = "emitters/point.h"
+    PARAMS = [("intensity", "float4"), ("position", "float4"), ("power", "float4")]
+    FLAGS = ("DELTA",)
+    METHODS = ("sample",)
 
     def __init__(self, props, children, spec):
         self.position = np.asarray(props.get_point("position", np.zeros(3)), np.float64)
@@ -33,7 +33,7 @@ class PointEmitter(Emitter):
     def intensity(self) -> np.ndarray:
         return self.power / (4.0 * np.pi)
 
-    def fill(self, row, ctx, shape):
-        row["radiance"][:3] = self.intensity
-        row["params"][0][:3] = self.position
-        row["params"][1][:3] = self.power
+    def fill(self, p, row, ctx, shape):
+        p["intensity"][:3] = self.intensity
+        p["position"][:3] = self.position
+        p["power"][:3] = self.power

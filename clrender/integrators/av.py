@@ -7,8 +7,6 @@
 </integrator>
 ```
 """
-import numpy as np
-
 from ..errors import SceneError
 from ..scene.registry import register
 from .integrator import Integrator
@@ -17,13 +15,12 @@ from .integrator import Integrator
 @register("integrator", "av")
 class AverageVisibility(Integrator):
     kernel = "av"
+    PARAMS = [("length", "float")]
 
     def __init__(self, props, children, spec):
         self.length = props.get_float("length")
         if not self.length > 0:
             raise SceneError(f"length must be positive, got {self.length}", props.location("length"))
 
-    def iparams(self):
-        p = np.zeros((2, 4), np.float32)
-        p[0, 0] = self.length
-        return p
+    def fill(self, p):
+        p["length"] = self.length

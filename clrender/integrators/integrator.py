@@ -1,7 +1,10 @@
-"""What the integrator plugins share: the kernel they select and the parameters they pack."""
-from __future__ import annotations
+"""What the integrator plugins share: the kernel they select and the parameters they pack.
 
-import numpy as np
+`kernel` names kernels/integrators/<kernel>.h (the program is built with -DINTEGRATOR=<kernel>); `PARAMS` declares
+the integrator's parameter struct, a member of SceneInfo's union `p` (sd->info->p.<kernel>), generated like a
+BSDF's (clrender/device/dispatch.py); `fill(p)` writes it.
+"""
+from __future__ import annotations
 
 NO_LIMIT = 0xFFFFFFFF
 
@@ -9,10 +12,19 @@ NO_LIMIT = 0xFFFFFFFF
 class Integrator:
     #: name of kernels/integrators/<kernel>.h
     kernel = ""
+    PARAMS: list = []
     #: path segments at most (path integrators' maxDepth); NO_LIMIT = none
     max_depth = NO_LIMIT
     rr_depth = 3
 
-    def iparams(self) -> np.ndarray:
-        """Two float4 of integrator parameters (SceneInfo.iparams)."""
-        return np.zeros((2, 4), np.float32)
+    def pack(self, info) -> None:
+        """Write the integrator's fields of the SceneInfo row `info`."""
+        from ..device import dispatch
+
+        info["max_depth"] = self.max_depth
+        info["rr_depth"] = self.rr_depth
+        if self.PARAMS:
+            self.fill(info[dispatch.member_of(type(self))])
+
+    def fill(self, p) -> None:
+        """Write the declared parameters into `p` (this integrator's member of SceneInfo's union)."""

@@ -17,13 +17,12 @@ from .integrator import Integrator
 @register("integrator", "simple")
 class SimpleIntegrator(Integrator):
     kernel = "simple"
+    PARAMS = [("position", "float4"), ("energy", "float4")]
 
     def __init__(self, props, children, spec):
         self.position = np.asarray(props.get_point("position"), np.float64)
         self.energy = np.asarray(props.get_color("energy"), np.float64)
 
-    def iparams(self):
-        p = np.zeros((2, 4), np.float32)
-        p[0, :3] = self.position
-        p[1, :3] = self.energy
-        return p
+    def fill(self, p):
+        p["position"][:3] = self.position
+        p["energy"][:3] = self.energy

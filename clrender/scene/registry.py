@@ -50,6 +50,18 @@ def lookup(tag: str, type_name: str, location: SourceLocation | None = None) -> 
         raise SceneError(f"unknown {tag} type '{type_name}'; known: {known}", location) from None
 
 
+def instantiate(tag: str, type_name: str, props: dict | None = None, location: SourceLocation | None = None):
+    """Make a plugin from code as if a file had written ``<tag type="type_name">`` with ``props``
+    ({name: (property tag, value)}); unknown types and unused properties are errors, as in a file."""
+    from .properties import PropertyList
+    from .spec import describe
+
+    plist = PropertyList(describe(tag, type_name), location)
+    for name, (ptag, value) in (props or {}).items():
+        plist.add(name, ptag, value)
+    return create(PluginSpec(tag, type_name, None, plist, [], location))
+
+
 def create(spec: PluginSpec):
     """Instantiate ``spec`` and, first, its nested objects; then reject unused properties."""
     cls = lookup(spec.tag, spec.type, spec.location)

@@ -87,7 +87,7 @@ _KERNELS: dict = {}
 
 
 def _kernel(ctx, name, source=BSDF_SRC, defines=None):
-    key = (ctx.int_ptr, name, source, tuple(sorted((defines or {}).items())), FAST_MATH)
+    key = (ctx.int_ptr, name, source, tuple(sorted((defines or {}).items())), FAST_MATH, layout.c_header())
     k = _KERNELS.get(key)
     if k is None:
         k = _KERNELS[key] = _cl().Kernel(_program(ctx, source, defines), name)

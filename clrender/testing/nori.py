@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..device.kernelargs import KernelArgs
 from ..errors import SceneError, SourceLocation
 from ..scene.registry import register
 from .chi2 import bin_directions, chi2_test, expected_from_grid, refined_direction_grid, sidak
@@ -251,24 +252,28 @@ class Runner:
                           detail=f"{bad} NaN/Inf sample weights" if bad else "")
 
     def _emitter_samples(self, item, dist, n):
+        from ..renderer import render_defines
         import pyopencl as cl
 
         from ..device.program import build_program
         from ..pack import pack_scene
 
         buffers = pack_scene(_EmitterScene(item))
-        prg = build_program(self.ctx, EMITTER_SRC)
+        prg = build_program(self.ctx, EMITTER_SRC, defines=render_defines(None, buffers))
         k = cl.Kernel(prg, "emitter_sample_batch")
         mf = cl.mem_flags
-        bufs = [cl.Buffer(self.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(x))
-                for x in buffers.scene_arrays()]
+        # (pyopencl's set_arg keeps no reference: the buffers must stay alive while the kernel runs)
+        bufs = {t: cl.Buffer(self.ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(x))
+                for t, x in buffers.tables.items()}
+        args = KernelArgs(k).set_scene(bufs)
+        args.set(e=np.uint32(0), ref=np.array([0, 0, dist, 0], np.float32), seed=np.uint32(self.seed))
         out = np.empty((n, 4), np.float32)
         chunk = 1 << 20
         for s in range(0, n, chunk):
             m = min(chunk, n - s)
             d_out = cl.Buffer(self.ctx, mf.WRITE_ONLY, m * 16)
-            k(self.queue, (-(-m // 64) * 64,), (64,), *bufs, np.uint32(0),
-              np.array([0, 0, dist, 0], np.float32), np.uint32(m), np.uint32(s), np.uint32(self.seed), d_out)
+            args.set(n=np.uint32(m), first=np.uint32(s), out=d_out)
+            cl.enqueue_nd_range_kernel(self.queue, k, (-(-m // 64) * 64,), (64,))
             cl.enqueue_copy(self.queue, out[s:s + m], d_out)
         self.queue.finish()
         return out[:, :3].astype(np.float64)
@@ -280,26 +285,30 @@ class Runner:
 
     def _image_samples(self, scene, n):
         """Li (RGB, float64) of `n` camera rays through uniform positions over the whole image."""
+        from ..renderer import render_defines
+
         import pyopencl as cl
 
         from ..device.program import build_program
-        from ..pack import DEFAULT_BVH_WIDTH, pack_scene
+        from ..pack import pack_scene
 
         b = pack_scene(scene)
-        defines = {"INTEGRATOR": scene.integrator.kernel}
-        if b.bvh_width != DEFAULT_BVH_WIDTH:
-            defines["BVH_WIDTH"] = b.bvh_width
-        k = cl.Kernel(build_program(self.ctx, '#include "image_samples.cl"\n', defines=defines), "image_samples")
+        prg = build_program(self.ctx, '#include "image_samples.cl"\n', defines=render_defines(scene, b))
+        k = cl.Kernel(prg, "image_samples")
         mf = cl.mem_flags
         ro = mf.READ_ONLY | mf.COPY_HOST_PTR
-        bufs = [cl.Buffer(self.ctx, ro, hostbuf=np.ascontiguousarray(x)) for x in b.scene_arrays()]
-        bufs.append(cl.Buffer(self.ctx, ro, hostbuf=b.camera))
+        # (pyopencl's set_arg keeps no reference: the buffers must stay alive while the kernel runs)
+        bufs = {t: cl.Buffer(self.ctx, ro, hostbuf=np.ascontiguousarray(x)) for t, x in b.tables.items()}
+        cam = cl.Buffer(self.ctx, ro, hostbuf=b.camera)
+        args = KernelArgs(k).set_scene(bufs)
         chunk = 1 << 16  # short launches; one fixed shape so PoCL compiles it once
         d_out = cl.Buffer(self.ctx, mf.WRITE_ONLY, chunk * 16)
+        args.set(cam=cam, out=d_out, seed=np.uint32(self.seed))
         out = np.empty((n, 4), np.float32)
         for s in range(0, n, chunk):
             m = min(chunk, n - s)
-            k(self.queue, (chunk,), (64,), *bufs, d_out, np.uint32(s), np.uint32(m), np.uint32(self.seed))
+            args.set(first=np.uint32(s), n=np.uint32(m))
+            cl.enqueue_nd_range_kernel(self.queue, k, (chunk,), (64,))
             cl.enqueue_copy(self.queue, out[s:s + m], d_out)
         self.queue.finish()
         return out[:, :3].astype(np.float64)

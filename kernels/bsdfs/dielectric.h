@@ -1,4 +1,4 @@
-/* Smooth dielectric interface. Row: params = (intIOR, extIOR, 0, 0).
+/* Smooth dielectric interface. Row: p.dielectric.int_ior, ext_ior.
    Sampling: reflect with probability F (unpolarised Fresnel, total internal reflection gives F = 1), refract
    otherwise. The side is the sign of cos(theta_i) = wi.z: wi.z > 0 is outside (extIOR), wi.z < 0 inside.
    Weights (radiance transport): reflection 1; refraction (eta_i / eta_t)^2 with eta_i the index on wi's side
@@ -10,7 +10,7 @@
 #include "common.h"
 
 INLINE float3 dielectric_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
-    float eta_int = b->params.x, eta_ext = b->params.y;
+    float eta_int = b->p.dielectric.int_ior, eta_ext = b->p.dielectric.ext_ior;
     float cos_i = q->wi.z;
     float cos_t;
     float F = fresnel_dielectric(cos_i, eta_ext, eta_int, &cos_t);

@@ -1,5 +1,5 @@
 /* Lambertian: f = albedo/pi when wi and wo are both above the surface; cosine-weighted sampling.
-   Row: color = albedo (or a texture, see texture.h). */
+   Row: p.diffuse.albedo (value1 of the row's texture, if any: see texture.h). */
 #ifndef CLRENDER_BSDFS_DIFFUSE_H
 #define CLRENDER_BSDFS_DIFFUSE_H
 #include "common.h"
@@ -8,7 +8,7 @@
 
 INLINE float3 diffuse_eval(__global const Bsdf* b, const BsdfQuery* q) {
     if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return (float3)(0.0f);
-    return bsdf_color(b, q->uv) * INV_PI;
+    return bsdf_texture(b, b->p.diffuse.albedo, q->uv) * INV_PI;
 }
 
 INLINE float diffuse_pdf(__global const Bsdf* b, const BsdfQuery* q) {
@@ -22,7 +22,9 @@ INLINE float3 diffuse_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     q->wo = square_to_cosine_hemisphere(u);
     /* f cos / pdf = albedo; a direction on the horizon has pdf 0 and gets no weight */
     if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return (float3)(0.0f);
-    return bsdf_color(b, q->uv);
+    return bsdf_texture(b, b->p.diffuse.albedo, q->uv);
 }
+
+INLINE float3 diffuse_albedo(__global const Bsdf* b, float2 uv) { return bsdf_texture(b, b->p.diffuse.albedo, uv); }
 
 #endif

@@ -1,5 +1,6 @@
 /* Nori's microfacet BRDF: a diffuse base plus a Beckmann specular lobe with dielectric Fresnel.
-   Row: color = kd (or a texture), params = (alpha, intIOR, extIOR, ks), ks = 1 - max(kd) (set by the host).
+   Row: p.microfacet = kd (value1 of the row's texture, if any), alpha, int_ior, ext_ior, ks = 1 - max(kd) (set by
+   the host).
      f   = kd/pi + ks D(h) F(h.wi) G1(wi,h) G1(wo,h) / (4 cos_i cos_o),   h = normalize(wi + wo)
      pdf = ks D(h) cos(theta_h) / (4 |h.wo|) + (1 - ks) cos_o / pi
    D is beckmann_d (warp.h, the standard D with cos^4), F the Fresnel term extIOR -> intIOR, G1 the rational
@@ -23,19 +24,20 @@ INLINE float microfacet_g1(float3 v, float3 h, float alpha) {
 INLINE float3 microfacet_eval(__global const Bsdf* b, const BsdfQuery* q) {
     float3 wi = q->wi, wo = q->wo;
     if (wi.z <= 0.0f || wo.z <= 0.0f) return (float3)(0.0f);
-    float alpha = b->params.x, eta_int = b->params.y, eta_ext = b->params.z, ks = b->params.w;
+    float alpha = b->p.microfacet.alpha, eta_int = b->p.microfacet.int_ior, eta_ext = b->p.microfacet.ext_ior;
+    float ks = b->p.microfacet.ks;
     float3 h = normalize3(wi + wo);
     float cos_t;
     float F = fresnel_dielectric(dot3(h, wi), eta_ext, eta_int, &cos_t);
     float spec = beckmann_d(h, alpha) * F * microfacet_g1(wi, h, alpha) * microfacet_g1(wo, h, alpha)
                  / (4.0f * wi.z * wo.z);
-    return bsdf_color(b, q->uv) * INV_PI + (float3)(ks * spec);
+    return bsdf_texture(b, b->p.microfacet.kd, q->uv) * INV_PI + (float3)(ks * spec);
 }
 
 INLINE float microfacet_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     float3 wi = q->wi, wo = q->wo;
     if (wi.z <= 0.0f || wo.z <= 0.0f) return 0.0f;
-    float alpha = b->params.x, ks = b->params.w;
+    float alpha = b->p.microfacet.alpha, ks = b->p.microfacet.ks;
     float3 h = normalize3(wi + wo);
     /* dwo = 4 |h.wo| dh: the Jacobian of reflecting wi about h */
     float spec = square_to_beckmann_pdf(h, alpha) / (4.0f * fabs(dot3(h, wo)));
@@ -43,7 +45,7 @@ INLINE float microfacet_pdf(__global const Bsdf* b, const BsdfQuery* q) {
 }
 
 INLINE float3 microfacet_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
-    float alpha = b->params.x, ks = b->params.w;
+    float alpha = b->p.microfacet.alpha, ks = b->p.microfacet.ks;
     q->measure = MEASURE_SOLID_ANGLE;
     q->eta = 1.0f;
     if (u.x < ks) {
@@ -59,5 +61,7 @@ INLINE float3 microfacet_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) 
     if (!(pdf > 0.0f)) return (float3)(0.0f);
     return microfacet_eval(b, q) * (q->wo.z / pdf);
 }
+
+INLINE float3 microfacet_albedo(__global const Bsdf* b, float2 uv) { return bsdf_texture(b, b->p.microfacet.kd, uv); }
 
 #endif

@@ -1,7 +1,7 @@
 /* Area light on a mesh or an analytic sphere: radiance L on the side the shading normal faces.
 
-   Emitter row: type EMITTER_AREA; shape = the emitting shape; radiance.xyz = L, radiance.w = total area A;
-   cdf_offset/count = the shape's normalised cumulative triangle-area CDF in emitter_cdf (spheres: count 1).
+   Emitter row: flags EMITTER_SURFACE; shape = the emitting shape; p.area.radiance.xyz = L, p.area.area = total
+   area A; cdf_offset/count = the shape's normalised cumulative triangle-area CDF in emitter_cdf (spheres: count 1).
 
    Meshes: a triangle is picked by binary search in the CDF (probability area_i / A), the sample is rescaled
    and reused for uniform barycentrics, so the point has area density 1/A; in solid angle at ref that is
@@ -11,9 +11,7 @@
    intersection of that direction with the sphere. From inside: uniform by area like a mesh. */
 #ifndef CLRENDER_EMITTERS_AREA_H
 #define CLRENDER_EMITTERS_AREA_H
-#ifndef CLRENDER_EMITTER_H
-#error "include emitter.h, not emitters/area.h"
-#endif
+#include "common.h"
 
 /* First index i in cdf[0..count) with cdf[i] > u (the CDF ends with 1, u < 1). */
 INLINE uint area_cdf_search(__global const float* cdf, uint count, float u) {
@@ -53,12 +51,12 @@ INLINE float3 area_point_sample(__global const Emitter* em, EmitterQuery* q, flo
     q->ng = ng;
     q->dist = l;
     q->pdf = area_solid_angle_pdf(1.0f / area, q->ref, p, ng, q->wi);
-    return (q->pdf > 0.0f && dot3(n, q->wi) < 0.0f) ? em->radiance.xyz * (1.0f / q->pdf) : (float3)(0.0f);
+    return (q->pdf > 0.0f && dot3(n, q->wi) < 0.0f) ? em->p.area.radiance.xyz * (1.0f / q->pdf) : (float3)(0.0f);
 }
 
 INLINE float3 area_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
     Shape sh = sd->shapes[em->shape];
-    float area = em->radiance.w;
+    float area = em->p.area.area;
     float3 ref = q->ref;
     if (sh.flags & SHAPE_SPHERE) {
         float4 s = sd->spheres[sh.first];
@@ -88,7 +86,7 @@ INLINE float3 area_sample(const SceneData* sd, __global const Emitter* em, Emitt
             q->ng = n;
             q->dist = len3(p - ref);
             q->pdf = 1.0f / (2.0f * M_PI_F_ * omc_max);
-            return dot3(n, wi) < 0.0f ? em->radiance.xyz * (1.0f / q->pdf) : (float3)(0.0f);
+            return dot3(n, wi) < 0.0f ? em->p.area.radiance.xyz * (1.0f / q->pdf) : (float3)(0.0f);
         }
         /* inside: uniform on the sphere */
         float3 n = square_to_uniform_sphere(u);
@@ -130,11 +128,11 @@ INLINE float area_pdf(const SceneData* sd, __global const Emitter* em, const Emi
             return 1.0f / (2.0f * M_PI_F_ * area_sphere_one_minus_cos(r2, d2));
         }
     }
-    return area_solid_angle_pdf(1.0f / em->radiance.w, q->ref, q->p, q->ng, q->wi);
+    return area_solid_angle_pdf(1.0f / em->p.area.area, q->ref, q->p, q->ng, q->wi);
 }
 
 INLINE float3 area_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
-    return dot3(q->n, q->wi) < 0.0f ? em->radiance.xyz : (float3)(0.0f);
+    return dot3(q->n, q->wi) < 0.0f ? em->p.area.radiance.xyz : (float3)(0.0f);
 }
 
 #endif

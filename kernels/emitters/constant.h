@@ -1,12 +1,10 @@
 /* Constant environment, an extension: radiance L from every direction (furnace tests, a uniform sky).
 
-   Emitter row: type EMITTER_CONSTANT; radiance.xyz = L.
+   Emitter row: flags EMITTER_INFINITE; p.constant_.radiance.xyz = L (`constant` is an OpenCL keyword).
    sample: uniform on the sphere, pdf 1 / (4 pi), returns 4 pi L, dist = INFINITY. */
 #ifndef CLRENDER_EMITTERS_CONSTANT_H
 #define CLRENDER_EMITTERS_CONSTANT_H
-#ifndef CLRENDER_EMITTER_H
-#error "include emitter.h, not emitters/constant.h"
-#endif
+#include "common.h"
 
 INLINE float3 constant_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
     float3 wi = square_to_uniform_sphere(u);
@@ -16,7 +14,7 @@ INLINE float3 constant_sample(const SceneData* sd, __global const Emitter* em, E
     q->ng = -wi;
     q->dist = INFINITY;
     q->pdf = INV_FOURPI;
-    return em->radiance.xyz * (4.0f * M_PI_F_);
+    return em->p.constant_.radiance.xyz * (4.0f * M_PI_F_);
 }
 
 INLINE float constant_pdf(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
@@ -24,7 +22,7 @@ INLINE float constant_pdf(const SceneData* sd, __global const Emitter* em, const
 }
 
 INLINE float3 constant_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
-    return em->radiance.xyz;
+    return em->p.constant_.radiance.xyz;
 }
 
 #endif

@@ -1,16 +1,15 @@
 /* Distant (directional) light, an extension: parallel light travelling along `direction`, irradiance E on a
    surface perpendicular to it. A delta light in direction.
 
-   Emitter row: type EMITTER_DISTANT; radiance.xyz = E (rgb); params[0].xyz = unit direction of travel.
+   Emitter row: flags EMITTER_DELTA; p.distant.irradiance.xyz = E (rgb); p.distant.direction.xyz = unit direction
+   of travel.
    sample: wi = -direction, dist = INFINITY, returns E with pdf 1 and delta = 1. */
 #ifndef CLRENDER_EMITTERS_DISTANT_H
 #define CLRENDER_EMITTERS_DISTANT_H
-#ifndef CLRENDER_EMITTER_H
-#error "include emitter.h, not emitters/distant.h"
-#endif
+#include "common.h"
 
 INLINE float3 distant_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
-    float3 wi = -em->params[0].xyz;
+    float3 wi = -em->p.distant.direction.xyz;
     q->wi = wi;
     q->p = q->ref + wi * emitter_far(sd, q->ref);
     q->n = -wi;
@@ -18,7 +17,7 @@ INLINE float3 distant_sample(const SceneData* sd, __global const Emitter* em, Em
     q->dist = INFINITY;
     q->pdf = 1.0f;
     q->delta = 1u;
-    return em->radiance.xyz;
+    return em->p.distant.irradiance.xyz;
 }
 
 #endif

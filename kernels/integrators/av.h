@@ -1,10 +1,10 @@
 /* av: average visibility. One direction uniform on the hemisphere about the shading normal; 1 when nothing
-   is hit within `length` (iparams[0].x), else 0. */
+   is hit within `length` (p.av.length), else 0. */
 #include "../warp.h"
 INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     Intersection its;
     if (!scene_intersect(sd, &ray, &its)) return (float3)(1.0f);
     float3 d = to_world(&its.sh, square_to_uniform_hemisphere(next2d(smp)));
-    float length = sd->info->iparams[0].x;
+    float length = sd->info->p.av.length;
     return scene_occluded(sd, its.p, d, ray_eps(its.p), length) ? (float3)(0.0f) : (float3)(1.0f);
 }

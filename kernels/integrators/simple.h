@@ -1,9 +1,9 @@
-/* simple (Nori): one point light given inline (iparams[0].xyz = position, iparams[1].xyz = energy Φ):
+/* simple (Nori): one point light given inline (p.simple.position, p.simple.energy = Φ):
    L = Φ / (4π²) · max(0, cos θ) / d² · V, i.e. a white diffuse surface lit by an isotropic point light. */
 INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     Intersection its;
     if (!scene_intersect(sd, &ray, &its)) return (float3)(0.0f);
-    float3 pos = sd->info->iparams[0].xyz, energy = sd->info->iparams[1].xyz;
+    float3 pos = sd->info->p.simple.position.xyz, energy = sd->info->p.simple.energy.xyz;
     float3 v = pos - its.p;
     float d2 = dot3(v, v), d = sqrt(d2);
     float3 wi = v * (1.0f / d);

@@ -1,0 +1,243 @@
+"""Kernel plugins: the registry, not hand-written switches, decides how the kernels reach a plugin.
+
+A plugin class that runs on the device declares, beside its XML form::
+
+    @register("bsdf", "roughconductor")
+    class RoughConductor(Bsdf):
+        kernel = "bsdfs/roughconductor.h"   # its OpenCL half; functions are named <prefix>_<method>
+        PARAMS = [("eta", "float4"), ("k", "float4"), ("alpha", "float")]   # its row's parameter struct
+        FLAGS = ("GLOSSY",)                 # capabilities the kernels test (never the type)
+        METHODS = ("eval", "pdf", "sample") # which of the kind's methods its header defines
+
+From the registered plugins of each kind this module derives, at program build time:
+- the tags: plugins numbered in the order of their prefixes (the kernel file's stem by default), so a tag never
+  depends on import order, and no tag silently means a default plugin;
+- the row struct: the kind's header fields, then a union ``p`` of every plugin's parameter struct
+  (``b->p.microfacet.alpha`` in C, ``row["p"]``-free ``row["microfacet"]["alpha"]`` in numpy), of a fixed size
+  so rows keep one layout whatever is registered (clrender/device/layout.py emits both sides);
+- ``gen/<kind>_dispatch.h``: the plugin headers' includes and one ``switch`` per method, written into a
+  generated-headers folder that build_program puts on the include path. A plugin whose header lacks a method
+  it declares fails the build (an undeclared function is an error in OpenCL C).
+Compare pbrt-v4's TaggedPointer::Dispatch and Mitsuba 3's BSDFFlags/EmitterFlags.
+"""
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+
+@dataclass(frozen=True)
+class Method:
+    name: str
+    ret: str
+    params: str        # the C parameter list, shared by the dispatcher and every plugin's function
+    args: str          # the call's arguments
+    default: str       # body for plugins without this method and for unknown tags
+    required: bool = False
+
+
+@dataclass(frozen=True)
+class Kind:
+    tag: str                   # registry tag, e.g. "bsdf"
+    struct: str                # C / layout name of the row, e.g. "Bsdf"
+    header: tuple              # layout fields before the union
+    param_bytes: int           # fixed size of the union (a plugin's parameters must fit)
+    flags: tuple               # capability flag names, bit i = 1 << i, emitted as <STRUCT>_<FLAG>
+    dispatch_name: str         # generated functions are <dispatch_name>_<method>
+    row: str                   # how the dispatcher's row pointer is named in `params`
+    methods: tuple
+    after: tuple = ()          # headers the generated file includes before the plugins'
+    dispatched: bool = True    # False: no switch (integrators: one per program, chosen by -DINTEGRATOR)
+
+
+BSDF = Kind(
+    tag="bsdf", struct="Bsdf",
+    header=(("type", "uint"), ("flags", "uint"), ("texture", "uint"), ("pad", "uint"),
+            ("tex", "float4", 2)),   # the row's texture (TEXTURE_* kind and parameters; kernels/bsdfs/texture.h)
+    param_bytes=64, flags=("DELTA", "DIFFUSE", "GLOSSY"), dispatch_name="bsdf", row="b",
+    methods=(
+        Method("eval", "float3", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return (float3)(0.0f);"),
+        Method("pdf", "float", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return 0.0f;"),
+        Method("sample", "float3", "__global const Bsdf* b, BsdfQuery* q, float2 u", "b, q, u",
+               "q->wo = (float3)(0.0f, 0.0f, 1.0f); q->eta = 1.0f; q->measure = MEASURE_SOLID_ANGLE; "
+               "return (float3)(0.0f);", required=True),
+        Method("albedo", "float3", "__global const Bsdf* b, float2 uv", "b, uv", "return (float3)(1.0f);"),
+    ),
+    after=("bsdfs/common.h", "bsdfs/texture.h"))
+
+EMITTER = Kind(
+    tag="emitter", struct="Emitter",
+    header=(("type", "uint"), ("flags", "uint"),
+            ("shape", "uint"),        # surface emitters: the emitting shape
+            ("cdf_offset", "uint"),   # surface emitters: offset of the shape's triangle-area CDF in emitter_cdf
+            ("count", "uint"),        # surface emitters: triangle count
+            ("pad", "uint", 3)),
+    param_bytes=80, flags=("DELTA", "INFINITE", "SURFACE"), dispatch_name="emitter_row", row="em",
+    methods=(
+        Method("sample", "float3", "const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u",
+               "sd, em, q, u", "q->pdf = 0.0f; q->dist = 0.0f; return (float3)(0.0f);", required=True),
+        Method("pdf", "float", "const SceneData* sd, __global const Emitter* em, const EmitterQuery* q",
+               "sd, em, q", "return 0.0f;"),
+        Method("eval", "float3", "const SceneData* sd, __global const Emitter* em, const EmitterQuery* q",
+               "sd, em, q", "return (float3)(0.0f);"),
+    ),
+    after=("emitters/common.h",))
+
+# Integrators: their parameters share SceneInfo's union `p` (sd->info->p.av.length); the program includes the one
+# integrator it runs (kernels/integrators/<kernel>.h), so there is nothing to dispatch.
+INTEGRATOR = Kind(
+    tag="integrator", struct="SceneInfo",
+    header=(("n_prims", "uint"), ("n_tris", "uint"), ("n_spheres", "uint"), ("n_emitters", "uint"),
+            ("bounds_center", "float4"),  # xyz: centre of the scene's bounding sphere, w: its radius
+            ("max_depth", "uint"),        # path length limit (0xFFFFFFFF: none)
+            ("rr_depth", "uint"),         # Russian roulette starts at this depth
+            ("n_infinite", "uint"),       # entries of the infinite-emitter index table
+            ("pad", "uint")),
+    param_bytes=32, flags=(), dispatch_name="integrator", row="info", methods=(), dispatched=False)
+
+KINDS = {k.tag: k for k in (BSDF, EMITTER, INTEGRATOR)}
+
+
+def _registry():
+    from .. import plugins  # noqa: F401  (registers every plugin)
+    from ..scene import registry
+
+    return registry
+
+
+def prefix_of(cls) -> str:
+    return getattr(cls, "prefix", None) or Path(cls.kernel).stem.split(".")[0]
+
+
+def plugins(kind: str) -> list[type]:
+    """The registered device plugins of `kind`, in tag order (sorted by prefix)."""
+    reg = _registry()
+    found = {}
+    for name in reg.registered(kind):
+        cls = reg.lookup(kind, name)
+        if getattr(cls, "kernel", None):
+            found.setdefault(prefix_of(cls), cls)
+    return [found[p] for p in sorted(found)]
+
+
+# Words a union member cannot be called in OpenCL C (address spaces, types, C keywords).
+_C_RESERVED = set("""auto bool break case char const constant continue default do double else enum extern float for
+global goto half if image1d_t image2d_t image3d_t inline int kernel local long private read_only read_write
+register restrict return sampler_t short signed sizeof static struct switch typedef uint ulong union unsigned
+ushort uchar void volatile while write_only""".split())
+
+
+def member_of(cls) -> str:
+    """The plugin's member of its row's union (`b->p.<member>` in C, `row[<member>]` in numpy): its prefix, with
+    a trailing underscore where that is a reserved word (the `constant` emitter's is `constant_`)."""
+    p = prefix_of(cls)
+    return p + "_" if p in _C_RESERVED or p.startswith("__") else p
+
+
+def signature() -> tuple:
+    """Everything the generated C depends on (a cache key that changes when a plugin is (un)registered)."""
+    out = []
+    for kind in KINDS.values():
+        for cls in plugins(kind.tag):
+            out.append((kind.tag, prefix_of(cls), cls.kernel, tuple(tuple(f) for f in getattr(cls, "PARAMS", ())),
+                        tuple(getattr(cls, "FLAGS", ())), tuple(methods_of(cls, kind))))
+    return tuple(out)
+
+
+def methods_of(cls, kind: Kind) -> list[str]:
+    if not kind.methods:
+        return []
+    declared = list(getattr(cls, "METHODS", [m.name for m in kind.methods]))
+    known = {m.name for m in kind.methods}
+    unknown = [m for m in declared if m not in known]
+    if unknown:
+        raise RuntimeError(f"{cls.__qualname__} declares unknown {kind.tag} methods {unknown}; "
+                           f"known: {sorted(known)}")
+    missing = [m.name for m in kind.methods if m.required and m.name not in declared]
+    if missing:
+        raise RuntimeError(f"{cls.__qualname__} must implement {missing}")
+    return declared
+
+
+def tag_of(cls) -> int:
+    """The type tag the kernels switch on (the plugin's position among its kind's prefixes)."""
+    kind = KINDS[_kind_tag(cls)]
+    return plugins(kind.tag).index(cls)
+
+
+def flags_of(cls) -> int:
+    kind = KINDS[_kind_tag(cls)]
+    bits = 0
+    for f in cls.FLAGS:
+        if f not in kind.flags:
+            raise RuntimeError(f"{cls.__qualname__}: unknown {kind.tag} flag {f!r}; known: {kind.flags}")
+        bits |= 1 << kind.flags.index(f)
+    return bits
+
+
+def _kind_tag(cls) -> str:
+    for tag in KINDS:
+        if cls in plugins(tag):
+            return tag
+    raise RuntimeError(f"{cls.__qualname__} is not a registered device plugin (it needs @register and `kernel`)")
+
+
+def params_struct(cls) -> str:
+    return "".join(w.capitalize() for w in prefix_of(cls).split("_")) + "Params"
+
+
+def flag_defines() -> dict[str, int]:
+    return {f"{k.struct.upper()}_{f}": 1 << i for k in KINDS.values() for i, f in enumerate(k.flags)}
+
+
+def dispatch_source(kind: Kind) -> str:
+    """The generated header: includes of the plugins' headers and one switch per method."""
+    out = [f"/* generated by clrender/device/dispatch.py from the registered {kind.tag} plugins: do not edit */",
+           f"#ifndef CLRENDER_GEN_{kind.tag.upper()}_DISPATCH_H", f"#define CLRENDER_GEN_{kind.tag.upper()}_DISPATCH_H"]
+    out += [f'#include "{h}"' for h in kind.after]
+    classes = plugins(kind.tag)
+    for cls in classes:
+        out.append(f'#include "{cls.kernel}"')
+    for m in kind.methods:
+        out.append(f"INLINE {m.ret} {kind.dispatch_name}_{m.name}({m.params}) {{")
+        out.append(f"    switch ({kind.row}->type) {{")
+        for tag, cls in enumerate(classes):
+            if m.name in methods_of(cls, kind):
+                out.append(f"    case {tag}u: return {prefix_of(cls)}_{m.name}({m.args});")
+        out.append(f"    default: {m.default}")
+        out.append("    }")
+        out.append("}")
+    out.append("#endif")
+    return "\n".join(out) + "\n"
+
+
+@functools.lru_cache(maxsize=None)
+def _generated_dir(sig: tuple) -> str:
+    text = {f"{k.tag}_dispatch.h": dispatch_source(k) for k in KINDS.values() if k.dispatched}
+    digest = hashlib.sha256(repr(sorted(text.items())).encode()).hexdigest()[:16]
+    # A stable path per content: PoCL's cache key includes the build options (our -I), so a fresh folder per
+    # process would make every build cold.
+    root = Path(tempfile.gettempdir()) / f"clrender-{os.getuid() if hasattr(os, 'getuid') else 'user'}" / "gen"
+    d = root / digest
+    (d / "gen").mkdir(parents=True, exist_ok=True)
+    for name, body in text.items():
+        p = d / "gen" / name
+        if not p.is_file() or p.read_text() != body:
+            tmp = p.with_name(f".{name}.{os.getpid()}")
+            tmp.write_text(body)
+            os.replace(tmp, p)
+    return str(d)
+
+
+def generated_include_dir() -> str:
+    """A folder holding gen/<kind>_dispatch.h for the plugins registered now (rewritten if it vanished)."""
+    sig = signature()
+    d = _generated_dir(sig)
+    if not all((Path(d) / "gen" / f"{k.tag}_dispatch.h").is_file() for k in KINDS.values() if k.dispatched):
+        _generated_dir.cache_clear()
+        d = _generated_dir(sig)
+    return d

@@ -1,0 +1,29 @@
+/* What every emitter kernel shares: the query record and the far point used for directional lights.
+   Measures, shadow rays and the dispatch are described in emitter.h. */
+#ifndef CLRENDER_EMITTERS_COMMON_H
+#define CLRENDER_EMITTERS_COMMON_H
+#include "math.h"
+#include "warp.h"
+#include "frame.h"
+#include "scene.h"
+
+typedef struct {
+    float3 ref;   /* reference point (the shading point) */
+    float3 p;     /* point on the emitter (for infinite/directional lights: ref + wi * far) */
+    float3 n;     /* emitter shading normal at p (area lights): decides the emitting side */
+    float3 wi;    /* unit direction from ref toward the light */
+    float dist;   /* shadow-ray length (INFINITY for infinite and directional lights) */
+    float pdf;    /* solid-angle pdf of wi for this emitter (discrete 1 for delta lights) */
+    uint delta;   /* 1 if the emitter is a delta light */
+    /* additions to the agreed API: */
+    float3 ng;    /* geometric normal at p (area lights): used for the area -> solid angle Jacobian */
+    uint emitter; /* index of the emitter that produced the sample (NONE if unknown) */
+} EmitterQuery;
+
+/* A point well outside the scene's bounding sphere, seen from ref along a unit direction. */
+INLINE float emitter_far(const SceneData* sd, float3 ref) {
+    float4 b = sd->info->bounds_center;
+    return 2.0f * (len3(ref - b.xyz) + b.w) + 1.0f;
+}
+
+#endif
