@@ -3,9 +3,10 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
+import os
 import sys
 import time
-from pathlib import Path
 
 from .errors import ClrenderError
 
@@ -20,29 +21,41 @@ def _defines(items):
     return out
 
 
+def _seconds(text: str) -> float:
+    """argparse type for --time-limit: a positive, finite number of seconds."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got '{text}'") from None
+    if not (math.isfinite(v) and v > 0):
+        raise argparse.ArgumentTypeError(f"must be a positive, finite number of seconds, got '{text}'")
+    return v
+
+
 def cmd_render(args) -> int:
-    from .film import Film  # noqa: F401
     from .loader import load_scene
+    from .output import output_paths
     from .renderer import Interrupted, Renderer
 
     t0 = time.perf_counter()
+    out, png = output_paths(args.output, args.scene)  # before any work: an unwritable -o fails now
     scene = load_scene(args.scene, nori_dialect=args.nori_dialect, **_defines(args.define))
-    out = Path(args.output) if args.output else Path(args.scene).with_suffix(".exr")
-    if out.suffix.lower() != ".exr":
-        out = out.with_suffix(".exr")
+    args.ctrl_c.check()  # a Ctrl-C that a library swallowed still stops us
     renderer = Renderer(scene, device=args.device)
+    args.ctrl_c.check()
     st = renderer.buffers.stats
     print(f"clrender: {args.scene}: {st['triangles']} triangles, {st['spheres']} spheres, "
           f"{st['emitters']} emitters; BVH {st['bvh_build_seconds']:.2f} s; load {time.perf_counter() - t0:.2f} s; "
           f"device {renderer.device_name}", file=sys.stderr)
+    progress = not args.quiet and (args.progress or sys.stderr.isatty())
     try:
-        film = renderer.render(spp=args.spp, seed=args.seed, time_limit=args.time_limit,
-                               progress=not args.quiet)
+        film = renderer.render(spp=args.spp, seed=args.seed, time_limit=args.time_limit, progress=progress)
     except Interrupted:
         print("clrender: aborted (second Ctrl-C); nothing written", file=sys.stderr)
+        _exit_now(args, 130)
         return 130
     film.write_exr(out)
-    png = film.write_png(out.with_suffix(".png"))
+    film.write_png(png)
     s = film.stats
     rate = s.samples / s.seconds / 1e6 if s.seconds > 0 else 0.0
     msg = (f"clrender: wrote {out} and {png}: {film.spp} spp in {s.seconds:.2f} s "
@@ -53,6 +66,14 @@ def cmd_render(args) -> int:
         msg += f"; {s.dropped} NaN/Inf samples dropped"
     print(msg, file=sys.stderr)
     return 130 if s.interrupted else 0
+
+
+def _exit_now(args, code: int) -> None:
+    """Leave at once, without waiting for device work in flight (only when run as a program)."""
+    if getattr(args, "hard_exit", False):
+        sys.stderr.flush()
+        sys.stdout.flush()
+        os._exit(code)
 
 
 def cmd_devices(args) -> int:
@@ -137,13 +158,16 @@ def build_parser() -> argparse.ArgumentParser:
     sub = ap.add_subparsers(dest="command", required=True)
     r = sub.add_parser("render", help="render a scene to EXR (+ PNG)")
     r.add_argument("scene", help="Nori XML scene file")
-    r.add_argument("-o", "--output", help="output EXR (default: beside the scene); a PNG is written beside it")
+    r.add_argument("-o", "--output", help="output .exr file, or a folder (default: beside the scene); a PNG "
+                                          "preview is written beside it")
     r.add_argument("--spp", type=int, help="samples per pixel (default: the scene's sampler)")
     r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     r.add_argument("--device", help="OpenCL device: index, cpu, gpu or name substring (default: PoCL CPU)")
-    r.add_argument("--time-limit", type=float, metavar="SEC", help="stop after about SEC seconds")
+    r.add_argument("--time-limit", type=_seconds, metavar="SEC", help="stop after about SEC seconds")
     r.add_argument("-D", "--define", action="append", metavar="NAME=VALUE", help="set $NAME in the scene")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    r.add_argument("--progress", action="store_true",
+                   help="show the progress bar even when stderr is not a terminal (e.g. a log file)")
     add_dialect_option(r)
     r.set_defaults(func=cmd_render)
     d = sub.add_parser("devices", help="list OpenCL platforms and devices")
@@ -178,28 +202,60 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    from .interrupt import CtrlC
+
+    # From the start: a Ctrl-C during the first imports must not be swallowed by a library's import guard.
+    with CtrlC() as ctrl_c:
+        return _main(argv, ctrl_c)
+
+
+def _main(argv, ctrl_c) -> int:
     logging.basicConfig(format="clrender: %(message)s", level=logging.WARNING)
     args = build_parser().parse_args(argv)
-    if getattr(args, "spp", None) is not None and args.spp < 1:
-        print("clrender: error: --spp must be at least 1", file=sys.stderr)
+    args.ctrl_c = ctrl_c
+    if getattr(args, "spp", None) is not None and not 1 <= args.spp < 2**32:
+        print("clrender: error: --spp must be between 1 and 4294967295", file=sys.stderr)
         return 2
+    if args.command == "render" and not 0 <= args.seed < 2**32:
+        print("clrender: error: --seed must be between 0 and 4294967295", file=sys.stderr)
+        return 2
+    args.hard_exit = argv is None  # run as a program (not called from Python): may leave with os._exit
     try:
         return args.func(args)
-    except ClrenderError as exc:
-        print(f"clrender: error: {exc}", file=sys.stderr)
-        return 2
     except KeyboardInterrupt:
-        print("clrender: interrupted", file=sys.stderr)
-        return 130
-    except OSError as exc:  # unwritable output, full disk, ...
+        return _interrupted(args)
+    except Exception as exc:
+        if ctrl_c.pressed:
+            # A library turned our KeyboardInterrupt into some other error: the cause is the Ctrl-C.
+            return _interrupted(args)
+        code = _report(exc)
+        if code is None:
+            raise
+        return code
+
+
+def _interrupted(args) -> int:
+    print("clrender: interrupted", file=sys.stderr)
+    _exit_now(args, 130)
+    return 130
+
+
+def _report(exc: Exception) -> int | None:
+    """Print an error a user can act on and return the exit status; None for a bug (a traceback)."""
+    if isinstance(exc, ClrenderError):
         print(f"clrender: error: {exc}", file=sys.stderr)
         return 2
-    except Exception as exc:
+    if isinstance(exc, OSError):  # a full disk, ...
+        print(f"clrender: error: {exc}", file=sys.stderr)
+        return 2
+    if isinstance(exc, MemoryError):
+        print("clrender: error: out of memory (try a smaller width/height or scene)", file=sys.stderr)
+        return 2
+    if type(exc).__module__.startswith("pyopencl"):
         # The OpenCL driver failed (out of device memory, a lost device, a driver bug): say so plainly.
-        if type(exc).__module__.startswith("pyopencl"):
-            print(f"clrender: OpenCL error on the device: {exc}", file=sys.stderr)
-            return 3
-        raise
+        print(f"clrender: OpenCL error on the device: {exc}", file=sys.stderr)
+        return 3
+    return None
 
 
 if __name__ == "__main__":

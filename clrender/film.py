@@ -91,18 +91,35 @@ def read_exr(path) -> tuple[np.ndarray, dict]:
         return np.array(img, np.float32), dict(f.header())
 
 
+def _umask() -> int:
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    old = os.umask(0o022)  # no /proc: read it by setting it (and put it back at once)
+    os.umask(old)
+    return old
+
+
 def _atomic_write(path: Path, write) -> Path:
     """Write through a temporary file in the same folder, then rename: readers never see half a file."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=str(path.parent))
-    os.close(fd)
     try:
+        # mkstemp makes 0600 files; the image gets the permissions any tool would give it (0644 under umask 022)
+        os.fchmod(fd, 0o666 & ~_umask())
+        os.close(fd)
         write(Path(tmp))
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         try:
             os.unlink(tmp)
         except OSError:
             pass
+        if isinstance(e, OSError):  # name the user's file, not our temporary one
+            raise OSError(e.errno, f"cannot write '{path}': {e.strerror or e}") from None
         raise
     return path

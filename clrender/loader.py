@@ -4,6 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .errors import SceneError, SourceLocation
+from .scene.checks import check_mesh_files, warn_if_unlit
 from .scene.registry import create
 from .scene.xmlparser import parse_file
 
@@ -18,4 +19,7 @@ def load_scene(path, nori_dialect: str | None = None, **defines):
     if spec.tag != "scene":
         raise SceneError(f"expected a <scene> file, found <{spec.tag}> (use `clrender test` for test files)",
                          SourceLocation(str(path), spec.location.line, spec.location.col))
-    return create(spec)
+    check_mesh_files(spec)
+    scene = create(spec)
+    warn_if_unlit(scene)
+    return scene

@@ -2,8 +2,9 @@
 
 A pass adds `spp` samples to every pixel (the image is cut into fixed-size launches so each launch stays
 short). Samples are numbered globally, so the image is the same however the work is split into passes.
-Ctrl-C sets a flag that is checked between launches: the pass in flight finishes, the partial image keeps
-its true sample count; a second Ctrl-C aborts at once.
+Ctrl-C sets a flag that is checked between passes: the pass in flight finishes, the partial image keeps
+its true sample count; a second Ctrl-C aborts at once (the host polls the queue instead of blocking in
+clFinish, so Python's signal handler runs while the device works).
 """
 from __future__ import annotations
 
@@ -19,6 +20,8 @@ from .device.context import describe, get_context
 from .device.kernelargs import KernelArgs
 from .device.program import build_program
 from .film import Film
+from .interrupt import wait_for
+from .memcheck import check_film_fits
 from .pack import DEFAULT_BVH_WIDTH, pack_scene
 
 LOCAL_SIZE = 64              # one fixed launch shape: every new shape costs PoCL a fresh compile
@@ -99,6 +102,7 @@ class Renderer:
         self.ctx, self.queue = get_context(device)
         dev = self.ctx.devices[0]
         self.device_name = f"{dev.platform.name.strip()} / {dev.name.strip()}"
+        check_film_fits(scene, dev, self.count_rays)
         self.buffers = buffers if buffers is not None else pack_scene(scene)
         t0 = time.perf_counter()
         #: the -D defines of the render program (`clrender bench` times builds of this very program)
@@ -138,6 +142,10 @@ class Renderer:
         spp = int(spp if spp is not None else self.scene.sample_count)
         if spp < 1:
             raise ValueError("spp must be at least 1")
+        if start_sample < 0 or start_sample + spp >= 2**32:
+            raise ValueError("sample numbers (start_sample + spp) must stay below 2^32")
+        if time_limit is not None and not (time_limit > 0 and np.isfinite(time_limit)):
+            raise ValueError(f"time_limit must be a positive finite number of seconds, got {time_limit}")
         n = self.n_pixels
         acc0 = np.zeros((n, 4), np.float32)
         acc1 = np.zeros((n, 4), np.float32)
@@ -167,7 +175,7 @@ class Renderer:
             args.set(pixel_offset=np.uint32(0), pixel_count=np.uint32(min(self.launch_pixels, n)),
                      sample_offset=np.uint32(start_sample), spp=np.uint32(0), seed=np.uint32(seed & 0xFFFFFFFF))
             cl.enqueue_nd_range_kernel(self.queue, k, (self.global_size,), (LOCAL_SIZE,))
-            self.queue.finish()
+            wait_for(self.queue)
             self._warm = True
             self.build_seconds += time.perf_counter() - t0
             stats.build_seconds = self.build_seconds
@@ -184,7 +192,7 @@ class Renderer:
                                  seed=np.uint32(seed & 0xFFFFFFFF))
                         cl.enqueue_nd_range_kernel(self.queue, k, (self.global_size,), (LOCAL_SIZE,))
                         stats.launches += 1
-                    self.queue.finish()
+                    wait_for(self.queue)  # not queue.finish(): a second Ctrl-C must not wait for the pass
                     dt = time.perf_counter() - t0
                     done += batch
                     stats.passes += 1

@@ -70,8 +70,8 @@ def test_ctrl_c_writes_the_partial_image(tmp_path):
     p = write(tmp_path, GOOD.format(w=256, h=256, mesh="quad.obj"))
     out = tmp_path / "partial.exr"
     env = dict(os.environ, PYTHONUNBUFFERED="1")
-    proc = subprocess.Popen([sys.executable, "-m", "clrender.cli", "render", str(p), "--spp", "1000000", "-o",
-                             str(out)], stderr=subprocess.PIPE, text=True, env=env)
+    proc = subprocess.Popen([sys.executable, "-m", "clrender.cli", "render", str(p), "--spp", "1000000",
+                             "--progress", "-o", str(out)], stderr=subprocess.PIPE, text=True, env=env)
     # Wait until rendering has started (the progress bar appears), then press Ctrl-C once.
     start = time.time()
     seen = ""

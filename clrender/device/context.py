@@ -150,8 +150,8 @@ def choose_device(spec: str | int | None = None):
                 if "portable computing language" in p.name.lower() and d.type & cl.device_type.CPU]
         pocl.sort(key=lambda pd: _pocl_version(pd[0]), reverse=True)
         intel = [(p, d) for p, d in devices if _is_intel_cpu(cl, p, d)]
-        others = [(p, d) for p, d in devices
-                  if d.type & cl.device_type.CPU and (p, d) not in pocl and (p, d) not in intel]
+        others = [(p, d) for p, d in devices  # a real CPU: not the Oclgrind simulator (see _is_only)
+                  if _is_only(d, cl.device_type.CPU) and (p, d) not in pocl and (p, d) not in intel]
         problems = []
         for p, d in pocl + intel + others:
             why = build_check(p, d)
@@ -179,7 +179,7 @@ def choose_device(spec: str | int | None = None):
     if s.lower() in ("cpu", "gpu"):
         want = cl.device_type.CPU if s.lower() == "cpu" else cl.device_type.GPU
         for p, d in devices:
-            if d.type & want:
+            if _is_only(d, want):
                 return p, d
         raise DeviceError(f"no {s.upper()} OpenCL device found; see `clrender devices`")
     for p, d in devices:
@@ -187,6 +187,14 @@ def choose_device(spec: str | int | None = None):
             return p, d
     names = ", ".join(f"[{i}] {describe(p, d)}" for i, (p, d) in enumerate(devices))
     raise DeviceError(f"no OpenCL device matches '{s}'; available: {names}")
+
+
+def _is_only(device, kind) -> bool:
+    """The device is of `kind` and of no other kind: a simulator such as Oclgrind, which reports itself as
+    CPU, GPU and accelerator at once, is neither `cpu` nor `gpu` (choose it by name)."""
+    cl = _cl()
+    kinds = cl.device_type.CPU | cl.device_type.GPU | cl.device_type.ACCELERATOR
+    return (device.type & kinds) == kind
 
 
 @functools.lru_cache(maxsize=None)

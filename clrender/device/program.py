@@ -7,7 +7,11 @@ source and options; PoCL's own disk cache (``POCL_CACHE_DIR``) makes a warm buil
 """
 from __future__ import annotations
 
+import contextlib
 import functools
+import os
+import sys
+import tempfile
 import warnings
 from pathlib import Path
 
@@ -53,6 +57,34 @@ def build_options(defines: dict | None = None, fast_math: bool = False) -> list[
     return opts
 
 
+@contextlib.contextmanager
+def _compiler_stderr():
+    """Hold back what the driver's compiler prints on file descriptor 2 during a build.
+
+    It is passed on after a successful build; after a failure the error (with the build log) says it all,
+    and after a Ctrl-C the compiler's "1 error generated." would only confuse."""
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError):
+        yield
+        return
+    with tempfile.TemporaryFile() as held:
+        os.dup2(held.fileno(), 2)
+        ok = False
+        try:
+            yield
+            ok = True
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            if ok:
+                held.seek(0)
+                text = held.read()
+                if text:
+                    os.write(2, text)
+
+
 _PROGRAMS: dict = {}
 
 
@@ -74,7 +106,7 @@ def build_program(ctx, source: str, defines: dict | None = None, fast_math: bool
     if prg is not None:
         return prg
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _compiler_stderr():
             # Intel's CPU runtime logs every successful build ("Compilation started ... Done."), which
             # pyopencl would print as a CompilerWarning on every render; a failed build still raises.
             if is_intel_cpu_runtime(ctx.devices[0].platform.name):

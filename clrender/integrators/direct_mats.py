@@ -12,6 +12,7 @@ from .integrator import Integrator
 @register("integrator", "direct_mats")
 class DirectMats(Integrator):
     kernel = "direct_mats"
+    needs_emitter = True  # sees nothing but emitted light
 
     def __init__(self, props, children, spec):
         pass

@@ -7,6 +7,8 @@ from .integrator import NO_LIMIT, Integrator
 
 
 class PathIntegrator(Integrator):
+    needs_emitter = True  # sees nothing but emitted light
+
     def __init__(self, props, children, spec):
         depth = props.get_int("maxDepth", -1)
         if depth == 0 or depth < -1:

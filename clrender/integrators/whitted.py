@@ -13,6 +13,7 @@ from .integrator import Integrator
 @register("integrator", "whitted")
 class Whitted(Integrator):
     kernel = "whitted"
+    needs_emitter = True  # sees nothing but emitted light
 
     def __init__(self, props, children, spec):
         pass

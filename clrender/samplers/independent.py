@@ -14,6 +14,6 @@ from ..scene.registry import register
 class IndependentSampler:
     def __init__(self, props, children, spec):
         self.sample_count = props.get_int("sampleCount", 1)
-        if self.sample_count < 1:
-            raise SceneError(f"sampleCount must be at least 1, got {self.sample_count}",
+        if not 1 <= self.sample_count < 2**32:  # sample numbers are 32-bit on the device
+            raise SceneError(f"sampleCount must be between 1 and {2**32 - 1}, got {self.sample_count}",
                              props.location("sampleCount"))

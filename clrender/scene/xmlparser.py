@@ -15,8 +15,10 @@ from __future__ import annotations
 import bisect
 import codecs
 import logging
+import math
 import os
 import re
+import stat
 from dataclasses import dataclass, field
 from typing import Mapping
 from xml.parsers import expat
@@ -66,23 +68,50 @@ def _quoted(names) -> str:
 # Pass one: bytes -> located element tree
 # --------------------------------------------------------------------------------------------------
 class _Source:
-    """The bytes given to expat, with offset -> (line, column) mapping."""
+    """The bytes given to expat, with offset -> (line, column) mapping.
+
+    Columns count characters, not bytes. Each line's byte -> column table is built once, when the line is
+    first asked about, so a whole scene written on one long line still loads in linear time.
+    """
 
     def __init__(self, data: bytes, filename: str, encoding: str | None):
         self.data = data
         self.filename = filename
         self.encoding = encoding or "utf-8"
+        try:
+            self._utf8 = codecs.lookup(self.encoding).name == "utf-8"
+        except LookupError:
+            self._utf8 = False
         self._newlines = [m.start() for m in re.finditer(b"\n", data)]
+        self._line_columns: dict[int, np.ndarray | None] = {}
+
+    def _columns(self, line: int, start: int) -> np.ndarray | None:
+        """Characters before each byte of line ``line`` (None: the line is ASCII, bytes are columns)."""
+        if line not in self._line_columns:
+            end = self._newlines[line] if line < len(self._newlines) else len(self.data)
+            raw = np.frombuffer(self.data, np.uint8, end - start, start)
+            table = None
+            if raw.size and raw.max() >= 0x80:
+                if self._utf8:
+                    starts = (raw & 0xC0) != 0x80   # UTF-8: every byte but a continuation starts a character
+                else:
+                    text = self.data[start:end].decode(self.encoding, errors="replace")
+                    starts = np.zeros(raw.size, bool)
+                    pos = 0
+                    for ch in text:   # other encodings: map each character back to its first byte
+                        if pos < raw.size:
+                            starts[pos] = True
+                        pos += max(1, len(ch.encode(self.encoding, errors="replace")))
+                table = np.concatenate(([0], np.cumsum(starts)))
+            self._line_columns[line] = table
+        return self._line_columns[line]
 
     def loc(self, offset: int) -> SourceLocation:
         offset = max(0, min(offset, len(self.data)))
         line = bisect.bisect_left(self._newlines, offset)  # newlines strictly before offset
         start = self._newlines[line - 1] + 1 if line else 0
-        prefix = self.data[start:offset]
-        try:
-            col = len(prefix.decode(self.encoding, errors="replace"))
-        except LookupError:
-            col = len(prefix)
+        table = self._columns(line, start)
+        col = offset - start if table is None else int(table[min(offset - start, table.size - 1)])
         return SourceLocation(self.filename, line + 1, col + 1)
 
 
@@ -117,6 +146,10 @@ def _prepare(data: bytes) -> tuple[bytes, str | None, bool]:
     return data, encoding, False
 
 
+#: Deeper nesting than any scene needs; the builder recurses once per level.
+MAX_DEPTH = 200
+
+
 def _read_tree(src: _Source, expat_encoding: str | None) -> _Elem:
     parser = expat.ParserCreate(expat_encoding)
     stack: list[_Elem] = []
@@ -125,6 +158,9 @@ def _read_tree(src: _Source, expat_encoding: str | None) -> _Elem:
     def start(tag, attrs):
         off = parser.CurrentByteIndex
         el = _Elem(tag, attrs, off, src.loc(off))
+        if len(stack) >= MAX_DEPTH:
+            raise SceneError(f"elements are nested more than {MAX_DEPTH} deep (at <{tag}>); "
+                             f"a scene needs only a few levels", el.loc)
         (stack[-1].children if stack else roots).append(el)
         stack.append(el)
 
@@ -241,6 +277,10 @@ class _Builder:
                 raise SceneError(f"bad number '{t}' in attribute {attr}=\"{text}\" of {tag}; "
                                  f"expected numbers separated by commas and/or spaces",
                                  self.attr_loc(el, attr)) from None
+            if not math.isfinite(values[-1]):
+                what = "not a number" if math.isnan(values[-1]) else "infinite (or too large for a float)"
+                raise SceneError(f"number '{t}' in attribute {attr}=\"{text}\" of {tag} is {what}; "
+                                 f"every number in a scene must be finite", self.attr_loc(el, attr))
         if counts is not None and len(values) not in counts:
             want = " or ".join(str(c) for c in counts)
             raise SceneError(f"attribute {attr}=\"{text}\" of {tag} needs {want} "
@@ -390,6 +430,12 @@ def _parse_bytes(data: bytes, filename: str, defines, base_dir: str, force_encod
     dialect = _dialect.resolve(nori_dialect)
     data, declared, blanked = _prepare(data)
     encoding = force_encoding or declared
+    if encoding is not None:
+        try:
+            codecs.lookup(encoding)
+        except LookupError:
+            raise SceneError(f"unknown encoding '{encoding}' in the XML declaration; use UTF-8",
+                             SourceLocation(filename, 1, 1)) from None
     src = _Source(data, filename, encoding)
     root = _read_tree(src, encoding if (force_encoding or blanked) else None)
     return _Builder(src, defines, base_dir, dialect).build_root(root)
@@ -400,6 +446,8 @@ def parse_file(path, defines: Mapping[str, str] | None = None, nori_dialect: str
     ``nori_dialect`` is ``upstream`` or ``eth`` (see :mod:`clrender.scene.dialect`; None: the default)."""
     path = os.fspath(path)
     try:
+        if not stat.S_ISREG(os.stat(path).st_mode):  # a FIFO or device would block or never end
+            raise SceneError(f"cannot read scene file '{path}': not a regular file")
         with open(path, "rb") as f:
             data = f.read()
     except OSError as e:

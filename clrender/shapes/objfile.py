@@ -19,6 +19,7 @@ errors with the OBJ line number.
 """
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 
@@ -26,6 +27,7 @@ import numpy as np
 
 from clrender.errors import SceneError, SourceLocation
 from clrender.shapes.meshdata import MeshData
+from clrender.shapes.meshfile import read_mesh_bytes
 
 __all__ = ["load_obj"]
 
@@ -37,12 +39,7 @@ def load_obj(path, location: SourceLocation | None = None) -> MeshData:
     not being readable. Errors inside the file name the OBJ file and line.
     """
     path = os.fspath(path)
-    try:
-        with open(path, "rb") as f:
-            data = f.read()
-    except OSError as e:
-        reason = e.strerror or str(e)
-        raise SceneError(f"cannot read OBJ file '{path}': {reason}", location) from None
+    data = read_mesh_bytes(path, "OBJ", location)
 
     parsed = None
     try:
@@ -99,6 +96,8 @@ def _parse_fast(data: bytes) -> _Parsed:
     positions = _floats_block(vl, 3)
     uvs = _floats_block(tl, 2)
     normals = _floats_block(nl, 3)
+    if not (np.isfinite(positions).all() and np.isfinite(uvs).all() and np.isfinite(normals).all()):
+        raise _NeedSlowPath  # the careful parser names the line with the NaN/Inf
     if not fl:
         return _Parsed(positions, uvs, normals, *(np.zeros(0, np.int64) for _ in range(4)))
 
@@ -216,6 +215,9 @@ def _faces_block(lines: list[bytes]):
 # Careful path
 
 
+_MAX_INDEX = 2**31 - 1  # faces are int32 on the device
+
+
 def _parse_slow(data: bytes, path: str) -> _Parsed:
     text = data.decode("utf-8", errors="replace")
     pos: list[list[float]] = []
@@ -239,6 +241,8 @@ def _parse_slow(data: bytes, path: str) -> _Parsed:
                 out.append(float(tok))
             except ValueError:
                 fail(lineno, f"bad number '{tok}' in '{what}' statement (expected {need} numbers)")
+            if not math.isfinite(out[-1]):
+                fail(lineno, f"number '{tok}' in '{what}' statement is not finite (NaN or infinite)")
         return out
 
     def index(tok, defined, what, lineno, corner):
@@ -248,6 +252,9 @@ def _parse_slow(data: bytes, path: str) -> _Parsed:
             fail(lineno, f"bad {what} index '{tok}' in face corner '{corner}' (expected an integer)")
         if i == 0:
             fail(lineno, f"{what} index 0 in face corner '{corner}' (OBJ indices start at 1)")
+        if abs(i) > _MAX_INDEX:
+            fail(lineno, f"{what} index {i} in face corner '{corner}' is out of range (a mesh holds at "
+                         f"most {_MAX_INDEX} vertices)")
         if i < 0:
             r = defined + i
             if r < 0:

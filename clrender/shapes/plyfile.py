@@ -16,6 +16,7 @@ import numpy as np
 
 from clrender.errors import SceneError, SourceLocation
 from clrender.shapes.meshdata import MeshData
+from clrender.shapes.meshfile import read_mesh_bytes
 
 __all__ = ["load_ply"]
 
@@ -26,24 +27,30 @@ _INDEX_NAMES = ("vertex_indices", "vertex_index")
 def load_ply(path, location: SourceLocation | None = None) -> MeshData:
     """Load a PLY mesh (object space). Errors name the PLY file, or `location` if it cannot be read."""
     path = os.fspath(path)
-    try:
-        with open(path, "rb") as f:
-            data = f.read()
-    except OSError as e:
-        raise SceneError(f"cannot read PLY file '{path}': {e.strerror or e}", location) from None
+    data = read_mesh_bytes(path, "PLY", location)
     here = SourceLocation(path)
     if not data.startswith(b"ply"):
         raise SceneError("not a PLY file (expected 'ply' on the first line)", here)
+    _check_header(data, path)
 
     try:
-        vertex, polygons = _read_with_trimesh(data)
-    except _VariableLists:
-        vertex, polygons = _read_binary_variable(data, here)
+        try:
+            vertex, polygons = _read_with_trimesh(data)
+        except _VariableLists:
+            vertex, polygons = _read_binary_variable(data, here)
     except SceneError:
         raise
     except Exception as e:  # trimesh raises assorted types for malformed files
-        raise SceneError(f"cannot parse PLY file: {e}", here) from None
+        raise SceneError(f"cannot parse PLY file: {type(e).__name__}: {e}", here) from None
 
+    try:
+        return _mesh_from(vertex, polygons, here)
+    except (ValueError, TypeError, IndexError, OverflowError) as e:
+        # e.g. an ASCII line with fewer numbers than the header promises: trimesh hands back ragged rows
+        raise SceneError(f"PLY data do not match the header ({type(e).__name__}: {e})", here) from None
+
+
+def _mesh_from(vertex, polygons, here: SourceLocation) -> MeshData:
     names = set(_field_names(vertex))
     if not {"x", "y", "z"} <= names:
         raise SceneError("PLY vertex element lacks x/y/z properties", here)
@@ -57,12 +64,76 @@ def load_ply(path, location: SourceLocation | None = None) -> MeshData:
             uvs = np.column_stack([np.asarray(vertex[a], np.float64), np.asarray(vertex[b], np.float64)])
             break
 
+    for what, arr in (("coordinate", positions), ("normal", normals), ("texture coordinate", uvs)):
+        if arr is not None and not np.isfinite(arr).all():
+            k = int(np.flatnonzero(~np.isfinite(arr).all(axis=1))[0])
+            raise SceneError(f"PLY vertex {k} has a non-finite {what} ({', '.join(map(str, arr[k]))})", here)
+
     faces = _fan(polygons, here)
     if faces.shape[0] == 0:
         raise SceneError("PLY file contains no faces", here)
     if faces.min() < 0 or faces.max() >= positions.shape[0]:
         raise SceneError(f"PLY face index out of range (the file has {positions.shape[0]} vertices)", here)
     return MeshData(positions=positions, normals=normals, uvs=uvs, faces=faces)
+
+
+def _check_header(data: bytes, path: str) -> None:
+    """Check the header and that the body can hold what it declares, before anything is allocated.
+
+    A truncated file, or a header claiming billions of vertices, is reported here with the header line,
+    instead of failing inside a reader (or allocating what the header claims)."""
+    end = data.find(b"end_header")
+    if end < 0:
+        raise SceneError("PLY header has no 'end_header' line (truncated or not a PLY file)", SourceLocation(path))
+    nl = data.find(b"\n", end)
+    body = len(data) - (nl + 1) if nl >= 0 else 0
+    fmt = None
+    elements: list[tuple[str, int, int, int]] = []  # name, count, line, bytes per record at least
+    for lineno, raw in enumerate(data[:end].decode("ascii", "replace").splitlines(), start=1):
+        tok = raw.split()
+        here = SourceLocation(path, lineno)
+        if not tok or tok[0] in ("ply", "comment", "obj_info"):
+            continue
+        if tok[0] == "format":
+            if len(tok) < 2 or tok[1] not in ("ascii", "binary_little_endian", "binary_big_endian"):
+                raise SceneError(f"unknown PLY format line '{raw.strip()}' (expected ascii, "
+                                 "binary_little_endian or binary_big_endian)", here)
+            fmt = tok[1]
+        elif tok[0] == "element":
+            if len(tok) != 3 or not tok[2].isdigit():
+                raise SceneError(f"bad PLY element line '{raw.strip()}' (expected 'element NAME COUNT')", here)
+            elements.append((tok[1], int(tok[2]), lineno, 0))
+        elif tok[0] == "property":
+            if not elements:
+                raise SceneError("PLY property before any element", here)
+            if len(tok) == 5 and tok[1] == "list" and tok[2] in _PLY_TYPES and tok[3] in _PLY_TYPES:
+                size = np.dtype(_PLY_TYPES[tok[2]]).itemsize  # an empty list is only its length
+            elif len(tok) == 3 and tok[1] in _PLY_TYPES:
+                size = np.dtype(_PLY_TYPES[tok[1]]).itemsize
+            else:
+                raise SceneError(f"bad PLY property line '{raw.strip()}' (expected 'property TYPE NAME' or "
+                                 f"'property list COUNT_TYPE INDEX_TYPE NAME'; types: "
+                                 f"{', '.join(_PLY_TYPES)})", here)
+            name, count, line, per = elements[-1]
+            elements[-1] = (name, count, line, per + size)
+        else:
+            raise SceneError(f"unknown PLY header line '{raw.strip()}'", here)
+    if fmt is None:
+        raise SceneError("PLY header has no 'format' line", SourceLocation(path))
+    if fmt == "ascii":
+        lines = data.count(b"\n", nl + 1) + 1 if nl >= 0 else 0
+        need = sum(count for _, count, _, _ in elements)
+        if need > lines:
+            raise SceneError(f"the PLY header declares {need} records but the file has only {lines} lines "
+                             "after the header (truncated, or a wrong element count)", SourceLocation(path))
+        return
+    offset = 0
+    for name, count, line, per in elements:
+        offset += count * per
+        if offset > body:
+            raise SceneError(f"PLY header declares {count} '{name}' records, at least {count * per} bytes, but "
+                             f"the file has only {body} bytes after the header (truncated, or a wrong "
+                             f"element count)", SourceLocation(path, line))
 
 
 class _VariableLists(Exception):
@@ -174,8 +245,13 @@ def _read_binary_variable(data: bytes, here: SourceLocation):
                 if t2 is None:
                     off += np.dtype(t1).itemsize
                     continue
+                if off + np.dtype(t1).itemsize > len(buf):
+                    raise SceneError(f"PLY file ends inside '{name}' record (truncated)", here)
                 n = int(np.frombuffer(buf, endian + t1, 1, off)[0])
                 off += np.dtype(t1).itemsize
+                if n < 0 or off + np.dtype(t2).itemsize * n > len(buf):
+                    raise SceneError(f"PLY '{name}' list of {n} entries runs past the end of the file "
+                                     "(truncated or corrupt)", here)
                 lists[pname].append(np.frombuffer(buf, endian + t2, n, off))
                 off += np.dtype(t2).itemsize * n
         if name == "face":

@@ -22,7 +22,9 @@ class Sphere(Shape):
     def __init__(self, props, children, spec):
         self.center = np.asarray(props.get_point("center", np.zeros(3)), np.float64)
         self.radius = float(props.get_float("radius", 1.0))
-        if not (self.radius > 0 and np.isfinite(self.radius)) or not np.all(np.isfinite(self.center)):
+        if not np.all(np.isfinite(self.center)):
+            raise SceneError(f"sphere center must be finite, got {self.center}", props.location("center"))
+        if not (self.radius > 0 and np.isfinite(self.radius)):
             raise SceneError(f"sphere radius must be a positive number, got {self.radius}", spec.location)
         self._attach(children, spec)
 

@@ -23,7 +23,14 @@ class TriangleMesh(Shape):
             raise SceneError("mesh toWorld is singular or not finite (e.g. a lookat whose up is parallel to "
                              "its viewing direction): points cannot be mapped to world space",
                              props.location("toWorld"))
-        mesh = loader(filename, props.location("filename"))
+        where = props.location("filename")
+        try:
+            mesh = loader(filename, where)
+        except SceneError as e:
+            if e.location == where:
+                raise
+            # The error names the mesh file (and line); add where the scene asked for that file.
+            raise SceneError(f"in mesh {e}", where) from None
         mesh = mesh.transformed(to_world.matrix)
         mesh, dropped = mesh.drop_degenerate()
         if dropped:

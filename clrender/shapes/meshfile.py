@@ -1,0 +1,43 @@
+"""Reading a mesh file's bytes, refusing anything that is not a regular file.
+
+A device file (/dev/zero, /dev/urandom) or a FIFO named as a mesh would be read until memory runs out, or
+block forever; a folder gives an obscure error. Only regular files are meshes.
+"""
+from __future__ import annotations
+
+import os
+import stat
+
+from clrender.errors import SceneError, SourceLocation
+
+
+def mesh_file_problem(path: str) -> str | None:
+    """Why `path` cannot be a mesh file (a sentence), or None if it is a regular file we may read."""
+    try:
+        st = os.stat(path)
+    except OSError as e:
+        return e.strerror or str(e)
+    if stat.S_ISDIR(st.st_mode):
+        return "it is a folder, not a file"
+    if not stat.S_ISREG(st.st_mode):
+        kind = ("a FIFO" if stat.S_ISFIFO(st.st_mode) else "a device file"
+                if stat.S_ISCHR(st.st_mode) or stat.S_ISBLK(st.st_mode) else "a socket or special file")
+        return f"it is {kind}; only regular files are meshes"
+    if not os.access(path, os.R_OK):
+        return "permission denied"
+    return None
+
+
+def read_mesh_bytes(path, kind: str, location: SourceLocation | None) -> bytes:
+    """The whole file; a SceneError at the scene's `location` if it is not a readable regular file."""
+    path = os.fspath(path)
+    why = mesh_file_problem(path)
+    if why is None:
+        try:
+            with open(path, "rb") as f:
+                return f.read()
+        except OSError as e:
+            why = e.strerror or str(e)
+        except MemoryError:
+            why = "not enough memory to read it"
+    raise SceneError(f"cannot read {kind} file '{path}': {why}", location)

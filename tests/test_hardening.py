@@ -1,0 +1,113 @@
+"""Smaller promises of the hardened command line: progress bar only on a terminal (or --progress), output
+files with the umask's permissions, scene columns in linear time, the film checked against memory, and
+`cpu`/`gpu` never choosing a simulator."""
+import os
+import time
+from types import SimpleNamespace
+
+import pytest
+
+from clrender.cli import main
+from clrender.errors import SceneError
+
+SCENE = """<scene>
+  <integrator type="normals"/>
+  <camera type="perspective"><integer name="width" value="{w}"/><integer name="height" value="{h}"/>
+    <transform name="toWorld"><lookat origin="0,0,3" target="0,0,0" up="0,1,0"/></transform></camera>
+  <mesh type="sphere"><float name="radius" value="1"/></mesh>
+</scene>
+"""
+
+
+def _scene(tmp_path, w=8, h=8):
+    p = tmp_path / "s.xml"
+    p.write_text(SCENE.format(w=w, h=h))
+    return p
+
+
+def test_no_progress_bar_unless_a_terminal_or_asked(tmp_path, capsys):
+    p = _scene(tmp_path)
+    assert main(["render", str(p), "--spp", "2", "-o", str(tmp_path / "a.exr")]) == 0
+    assert "spp/s" not in capsys.readouterr().err  # stderr is not a terminal here
+    assert main(["render", str(p), "--spp", "2", "--progress", "-o", str(tmp_path / "b.exr")]) == 0
+    assert "rendering" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("umask,mode", [(0o022, 0o644), (0o077, 0o600), (0o002, 0o664)])
+def test_images_get_the_umask_permissions(tmp_path, umask, mode):
+    p = _scene(tmp_path)
+    old = os.umask(umask)
+    try:
+        assert main(["render", str(p), "-q", "--spp", "1", "-o", str(tmp_path / "o.exr")]) == 0
+    finally:
+        os.umask(old)
+    for name in ("o.exr", "o.png"):
+        assert (tmp_path / name).stat().st_mode & 0o777 == mode, name
+
+
+def test_one_long_line_parses_in_linear_time():
+    # Columns used to be found by decoding the line's prefix per element: quadratic on one long line.
+    from clrender.scene.xmlparser import parse_string
+
+    spheres = "".join(f'<mesh type="sphere"><point name="center" value="{i},0,0"/>'
+                      f'<float name="radius" value="0.35"/></mesh>' for i in range(5000))
+    texts = {sep: f"<scene>{sep}" + spheres.replace("</mesh>", "</mesh>" + sep) + "</scene>" for sep in ("\n", " ")}
+    times = {}
+    for sep, text in texts.items():
+        for _ in range(2):
+            t0 = time.perf_counter()
+            parse_string("<!-- \u00e9 -->" + text)  # a non-ASCII character: the per-line table is built
+            times[sep] = min(times.get(sep, 1e9), time.perf_counter() - t0)
+    assert times[" "] < 3 * times["\n"] + 0.2, times
+
+
+def test_columns_count_characters_on_long_lines():
+    from clrender.scene.xmlparser import parse_string
+
+    text = "<scene>" + "<!-- \u00e9\u00e9 -->" * 1000 + "<bogus/></scene>"
+    with pytest.raises(SceneError) as e:
+        parse_string(text)
+    assert e.value.location.col == len("<scene>" + "<!-- \u00e9\u00e9 -->" * 1000) + 1
+
+
+def test_film_is_checked_against_device_and_host_memory(monkeypatch):
+    from clrender import memcheck
+    from clrender.memcheck import check_film_fits
+
+    import pyopencl as cl
+
+    class Props(dict):
+        def location(self, name):
+            return f"s.xml:4 ({name})"
+
+    spec = SimpleNamespace(props=Props(width=1, height=1), location="s.xml:3")
+    scene = SimpleNamespace(width=20000, height=10000, camera=SimpleNamespace(spec=spec))
+    gpu = SimpleNamespace(max_mem_alloc_size=2**30, global_mem_size=4 * 2**30, type=cl.device_type.GPU)
+    with pytest.raises(SceneError) as e:
+        check_film_fits(scene, gpu)
+    assert "20000 x 10000" in str(e.value) and "per buffer" in str(e.value) and "(width)" in str(e.value)
+    gpu.max_mem_alloc_size = 2**40
+    with pytest.raises(SceneError, match="device memory"):
+        check_film_fits(scene, gpu)
+    gpu.global_mem_size = 2**40
+    monkeypatch.setattr(memcheck, "available_host_memory", lambda: 2**45)
+    check_film_fits(scene, gpu)
+    monkeypatch.setattr(memcheck, "available_host_memory", lambda: 2**33)
+    with pytest.raises(SceneError, match="host memory"):
+        check_film_fits(scene, gpu)
+
+
+def test_cpu_and_gpu_mean_one_kind_of_device(monkeypatch):
+    import pyopencl as cl
+
+    from clrender.device import context
+
+    t = cl.device_type
+    sim = SimpleNamespace(type=t.CPU | t.GPU | t.ACCELERATOR | t.DEFAULT, name="Oclgrind Simulator", int_ptr=1)
+    cpu = SimpleNamespace(type=t.CPU, name="pthread CPU", int_ptr=2)
+    plat = SimpleNamespace(name="P")
+    monkeypatch.setattr(context, "list_devices", lambda: [(plat, sim), (plat, cpu)])
+    assert context.choose_device("cpu")[1] is cpu
+    with pytest.raises(context.DeviceError, match="no GPU"):
+        context.choose_device("gpu")
+    assert context.choose_device("oclgrind")[1] is sim

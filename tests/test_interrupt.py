@@ -1,0 +1,87 @@
+"""Ctrl-C in every phase of `clrender render`: "interrupted", exit status 130, no traceback, and an image
+only when the passes had started (the partial image); a second Ctrl-C aborts at once."""
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from bigmesh import write_grid_ply
+
+
+
+def _scene(tmp_path, w=16, h=16, mesh="grid.ply"):
+    if mesh == "grid.ply":
+        write_grid_ply(tmp_path / mesh)  # 100k triangles: the load and BVH build take a while
+    p = tmp_path / "s.xml"
+    p.write_text(f"""<scene>
+  <integrator type="path_mis"/>
+  <camera type="perspective"><integer name="width" value="{w}"/><integer name="height" value="{h}"/>
+    <transform name="toWorld"><lookat origin="0,1.5,4" target="0,0.5,0" up="0,1,0"/></transform></camera>
+  <mesh type="ply"><string name="filename" value="{mesh}"/>
+    <emitter type="area"><color name="radiance" value="1"/></emitter></mesh>
+</scene>
+""")
+    return p
+
+
+def _run(tmp_path, scene, delays, extra=(), env=None):
+    """Start a render, send SIGINT after each delay (seconds, cumulative); return (status, stderr, seconds
+    from the last SIGINT to the exit, the -o path)."""
+    out = tmp_path / "o.exr"
+    proc = subprocess.Popen([sys.executable, "-m", "clrender.cli", "render", str(scene), "-o", str(out), *extra],
+                            stderr=subprocess.PIPE, text=True, env=dict(os.environ, **(env or {})))
+    for d in delays:
+        time.sleep(d)
+        proc.send_signal(signal.SIGINT)
+    last = time.time()
+    _, err = proc.communicate(timeout=300)
+    return proc.returncode, err, time.time() - last, out
+
+
+@pytest.mark.parametrize("delay", [0.5, 1.0, 2.0])
+def test_ctrl_c_while_starting_or_loading(tmp_path, delay):
+    # From the first imports to the end of the PLY load: never ignored, never a parse error.
+    status, err, _, out = _run(tmp_path, _scene(tmp_path), [delay], ["--spp", "1"])
+    assert status == 130, err
+    assert "interrupted" in err and "Traceback" not in err and "cannot parse" not in err, err
+    assert not out.exists()
+
+
+def test_ctrl_c_during_the_kernel_build(tmp_path):
+    # A fresh PoCL cache makes the build take seconds; the small scene loads in well under a second.
+    (tmp_path / "quad.obj").write_text("v -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nf 1 2 3 4\n")
+    scene = _scene(tmp_path, mesh="quad.obj").read_text().replace('type="ply"', 'type="obj"')
+    (tmp_path / "s.xml").write_text(scene)
+    status, err, after, out = _run(tmp_path, tmp_path / "s.xml", [2.5], ["--spp", "1"],
+                                   env={"POCL_CACHE_DIR": str(tmp_path / "cold-cache")})
+    assert status == 130, err
+    assert "interrupted" in err and "Traceback" not in err and "error generated" not in err, err
+    assert not out.exists()
+
+
+def test_second_ctrl_c_during_a_long_pass(tmp_path):
+    scene = _scene(tmp_path, w=2048, h=2048)  # one pass takes seconds
+    out = tmp_path / "o.exr"
+    proc = subprocess.Popen([sys.executable, "-m", "clrender.cli", "render", str(scene), "-o", str(out),
+                             "--spp", "100000", "--progress"], stderr=subprocess.PIPE, text=True)
+    seen = ""
+    start = time.time()
+    # Wait for the progress bar's first count ("| 1/100000"): the passes have begun (not the warm-up launch).
+    while not re.search(r"\| [1-9][0-9]*/100000", seen) and time.time() - start < 300:
+        c = proc.stderr.read(1)
+        if not c:
+            break
+        seen += c
+    time.sleep(0.3)
+    proc.send_signal(signal.SIGINT)
+    time.sleep(0.1)
+    proc.send_signal(signal.SIGINT)
+    last = time.time()
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert time.time() - last < 2.0, "the second Ctrl-C waited for the pass in flight"
+    assert "aborted" in err and "Traceback" not in err
+    assert not out.exists()
