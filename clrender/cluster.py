@@ -1,0 +1,478 @@
+"""Render on a Dask cluster: tasks of sample ranges (and bands of rows for large films) on many workers,
+whose accumulators the client adds in a fixed order.
+
+    import clrender
+    film = clrender.render(scene, spp=1024, seed=0, cluster="local:4")          # a LocalCluster of 4
+    film = clrender.render(scene, spp=1024, cluster="tcp://head:8786")            # `dask scheduler` there
+    film = clrender.render("scene.xml", spp=1024, cluster=client, files="shared")  # a distributed.Client
+
+How the scene reaches the workers (``files=``):
+  ``"ship"``   (default) the client loads and packs the scene once (BVH included) and scatters the packed
+               tables to the workers: they need no scene files. Best for scenes up to some hundred MB
+               packed, or when workers do not share a filesystem with the client.
+  ``"shared"`` the task names the XML file (absolute path), the ``-D`` defines and the dialect; each worker
+               loads the scene from that path and builds its own BVH, after checking that the files it
+               reads hash like the client's. Best for very large meshes on a farm with a shared filesystem.
+Either way a worker builds its program once per scene and device and keeps it (keyed by the scene's
+content hash) for every later task of that scene.
+
+Samples are numbered globally and the counter-based RNG makes a sample's value independent of where it is
+drawn, so any split gives the single-process image up to the float rounding of the sums. Dask reruns the
+task of a worker that died; a worker whose device fails is reported by name and its task moves to the
+other workers.
+"""
+from __future__ import annotations
+
+import math
+import os
+import threading
+import time
+from collections import OrderedDict
+from dataclasses import dataclass
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+
+from .errors import ClrenderError, DeviceError
+from .scenesource import DEFAULT_DIALECT, SceneSource, packed_hash
+
+INSTALL_HINT = 'rendering on a cluster needs Dask: pip install "clrender[cluster]"'
+MIN_BAND_PIXELS = 1 << 16   # one launch: a band smaller than this wastes a GPU
+TASKS_PER_THREAD = 4        # enough tasks to balance load and keep Ctrl-C and --time-limit responsive
+MAX_DEVICE_FAILURES = 3     # per task, before the render gives up
+WORKER_CACHE_SCENES = 2     # packed scenes and programs a worker keeps
+
+
+class ClusterError(ClrenderError):
+    """The cluster render failed (no workers, a bad scene on a worker, every device failed, ...)."""
+
+
+class TaskFailed(Exception):
+    """Raised on a worker; args: (kind, worker, device, message). kind "device": the worker's device or
+    driver failed (the task may run elsewhere); "scene": the scene cannot be rendered anywhere."""
+
+    def __str__(self):
+        kind, worker, device, message = self.args
+        return f"worker {worker} ({device}): {message}"
+
+
+# ---------------------------------------------------------------------------------------------- payloads
+@dataclass(frozen=True)
+class ShippedScene:
+    """The packed scene itself: workers need no files."""
+    key: str
+    buffers: object
+    integrator: str
+    width: int
+    height: int
+    sample_count: int
+
+    def scene(self):
+        # What Renderer reads from a Scene; the Scene object itself (plugin classes made at run time) does
+        # not pickle, and the packed tables are all the kernels see.
+        return SimpleNamespace(integrator=SimpleNamespace(kernel=self.integrator), width=self.width,
+                               height=self.height, sample_count=self.sample_count)
+
+
+@dataclass(frozen=True)
+class SharedScene:
+    """Where the scene is on a filesystem that every worker sees."""
+    key: str
+    source: SceneSource
+
+
+# ------------------------------------------------------------------------------------------ worker side
+_CACHE: "OrderedDict[tuple, tuple]" = OrderedDict()   # (scene key, device spec) -> (Renderer, lock)
+_CACHE_LOCK = threading.Lock()
+
+
+def _worker_identity():
+    try:
+        from distributed import get_worker
+
+        w = get_worker()
+        return w.address, w.name
+    except (ImportError, ValueError):
+        return f"pid {os.getpid()}", None
+
+
+def _device_spec(plan, worker_name):
+    """The device this worker renders on: one spec for all, or one per LocalCluster worker by its name."""
+    if plan is None or isinstance(plan, str):
+        return plan
+    try:
+        return plan[int(worker_name) % len(plan)]
+    except (TypeError, ValueError):
+        return plan[0]
+
+
+def _renderer_for(payload, spec, worker):
+    from .renderer import Renderer
+
+    key = (payload.key, spec)
+    with _CACHE_LOCK:
+        if key in _CACHE:
+            _CACHE.move_to_end(key)
+            return _CACHE[key]
+        try:
+            if isinstance(payload, ShippedScene):
+                renderer = Renderer(payload.scene(), device=spec, buffers=payload.buffers)
+            else:
+                got = payload.source.content_hash()
+                if got != payload.key:
+                    raise TaskFailed("scene", worker, spec or "default device",
+                                     f"the scene files at {payload.source.path} differ from the client's "
+                                     f"(hash {got} != {payload.key}); use the same files or files='ship'")
+                renderer = Renderer(payload.source.load(), device=spec)
+        except TaskFailed:
+            raise
+        except DeviceError as exc:
+            raise TaskFailed("device", worker, f"device {spec or 'default'}", str(exc)) from None
+        except ClrenderError as exc:
+            raise TaskFailed("scene", worker, spec or "default device", str(exc)) from None
+        except Exception as exc:  # an OpenCL driver error while building or uploading
+            raise TaskFailed("device", worker, f"device {spec or 'default'}",
+                             f"{type(exc).__name__}: {exc}") from None
+        _CACHE[key] = (renderer, threading.Lock())
+        while len(_CACHE) > WORKER_CACHE_SCENES:
+            _CACHE.popitem(last=False)
+        return _CACHE[key]
+
+
+def render_task(payload, index, pixels, start, count, seed, plan):
+    """One task on a worker: samples start..start+count-1 of pixels [pixels[0], pixels[1])."""
+    from . import __version__
+
+    worker, name = _worker_identity()
+    spec = _device_spec(plan, name)
+    renderer, lock = _renderer_for(payload, spec, worker)
+    p0, p1 = pixels
+    t0 = time.perf_counter()
+    with lock:  # one Renderer per device: tasks of a multi-threaded worker take turns
+        try:
+            film_acc = _render_raw(renderer, count, seed, start, p0, p1)
+        except Exception as exc:
+            with _CACHE_LOCK:
+                _CACHE.pop((payload.key, spec), None)
+            raise TaskFailed("device", worker, renderer.device_name, f"{type(exc).__name__}: {exc}") from None
+    acc0, acc1, bad = film_acc
+    return {"index": index, "p0": p0, "start": start, "count": count, "acc0": acc0, "acc1": acc1,
+            "bad": bad, "worker": worker, "device": renderer.device_name, "version": __version__,
+            "seconds": time.perf_counter() - t0}
+
+
+def _render_raw(renderer, count, seed, start, p0, p1):
+    """The band's float32 accumulators as the device summed them (acc0 = sum wL, sum w; acc1 = sum (wL)^2,
+    count), without the float64 copy of the whole film that Film holds."""
+    film = renderer.render(spp=count, seed=seed, start_sample=start, pixels=(p0, p1))
+    acc0 = np.empty((p1 - p0, 4), np.float32)
+    acc1 = np.empty((p1 - p0, 4), np.float32)
+    acc0[:, :3] = film.sum_wl.reshape(-1, 3)[p0:p1]
+    acc0[:, 3] = film.sum_w.reshape(-1)[p0:p1]
+    acc1[:, :3] = film.sum_wl2.reshape(-1, 3)[p0:p1]
+    acc1[:, 3] = film.count.reshape(-1)[p0:p1]
+    return acc0, acc1, film.dropped.reshape(-1)[p0:p1].astype(np.uint32)
+
+
+# ------------------------------------------------------------------------------------------ client side
+def _distributed():
+    try:
+        import distributed
+    except ImportError:
+        raise ClusterError(INSTALL_HINT) from None
+    return distributed
+
+
+def usable_device_specs() -> list[str]:
+    """One spec per device worth a LocalCluster worker: the default (CPU) device once, plus every GPU or
+    accelerator that compiles kernels. Other CPU devices are the same cores again and are left out."""
+    import pyopencl as cl
+
+    from .device.context import build_check, choose_device, list_devices
+
+    devices = list_devices()
+    try:
+        p_def, d_def = choose_device(None)
+    except ClrenderError:
+        p_def = d_def = None
+    specs = []
+    for i, (p, d) in enumerate(devices):
+        if d_def is not None and d.int_ptr == d_def.int_ptr:
+            specs.insert(0, str(i))
+        elif not d.type & cl.device_type.CPU and build_check(p, d) is None:
+            specs.append(str(i))
+    return specs or [None]
+
+
+def connect(cluster, n_workers: int | None = None):
+    """(client, close, description, is_local) for a cluster given as a distributed.Client, a Cluster object,
+    "local" / "local:N", a scheduler address ("tcp://HOST:PORT") or a scheduler file."""
+    distributed = _distributed()
+    if isinstance(cluster, distributed.Client):
+        return cluster, (lambda: None), f"Dask client {cluster.scheduler.address}", False
+    if hasattr(cluster, "scheduler_address"):
+        client = distributed.Client(cluster)
+        return client, client.close, f"Dask cluster {cluster.scheduler_address}", False
+    spec = str(cluster).strip()
+    if spec == "local" or spec.startswith("local:"):
+        n = n_workers
+        if spec.startswith("local:"):
+            try:
+                n = int(spec[len("local:"):])
+            except ValueError:
+                n = 0
+            if n < 1:
+                raise ClusterError(f"--cluster {spec}: expected local or local:N with N >= 1 workers")
+        import logging
+
+        try:
+            import bokeh  # noqa: F401
+            dashboard = ":0"   # any free port: several renders (or users) may run at once
+        except ImportError:
+            dashboard = None
+        lc = distributed.LocalCluster(n_workers=n or len(usable_device_specs()), threads_per_worker=1,
+                                      processes=True, dashboard_address=dashboard,
+                                      silence_logs=logging.CRITICAL)
+        client = distributed.Client(lc)
+
+        def close():
+            client.close()
+            lc.close()
+        return client, close, f"local Dask cluster of {len(lc.workers)} worker processes", True
+    try:
+        if "://" in spec:
+            client = distributed.Client(spec, timeout="20s")
+        elif Path(spec).is_file():
+            client = distributed.Client(scheduler_file=spec, timeout="20s")
+        else:
+            raise ClusterError(f"--cluster {spec!r}: expected local[:N], a scheduler address like "
+                               "tcp://HOST:8786, or an existing scheduler file")
+    except ClusterError:
+        raise
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise ClusterError(f"cannot reach the Dask scheduler {spec}: {exc}") from None
+    return client, client.close, f"Dask scheduler {client.scheduler.address}", False
+
+
+def split(width: int, height: int, spp: int, start_sample: int, n_tasks: int, bands: int | None = None):
+    """Tasks as (index, (pixel0, pixel1), sample start, sample count), in the fixed order of their sums:
+    sample chunks outer, bands of rows inner, so a partial render has its samples spread over the image.
+    Bands are used only when there are more tasks than a film needs one launch for (big films, many
+    workers): a band returns its share of the film, where a sample chunk returns the whole film."""
+    if bands is None:
+        bands = max(1, min(n_tasks, (width * height) // MIN_BAND_PIXELS, height))
+    bands = max(1, min(int(bands), height))
+    chunks = max(1, min(spp, math.ceil(n_tasks / bands)))
+    rows = [height * j // bands for j in range(bands + 1)]
+    tasks = []
+    for i in range(chunks):
+        s0, s1 = spp * i // chunks, spp * (i + 1) // chunks
+        if s1 == s0:
+            continue
+        for j in range(bands):
+            tasks.append((len(tasks), (rows[j] * width, rows[j + 1] * width), start_sample + s0, s1 - s0))
+    return tasks
+
+
+def _payload(scene, files, defines, dialect, say):
+    """(payload, scene key, width, height, default spp, integrator) for a Scene or an XML path."""
+    from .pack import pack_scene
+
+    if isinstance(scene, (str, Path)):
+        source = SceneSource(str(Path(scene).resolve()), dict(defines or {}), dialect or DEFAULT_DIALECT)
+        key = source.content_hash()
+        loaded = source.load()
+    else:
+        if files == "shared":
+            raise ClusterError("files='shared' needs the scene as a path to its XML file (workers load it)")
+        source, key, loaded = None, None, scene
+    w, h, spp, integ = loaded.width, loaded.height, loaded.sample_count, loaded.integrator.kernel
+    if files == "shared":
+        return SharedScene(key, source), key, w, h, spp, integ
+    if files != "ship":
+        raise ClusterError(f"files={files!r}: expected 'ship' or 'shared'")
+    buffers = pack_scene(loaded)
+    if key is None:
+        key = packed_hash(buffers, integ, w, h)
+    return ShippedScene(key, buffers, integ, w, h, spp), key, w, h, spp, integ
+
+
+def render(scene, spp: int | None = None, seed: int = 0, cluster="local", *, start_sample: int = 0,
+           files: str = "ship", defines: dict | None = None, dialect: str = DEFAULT_DIALECT,
+           device=None, tasks: int | None = None, bands: int | None = None, time_limit: float | None = None,
+           progress: bool = False, say=None, on_result=None):
+    """Render on a Dask cluster and return the Film (``film.count`` holds the true per-pixel counts).
+
+    ``scene``: a loaded Scene (shipped) or the path of its XML file (shipped or, with ``files="shared"``,
+    loaded by the workers). ``cluster``: see :func:`connect`. ``device``: one device spec for every worker
+    (default: each worker's own choice, ``CLRENDER_DEVICE`` in its environment, or for a LocalCluster one
+    usable device per worker). ``tasks``: how many tasks (default 4 per worker thread). ``say``: called
+    with progress messages. ``on_result(result, client)``: called after every finished task (tests).
+    Ctrl-C cancels the outstanding tasks and returns what was finished; ``time_limit`` stops handing out
+    tasks after that many seconds.
+    """
+    from .renderer import RenderStats, _SigintFlag
+
+    say = say or (lambda msg: None)
+    client, close, what, local = connect(cluster)
+    try:
+        return _render(client, what, local, scene, spp, seed, start_sample, files, defines, dialect, device,
+                       tasks, bands, time_limit, progress, say, on_result, RenderStats, _SigintFlag)
+    finally:
+        close()
+
+
+def _render(client, what, local, scene, spp, seed, start_sample, files, defines, dialect, device, n_tasks, bands,
+            time_limit, progress, say, on_result, RenderStats, SigintFlag):
+    from . import __version__
+    from .parts import Accumulator
+
+    distributed = _distributed()
+    t_begin = time.perf_counter()
+    payload, key, width, height, scene_spp, integrator = _payload(scene, files, defines, dialect, say)
+    spp = int(spp if spp is not None else scene_spp)
+    if spp < 1:
+        raise ValueError("spp must be at least 1")
+    try:
+        client.wait_for_workers(1, timeout=60)
+    except TimeoutError:
+        raise ClusterError(f"no Dask worker joined {what} within 60 s (start some with `dask worker ADDRESS`)") \
+            from None
+    threads = _threads(client)
+    say(f"{what}: {len(client.scheduler_info()['workers'])} workers, {threads} threads")
+    link = _dashboard(client)
+    say(f"Dask dashboard: {link}" if link else "no Dask dashboard (it needs bokeh: pip install bokeh)")
+    plan = device if device is not None else (usable_device_specs() if local else None)
+    plan = plan if plan != [None] else None
+    if files == "ship":
+        payload = client.scatter(payload, broadcast=False, hash=False)  # sent once; workers fetch it once
+    todo = split(width, height, spp, start_sample, n_tasks or TASKS_PER_THREAD * threads, bands)
+    acc = Accumulator(width, height)
+    n_pixels = width * height
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=spp * n_pixels, unit="sample", unit_scale=True, dynamic_ncols=True, leave=True,
+                   desc=f"rendering on {len(client.scheduler_info()['workers'])} workers")
+    pending: dict = {}                 # future -> task
+    failures: dict[int, int] = {}      # task index -> device failures
+    bad_workers: set[str] = set()
+    held: dict[int, dict] = {}         # finished results waiting for their turn in the fixed order
+    added, next_add, next_submit = [], 0, 0
+    devices, workers_used = set(), set()
+    stopped_by = None
+    stats = RenderStats()
+
+    def submit(task, workers=None):
+        index, pixels, s0, cnt = task
+        f = client.submit(render_task, payload, index, pixels, s0, cnt, seed, plan, pure=False,
+                          key=f"clrender-{key[:12]}-{seed}-{s0}-{pixels[0]}-{os.urandom(4).hex()}",
+                          workers=workers, allow_other_workers=False)
+        pending[f] = task
+
+    def fail(msg):
+        client.cancel(list(pending))
+        pending.clear()
+        raise ClusterError(msg)
+
+    t_start = time.perf_counter()
+    with SigintFlag() as flag:
+        try:
+            while True:
+                if time_limit is not None and time.perf_counter() - t_start >= time_limit and stopped_by is None:
+                    stopped_by = "time limit"
+                window = 2 * max(_threads(client), 1)
+                while stopped_by is None and next_submit < len(todo) and len(pending) < window:
+                    submit(todo[next_submit])
+                    next_submit += 1
+                if not pending:
+                    break
+                try:
+                    distributed.wait(list(pending), timeout=0.2, return_when="FIRST_COMPLETED")
+                except TimeoutError:
+                    pass
+                for f in [f for f in pending if f.done()]:
+                    task = pending.pop(f)
+                    if f.status == "finished":
+                        r = f.result()
+                        f.release()
+                        if r["version"] != __version__:
+                            fail(f"worker {r['worker']} runs clrender {r['version']}, this client "
+                                 f"{__version__}: install the same version everywhere")
+                        held[r["index"]] = r
+                        devices.add(r["device"])
+                        workers_used.add(r["worker"])
+                        if bar is not None:
+                            bar.update(r["count"] * (task[1][1] - task[1][0]))
+                        if on_result is not None:
+                            on_result(r, client)
+                        continue
+                    exc = f.exception() if f.status == "error" else None
+                    f.release()
+                    if isinstance(exc, TaskFailed) and exc.args[0] == "device":
+                        failures[task[0]] = failures.get(task[0], 0) + 1
+                        bad_workers.add(exc.args[1])
+                        good = [w for w in client.scheduler_info()["workers"] if w not in bad_workers]
+                        say(f"device failure on {exc}; its task goes to another worker")
+                        if failures[task[0]] >= MAX_DEVICE_FAILURES or not good:
+                            fail(f"giving up: {exc} (failed {failures[task[0]]} time(s); "
+                                 f"{len(good)} healthy worker(s) left)")
+                        submit(task, workers=good)
+                    elif isinstance(exc, TaskFailed):
+                        fail(str(exc))
+                    elif exc is not None and type(exc).__name__ == "KilledWorker":
+                        fail(f"task {task[0]} (samples {task[2]}..{task[2] + task[3] - 1}) killed its workers "
+                             f"too often: {exc}")
+                    else:
+                        fail(f"task {task[0]} failed on the cluster: {f.status}: {exc!r}")
+                while next_add in held:    # add in index order as soon as the prefix is complete
+                    _add(acc, held.pop(next_add), added)
+                    next_add += 1
+                if flag.requested and stopped_by is None:
+                    stopped_by = "Ctrl-C"
+                    client.cancel(list(pending))
+                    pending.clear()
+        finally:
+            if bar is not None:
+                bar.close()
+    for index in sorted(held):             # after an interruption: the finished tasks, still in order
+        _add(acc, held.pop(index), added)
+    stats.seconds = time.perf_counter() - t_start
+    stats.samples = int(acc.count.sum())
+    stats.passes = len(added)
+    stats.dropped = int(acc.dropped.sum())
+    stats.interrupted = stopped_by == "Ctrl-C"
+    complete = len(added) == len(todo)
+    spp_min = int(acc.count.min()) if n_pixels else 0
+    meta = {"spp": spp_min, "spp_max": int(acc.count.max()) if n_pixels else 0, "seed": seed,
+            "start_sample": start_sample, "render_seconds": round(stats.seconds, 4),
+            "device": "; ".join(sorted(devices)), "integrator": integrator, "version": __version__,
+            "interrupted": not complete, "dropped_samples": stats.dropped, "scene_hash": key,
+            "dialect": dialect or DEFAULT_DIALECT, "cluster": what, "workers": len(workers_used),
+            "tasks": f"{len(added)}/{len(todo)}", "wall_seconds": round(time.perf_counter() - t_begin, 4)}
+    if stopped_by:
+        meta["stopped_by"] = stopped_by
+    film = acc.film(meta)
+    film.stats = stats
+    return film
+
+
+def _add(acc, r, added):
+    acc.add_raw(r["p0"], r["acc0"], r["acc1"], r["bad"])
+    added.append(r["index"])
+
+
+def _threads(client) -> int:
+    return sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values())
+
+
+def _dashboard(client) -> str | None:
+    try:
+        if "dashboard" not in client.scheduler_info().get("services", {}):
+            return None
+        return client.dashboard_link
+    except Exception:  # the link is a nicety: never fail a render over it
+        return None
+
