@@ -1,4 +1,4 @@
-"""Command line: `clrender render | devices | bench` (a thin wrapper over the Python API)."""
+"""Command line: `clrender render | devices | bench | merge` (a thin wrapper over the Python API)."""
 from __future__ import annotations
 
 import argparse
@@ -25,6 +25,10 @@ def cmd_render(args) -> int:
     from .loader import load_scene
     from .renderer import Interrupted, Renderer
 
+    if args.cluster or args.sample_range:
+        from .cli_cluster import cmd_render_distributed
+
+        return cmd_render_distributed(args, _defines(args.define))
     t0 = time.perf_counter()
     scene = load_scene(args.scene, **_defines(args.define))
     out = Path(args.output) if args.output else Path(args.scene).with_suffix(".exr")
@@ -125,12 +129,16 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--time-limit", type=float, metavar="SEC", help="stop after about SEC seconds")
     r.add_argument("-D", "--define", action="append", metavar="NAME=VALUE", help="set $NAME in the scene")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    from .cli_cluster import add_merge_parser, add_render_arguments
+
+    add_render_arguments(r)
     r.set_defaults(func=cmd_render)
     d = sub.add_parser("devices", help="list OpenCL platforms and devices")
     d.set_defaults(func=cmd_devices)
     from .cli_tests import add_parsers
 
     add_parsers(sub)
+    add_merge_parser(sub)
     b = sub.add_parser("bench", help="benchmark scenes on OpenCL devices (or --compare two results)",
                        description="Measure build, load, BVH, render speed (samples/s, rays/s), memory and, "
                                    "with --reference, convergence, per scene and device. Without SCENE: the "

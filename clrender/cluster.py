@@ -39,7 +39,9 @@ from .scenesource import DEFAULT_DIALECT, SceneSource, packed_hash
 
 INSTALL_HINT = 'rendering on a cluster needs Dask: pip install "clrender[cluster]"'
 MIN_BAND_PIXELS = 1 << 16   # one launch: a band smaller than this wastes a GPU
-TASKS_PER_THREAD = 4        # enough tasks to balance load and keep Ctrl-C and --time-limit responsive
+TASK_SECONDS = 2.0          # adaptive task size: long enough to hide the per-task cost, short enough that
+                            # Ctrl-C, --time-limit and the progress bar respond and the load balances
+FIRST_TASK_SPP = 2          # the first tasks measure the speed of the workers
 MAX_DEVICE_FAILURES = 3     # per task, before the render gives up
 WORKER_CACHE_SCENES = 2     # packed scenes and programs a worker keeps
 
@@ -231,6 +233,10 @@ def connect(cluster, n_workers: int | None = None):
             dashboard = ":0"   # any free port: several renders (or users) may run at once
         except ImportError:
             dashboard = None
+        # The scheduler lives in this process: its chatter (workers joining, leaving, restarted after a
+        # crash) is not the user's business; what matters is reported by render().
+        for name in ("distributed", "bokeh"):
+            logging.getLogger(name).setLevel(logging.ERROR)
         lc = distributed.LocalCluster(n_workers=n or len(usable_device_specs()), threads_per_worker=1,
                                       processes=True, dashboard_address=dashboard,
                                       silence_logs=logging.CRITICAL)
@@ -255,24 +261,70 @@ def connect(cluster, n_workers: int | None = None):
     return client, client.close, f"Dask scheduler {client.scheduler.address}", False
 
 
-def split(width: int, height: int, spp: int, start_sample: int, n_tasks: int, bands: int | None = None):
-    """Tasks as (index, (pixel0, pixel1), sample start, sample count), in the fixed order of their sums:
-    sample chunks outer, bands of rows inner, so a partial render has its samples spread over the image.
-    Bands are used only when there are more tasks than a film needs one launch for (big films, many
-    workers): a band returns its share of the film, where a sample chunk returns the whole film."""
-    if bands is None:
-        bands = max(1, min(n_tasks, (width * height) // MIN_BAND_PIXELS, height))
-    bands = max(1, min(int(bands), height))
-    chunks = max(1, min(spp, math.ceil(n_tasks / bands)))
-    rows = [height * j // bands for j in range(bands + 1)]
-    tasks = []
-    for i in range(chunks):
-        s0, s1 = spp * i // chunks, spp * (i + 1) // chunks
-        if s1 == s0:
-            continue
-        for j in range(bands):
-            tasks.append((len(tasks), (rows[j] * width, rows[j + 1] * width), start_sample + s0, s1 - s0))
-    return tasks
+def _bands(width: int, height: int, n: int) -> list[tuple[int, int]]:
+    rows = [height * j // n for j in range(n + 1)]
+    return [(rows[j] * width, rows[j + 1] * width) for j in range(n)]
+
+
+class TaskPlan:
+    """Hands out tasks (index, (pixel0, pixel1), sample start, sample count) in index order: sample chunks
+    outer, bands of rows inner, so a partial render has its samples spread over the whole image; results
+    are added in index order.
+
+    Bands are used only for films of several launches (one band per launch at most): a task returns its
+    band of the film, where a sample chunk of a whole film returns the whole film, so bands keep the bytes
+    sent back per sample small on big films. ``tasks=N`` fixes the split (N tasks, about equal); otherwise
+    chunks start at FIRST_TASK_SPP samples and then grow to about TASK_SECONDS of the measured speed."""
+
+    def __init__(self, width, height, spp, start_sample, threads, tasks=None, bands=None):
+        pixels = width * height
+        if bands is None:
+            bands = min(max(tasks or 4 * threads, 1), max(pixels // MIN_BAND_PIXELS, 1))
+        self.bands = _bands(width, height, max(1, min(int(bands), height)))
+        self.spp, self.start = spp, start_sample
+        self.fixed = None
+        if tasks is not None:
+            chunks = max(1, min(spp, -(-int(tasks) // len(self.bands))))
+            self.fixed = [spp * (i + 1) // chunks - spp * i // chunks for i in range(chunks)]
+        self.done_spp = 0          # samples per pixel handed out in whole chunks
+        self.queue: list = []      # tasks of the current chunk not yet handed out
+        self.issued = self.chunks = 0
+        self.rates: list[float] = []
+
+    def observe(self, pixels: int, count: int, seconds: float) -> None:
+        if seconds > 0:
+            self.rates = (self.rates + [pixels * count / seconds])[-16:]
+
+    def _chunk(self, threads: int) -> int:
+        left = self.spp - self.done_spp
+        if self.fixed is not None:
+            return self.fixed[self.chunks]
+        if not self.rates:
+            c = FIRST_TASK_SPP
+        else:
+            rate = sorted(self.rates)[len(self.rates) // 2]    # pixel-samples per second of one task
+            band = max(p1 - p0 for p0, p1 in self.bands)
+            c = int(TASK_SECONDS * rate / band)
+            # near the end, smaller chunks so that every thread has something to do
+            c = min(c, -(-left * len(self.bands) // max(threads, 1)))
+        return max(1, min(c, left))
+
+    def next(self, threads: int):
+        if not self.queue:
+            if self.done_spp >= self.spp:
+                return None
+            c = self._chunk(threads)
+            s0 = self.start + self.done_spp
+            self.queue = [(p, s0, c) for p in self.bands]
+            self.done_spp += c
+            self.chunks += 1
+        pixels, s0, c = self.queue.pop(0)
+        self.issued += 1
+        return (self.issued - 1, pixels, s0, c)
+
+    @property
+    def exhausted(self) -> bool:
+        return not self.queue and self.done_spp >= self.spp
 
 
 def _payload(scene, files, defines, dialect, say):
@@ -347,7 +399,7 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
     plan = plan if plan != [None] else None
     if files == "ship":
         payload = client.scatter(payload, broadcast=False, hash=False)  # sent once; workers fetch it once
-    todo = split(width, height, spp, start_sample, n_tasks or TASKS_PER_THREAD * threads, bands)
+    plan_tasks = TaskPlan(width, height, spp, start_sample, threads, n_tasks, bands)
     acc = Accumulator(width, height)
     n_pixels = width * height
     bar = None
@@ -360,7 +412,7 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
     failures: dict[int, int] = {}      # task index -> device failures
     bad_workers: set[str] = set()
     held: dict[int, dict] = {}         # finished results waiting for their turn in the fixed order
-    added, next_add, next_submit = [], 0, 0
+    added, next_add = [], 0
     devices, workers_used = set(), set()
     stopped_by = None
     stats = RenderStats()
@@ -384,9 +436,11 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
                 if time_limit is not None and time.perf_counter() - t_start >= time_limit and stopped_by is None:
                     stopped_by = "time limit"
                 window = 2 * max(_threads(client), 1)
-                while stopped_by is None and next_submit < len(todo) and len(pending) < window:
-                    submit(todo[next_submit])
-                    next_submit += 1
+                while stopped_by is None and len(pending) < window:
+                    task = plan_tasks.next(_threads(client))
+                    if task is None:
+                        break
+                    submit(task)
                 if not pending:
                     break
                 try:
@@ -402,6 +456,7 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
                             fail(f"worker {r['worker']} runs clrender {r['version']}, this client "
                                  f"{__version__}: install the same version everywhere")
                         held[r["index"]] = r
+                        plan_tasks.observe(task[1][1] - task[1][0], r["count"], r["seconds"])
                         devices.add(r["device"])
                         workers_used.add(r["worker"])
                         if bar is not None:
@@ -444,14 +499,14 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
     stats.passes = len(added)
     stats.dropped = int(acc.dropped.sum())
     stats.interrupted = stopped_by == "Ctrl-C"
-    complete = len(added) == len(todo)
+    complete = plan_tasks.exhausted and len(added) == plan_tasks.issued
     spp_min = int(acc.count.min()) if n_pixels else 0
     meta = {"spp": spp_min, "spp_max": int(acc.count.max()) if n_pixels else 0, "seed": seed,
             "start_sample": start_sample, "render_seconds": round(stats.seconds, 4),
             "device": "; ".join(sorted(devices)), "integrator": integrator, "version": __version__,
             "interrupted": not complete, "dropped_samples": stats.dropped, "scene_hash": key,
             "dialect": dialect or DEFAULT_DIALECT, "cluster": what, "workers": len(workers_used),
-            "tasks": f"{len(added)}/{len(todo)}", "wall_seconds": round(time.perf_counter() - t_begin, 4)}
+            "tasks": len(added), "bands": len(plan_tasks.bands), "wall_seconds": round(time.perf_counter() - t_begin, 4)}
     if stopped_by:
         meta["stopped_by"] = stopped_by
     film = acc.film(meta)

@@ -86,10 +86,8 @@ def write_part(film: Film, path, scene_hash: str, seed: int, sample_start: int, 
     channels = {"RGB": f32(film.image), "sum_w": f32(film.sum_w),
                 "count": np.ascontiguousarray(np.rint(film.count), np.uint32),
                 "dropped": np.ascontiguousarray(film.dropped, np.uint32)}
-    for name, names in _SUM_CHANNELS.items():
-        arr = getattr(film, name)
-        for i, c in enumerate(names):
-            channels[c] = f32(arr[..., i])
+    for name in _SUM_CHANNELS:  # (H, W, 3) arrays are written as channels NAME.R, NAME.G, NAME.B
+        channels[name] = f32(getattr(film, name))
     return _atomic_write(Path(path), lambda tmp: OpenEXR.File(header, channels).write(str(tmp)))
 
 
@@ -124,8 +122,11 @@ def read_part(path) -> Part:
         raise ClrenderError(f"{path}: not an accumulator EXR (written by `clrender render --sample-range`); "
                             "a plain image holds no sample counts and cannot be merged")
     meta.setdefault("dialect", DEFAULT_DIALECT)  # parts written before the dialect was recorded
-    need = ["sum_w", "count", "dropped"] + [c for names in _SUM_CHANNELS.values() for c in names]
-    missing = [c for c in need if c not in ch]
+    for name, names in _SUM_CHANNELS.items():  # OpenEXR groups NAME.R/G/B into one (H, W, 3) array
+        if name not in ch and all(c in ch for c in names):
+            ch[name] = np.stack([ch[c] for c in names], -1)
+    need = ["sum_w", "count", "dropped"] + list(_SUM_CHANNELS)
+    missing = [c for c in need if c not in ch or (c in _SUM_CHANNELS and ch[c].ndim != 3)]
     if missing:
         raise ClrenderError(f"{path}: accumulator EXR lacks channel(s) {', '.join(missing)}")
     for key in ("seed", "sample_start", "sample_count", "width", "height"):
@@ -136,9 +137,8 @@ def read_part(path) -> Part:
     h, w = ch["sum_w"].shape
     if (w, h) != (meta["width"], meta["height"]):
         raise ClrenderError(f"{path}: the header says {meta['width']}x{meta['height']}, the pixels are {w}x{h}")
-    film = Film(w, h, np.stack([ch[c] for c in _SUM_CHANNELS["sum_wl"]], -1).astype(np.float64),
-                ch["sum_w"].astype(np.float64),
-                np.stack([ch[c] for c in _SUM_CHANNELS["sum_wl2"]], -1).astype(np.float64),
+    film = Film(w, h, ch["sum_wl"].astype(np.float64), ch["sum_w"].astype(np.float64),
+                ch["sum_wl2"].astype(np.float64),
                 ch["count"].astype(np.int64), ch["dropped"].astype(np.int64), dict(meta))
     return Part(path, meta, film)
 
