@@ -398,7 +398,9 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
     plan = device if device is not None else (usable_device_specs() if local else None)
     plan = plan if plan != [None] else None
     if files == "ship":
-        payload = client.scatter(payload, broadcast=False, hash=False)  # sent once; workers fetch it once
+        # On every worker (copied worker to worker), so no single dead worker takes it with it; workers
+        # that join later fetch it from a peer.
+        payload = client.scatter(payload, broadcast=True, hash=False)
     plan_tasks = TaskPlan(width, height, spp, start_sample, threads, n_tasks, bands)
     acc = Accumulator(width, height)
     n_pixels = width * height
