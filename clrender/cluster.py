@@ -241,6 +241,9 @@ def connect(cluster, n_workers: int | None = None):
                                       processes=True, dashboard_address=dashboard,
                                       silence_logs=logging.CRITICAL)
         client = distributed.Client(lc)
+        from .dask_plugins import IgnoreCtrlC
+
+        client.register_plugin(IgnoreCtrlC(), name="clrender-ignore-ctrl-c")
 
         def close():
             client.close()
@@ -447,7 +450,7 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
                     break
                 try:
                     distributed.wait(list(pending), timeout=0.2, return_when="FIRST_COMPLETED")
-                except TimeoutError:
+                except Exception:  # a timeout, or futures cancelled under us (looked at one by one below)
                     pass
                 for f in [f for f in pending if f.done()]:
                     task = pending.pop(f)
@@ -465,6 +468,15 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
                             bar.update(r["count"] * (task[1][1] - task[1][0]))
                         if on_result is not None:
                             on_result(r, client)
+                        continue
+                    if f.status == "cancelled" and not flag.requested:
+                        # not by us: the scheduler forgot it (its workers went away); hand it out again
+                        failures[task[0]] = failures.get(task[0], 0) + 1
+                        if failures[task[0]] >= MAX_DEVICE_FAILURES:
+                            fail(f"task {task[0]} was cancelled by the cluster {failures[task[0]]} times")
+                        submit(task)
+                        continue
+                    if f.status == "cancelled":
                         continue
                     exc = f.exception() if f.status == "error" else None
                     f.release()
