@@ -394,7 +394,7 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
     except TimeoutError:
         raise ClusterError(f"no Dask worker joined {what} within 60 s (start some with `dask worker ADDRESS`)") \
             from None
-    threads = _threads(client)
+    threads, threads_at = _threads(client), time.perf_counter()
     say(f"{what}: {len(client.scheduler_info()['workers'])} workers, {threads} threads")
     link = _dashboard(client)
     say(f"Dask dashboard: {link}" if link else "no Dask dashboard (it needs bokeh: pip install bokeh)")
@@ -440,9 +440,11 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
             while True:
                 if time_limit is not None and time.perf_counter() - t_start >= time_limit and stopped_by is None:
                     stopped_by = "time limit"
-                window = 2 * max(_threads(client), 1)
+                if time.perf_counter() - threads_at > 2.0:   # asking the scheduler costs a round trip
+                    threads, threads_at = _threads(client), time.perf_counter()
+                window = 2 * max(threads, 1)
                 while stopped_by is None and len(pending) < window:
-                    task = plan_tasks.next(_threads(client))
+                    task = plan_tasks.next(threads)
                     if task is None:
                         break
                     submit(task)
