@@ -68,7 +68,6 @@ def main(argv=None):
     import distributed
 
     import clrender
-    from clrender import cluster
     from clrender.renderer import Renderer
 
     os.environ.setdefault("POCL_CACHE_DIR", str(ROOT / ".pocl-cache"))
@@ -81,13 +80,11 @@ def main(argv=None):
     scene = clrender.load_scene(args.scene)
     r = Renderer(scene)
     r.render(spp=1)
-    single, runs = timed(lambda: r.render(spp=args.spp, seed=1), args.repeat)
-    res["single_seconds"], res["single_runs"] = single, runs
     pixels = scene.width * scene.height
-    say(f"one process: {single:.2f} s ({pixels * args.spp / single / 1e6:.2f} M samples/s)")
     big_r = Renderer(clrender.load_scene(big))
     big_r.render(spp=1)
     big_1spp, _ = timed(lambda: big_r.render(spp=1, seed=1), args.repeat)
+    one = lambda: r.render(spp=args.spp, seed=1)  # noqa: E731
 
     for n in args.workers:
         t0 = time.perf_counter()
@@ -98,8 +95,13 @@ def main(argv=None):
             t0 = time.perf_counter()
             clrender.render(args.scene, spp=2, seed=1, cluster=client)          # programs built, scene there
             first = time.perf_counter() - t0
-            wall, walls = timed(lambda: clrender.render(args.scene, spp=args.spp, seed=1, cluster=client),
-                                args.repeat)
+            # interleaved with the one-process render, so both see the same load on this shared machine
+            singles, walls = [], []
+            for _ in range(args.repeat):
+                singles.append(timed(one, 1)[0])
+                walls.append(timed(lambda: clrender.render(args.scene, spp=args.spp, seed=1, cluster=client),
+                                   1)[0])
+            single, wall = statistics.median(singles), statistics.median(walls)
             film = clrender.render(args.scene, spp=args.spp, seed=1, cluster=client)
             clrender.render(str(tiny), spp=4, seed=1, cluster=client, tasks=4)
             per_task, _ = timed(lambda: clrender.render(str(tiny), spp=args.tasks, seed=1, cluster=client,
@@ -116,19 +118,27 @@ def main(argv=None):
         # k tasks on n workers: k/n renders each in parallel; the rest is moving and adding accumulators
         per_big_task = max(big_wall - k / n * big_1spp, 0.0) / k
         row = {"cluster_start_seconds": start, "first_render_seconds": first, "wall_seconds": wall,
-               "wall_runs": walls, "speedup": single / wall, "tasks": film.metadata["tasks"],
+               "wall_runs": walls, "single_seconds": single, "single_runs": singles, "speedup": single / wall,
+               "tasks": film.metadata["tasks"],
                "per_task_seconds": per_task, "per_task_seconds_9mb": per_big_task,
                "bytes_per_second": nbytes / max(per_big_task - per_task, 1e-9)}
         res["local"][n] = row
         say(f"local:{n}: start {start:.2f} s, first render {first:.2f} s, {args.spp} spp in {wall:.2f} s "
-            f"({film.metadata['tasks']} tasks) = {row['speedup']:.2f}x one process; per task "
+            f"({film.metadata['tasks']} tasks), one process {single:.2f} s "
+            f"({pixels * args.spp / single / 1e6:.2f} M samples/s): {row['speedup']:.2f}x; per task "
             f"{per_task * 1e3:.1f} ms (empty), {per_big_task * 1e3:.0f} ms (9.4 MB back) "
             f"-> {row['bytes_per_second'] / 1e6:.0f} MB/s")
     res["loadavg_end"] = os.getloadavg()
     n_best = max(res["local"])
-    res["estimate"] = estimate(res["local"][n_best]["per_task_seconds"], res["local"][n_best]["bytes_per_second"],
-                               args.gpu_samples_per_second)
+    best = res["local"][n_best]
+    res["estimate"] = estimate(best["per_task_seconds"], best["bytes_per_second"], args.gpu_samples_per_second)
     print(format_estimate(res["estimate"]))
+    # the same with one band per GPU (bands=1000 in the API): each task renders all its samples of a thin
+    # band, so the film comes back about once instead of once per sample chunk
+    res["estimate_band_per_gpu"] = estimate(best["per_task_seconds"], best["bytes_per_second"],
+                                            args.gpu_samples_per_second, band_pixels=3840 * 2160 // 1000,
+                                            tasks_per_gpu=1)
+    print("one band per GPU: " + format_estimate(res["estimate_band_per_gpu"]))
     if args.json:
         Path(args.json).write_text(json.dumps(res, indent=1, default=float))
         say(f"wrote {args.json}")

@@ -23,7 +23,6 @@ other workers.
 """
 from __future__ import annotations
 
-import math
 import os
 import threading
 import time
@@ -195,9 +194,9 @@ def usable_device_specs() -> list[str]:
 
     devices = list_devices()
     try:
-        p_def, d_def = choose_device(None)
+        d_def = choose_device(None)[1]
     except ClrenderError:
-        p_def = d_def = None
+        d_def = None
     specs = []
     for i, (p, d) in enumerate(devices):
         if d_def is not None and d.int_ptr == d_def.int_ptr:
