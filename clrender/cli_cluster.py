@@ -18,7 +18,8 @@ def add_render_arguments(r) -> None:
     g.add_argument("--scene-files", choices=("ship", "shared"), default="ship",
                    help="with --cluster: ship the packed scene to the workers (default), or let each worker "
                         "load it from this path on a shared filesystem")
-    g.add_argument("--tasks", type=int, metavar="N", help="with --cluster: number of tasks (default 4 per worker)")
+    g.add_argument("--tasks", type=int, metavar="N",
+                   help="with --cluster: a fixed number of tasks (default: sized to about 2 s each)")
     g.add_argument("--sample-range", metavar="START:COUNT",
                    help="render samples START..START+COUNT-1 of every pixel and write an accumulator EXR "
                         "for `clrender merge` (farm mode)")

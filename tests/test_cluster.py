@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import clrender
-from clrender import cluster
+from clrender import cluster, cluster_worker
 from clrender.renderer import Renderer
 from cluster_scene import write_scene
 
@@ -105,11 +105,11 @@ def test_failing_device_is_reported_by_name_and_its_task_moves(client, small):
 
     def break_device():
         os.environ["CLRENDER_DEVICE"] = "no-such-device-xyz"
-        cluster._CACHE.clear()
+        cluster_worker._CACHE.clear()
 
     def repair():
         os.environ.pop("CLRENDER_DEVICE", None)
-        cluster._CACHE.clear()
+        cluster_worker._CACHE.clear()
 
     client.run(break_device, workers=[victim])
     try:
@@ -209,3 +209,14 @@ def test_ctrl_c_on_the_command_line_with_a_local_cluster(tmp_path):
     p = read_part(out)   # an accumulator EXR: the per-pixel counts of the finished tasks
     assert 0 < int(p.film.count.min()) < 10**6
     assert "partial: Ctrl-C" in err and "Dask dashboard" in seen
+
+
+def test_shared_scene_files_that_differ_on_a_worker_are_refused(client, small):
+    """A worker reading other files than the client's (a stale copy on its filesystem) must not render."""
+    from clrender.scenesource import SceneSource
+
+    path = small[0]
+    stale = cluster_worker.SharedScene("0" * 32, SceneSource(str(path)))
+    f = client.submit(cluster_worker.render_task, stale, 0, (0, 40 * 30), 0, 1, SEED, None, pure=False)
+    with pytest.raises(cluster_worker.TaskFailed, match="differ from the client's"):
+        f.result()
