@@ -5,6 +5,7 @@
     film = clrender.render(scene, spp=64, seed=0)      # PoCL CPU by default; device="gpu" or an index
     film.image            # (H, W, 3) float32 linear radiance
     film.write_exr("cornell.exr"); film.write_png("cornell.png")
+    film = clrender.render(scene, spp=1024, cluster="local:4")   # on Dask (clrender[cluster]): cluster.py
 """
 __version__ = "0.1.0"
 
@@ -19,8 +20,19 @@ def load_scene(path, nori_dialect=None, **defines):
     return _load(path, nori_dialect=nori_dialect, **defines)
 
 
-def render(scene, spp=None, seed=0, device=None, time_limit=None, progress=False):
-    """Render a loaded scene on an OpenCL device and return its Film."""
+def render(scene, spp=None, seed=0, device=None, time_limit=None, progress=False, cluster=None, **cluster_options):
+    """Render a loaded scene on an OpenCL device and return its Film.
+
+    With ``cluster=`` (a ``distributed.Client``, ``"local[:N]"``, ``"tcp://HOST:PORT"`` or a scheduler file)
+    the samples are rendered by Dask workers; ``scene`` may then also be the XML path, and
+    ``cluster_options`` are those of :func:`clrender.cluster.render` (files=, defines=, tasks=, ...)."""
+    if cluster is not None:
+        from .cluster import render as _cluster_render
+
+        return _cluster_render(scene, spp=spp, seed=seed, cluster=cluster, device=device,
+                               time_limit=time_limit, progress=progress, **cluster_options)
+    if cluster_options:
+        raise TypeError(f"{', '.join(cluster_options)}: options of cluster renders only (pass cluster=)")
     from .renderer import render as _render
 
     return _render(scene, spp=spp, seed=seed, device=device, time_limit=time_limit, progress=progress)

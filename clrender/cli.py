@@ -1,4 +1,4 @@
-"""Command line: `clrender render | devices | bench` (a thin wrapper over the Python API)."""
+"""Command line: `clrender render | devices | bench | merge` (a thin wrapper over the Python API)."""
 from __future__ import annotations
 
 import argparse
@@ -37,6 +37,10 @@ def cmd_render(args) -> int:
     from .output import output_paths
     from .renderer import Interrupted, Renderer
 
+    if args.cluster or args.sample_range:
+        from .cli_cluster import cmd_render_distributed
+
+        return cmd_render_distributed(args, _defines(args.define))
     t0 = time.perf_counter()
     out, png = output_paths(args.output, args.scene)  # before any work: an unwritable -o fails now
     scene = load_scene(args.scene, nori_dialect=args.nori_dialect, **_defines(args.define))
@@ -169,12 +173,16 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--progress", action="store_true",
                    help="show the progress bar even when stderr is not a terminal (e.g. a log file)")
     add_dialect_option(r)
+    from .cli_cluster import add_merge_parser, add_render_arguments
+
+    add_render_arguments(r)
     r.set_defaults(func=cmd_render)
     d = sub.add_parser("devices", help="list OpenCL platforms and devices")
     d.set_defaults(func=cmd_devices)
     from .cli_tests import add_parsers
 
     add_parsers(sub)
+    add_merge_parser(sub)
     b = sub.add_parser("bench", help="benchmark scenes on OpenCL devices (or --compare two results)",
                        description="Measure build, load, BVH, render speed (samples/s, rays/s), memory and, "
                                    "with --reference, convergence, per scene and device. Without SCENE: the "

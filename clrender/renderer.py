@@ -135,8 +135,11 @@ class Renderer:
         return int(fixed + per_pixel * self.n_pixels + (0 if self.count_rays else 16))
 
     def render(self, spp: int | None = None, seed: int = 0, time_limit: float | None = None,
-               progress: bool = False, on_pass=None, start_sample: int = 0) -> Film:
-        """Render `spp` samples per pixel (default: the scene's sampler), numbered from `start_sample`."""
+               progress: bool = False, on_pass=None, start_sample: int = 0, pixels=None) -> Film:
+        """Render `spp` samples per pixel (default: the scene's sampler), numbered from `start_sample`.
+
+        ``pixels=(first, stop)`` renders only that range of pixel indices (row-major; a band of rows for a
+        cluster task): the Film is full-size with zeros elsewhere."""
         import pyopencl as cl
 
         spp = int(spp if spp is not None else self.scene.sample_count)
@@ -147,6 +150,9 @@ class Renderer:
         if time_limit is not None and not (time_limit > 0 and np.isfinite(time_limit)):
             raise ValueError(f"time_limit must be a positive finite number of seconds, got {time_limit}")
         n = self.n_pixels
+        p0, p1 = (0, n) if pixels is None else (int(pixels[0]), int(pixels[1]))
+        if not 0 <= p0 < p1 <= n:
+            raise ValueError(f"pixel range {p0}:{p1} is not inside 0:{n}")
         acc0 = np.zeros((n, 4), np.float32)
         acc1 = np.zeros((n, 4), np.float32)
         bad = np.zeros(n, np.uint32)
@@ -185,8 +191,8 @@ class Renderer:
                 while done < spp:
                     batch = min(per_pass, spp - done)
                     t0 = time.perf_counter()
-                    for off in range(0, n, self.launch_pixels):
-                        cnt = min(self.launch_pixels, n - off)
+                    for off in range(p0, p1, self.launch_pixels):
+                        cnt = min(self.launch_pixels, p1 - off)
                         args.set(pixel_offset=np.uint32(off), pixel_count=np.uint32(cnt),
                                  sample_offset=np.uint32(start_sample + done), spp=np.uint32(batch),
                                  seed=np.uint32(seed & 0xFFFFFFFF))
@@ -203,7 +209,7 @@ class Renderer:
                     if flag.requested:
                         stats.interrupted = True
                         break
-                    launches = -(-n // self.launch_pixels)
+                    launches = -(-(p1 - p0) // self.launch_pixels)
                     per_launch = dt / max(launches, 1) / batch  # seconds per sample per launch
                     per_pass = max(1, int(TARGET_LAUNCH_SECONDS / max(per_launch, 1e-9)))
                     if time_limit is not None:
@@ -217,13 +223,14 @@ class Renderer:
                 if bar is not None:
                     bar.close()
         stats.seconds = time.perf_counter() - t_start
-        cl.enqueue_copy(self.queue, acc0, d_acc0)
-        cl.enqueue_copy(self.queue, acc1, d_acc1)
-        cl.enqueue_copy(self.queue, bad, d_bad)
+        # Only the rendered range: a band of a 4K film need not download the whole film.
+        cl.enqueue_copy(self.queue, acc0[p0:p1], d_acc0, src_offset=p0 * acc0.itemsize * 4)
+        cl.enqueue_copy(self.queue, acc1[p0:p1], d_acc1, src_offset=p0 * acc1.itemsize * 4)
+        cl.enqueue_copy(self.queue, bad[p0:p1], d_bad, src_offset=p0 * bad.itemsize)
         if self.count_rays:
             cl.enqueue_copy(self.queue, rays, d_rays)
         self.queue.finish()
-        stats.samples = done * n
+        stats.samples = done * (p1 - p0)
         stats.dropped = int(bad.sum())
         meta = {
             "spp": done, "seed": seed, "render_seconds": round(stats.seconds, 4), "device": self.device_name,
