@@ -7,59 +7,103 @@
    max_depth (SceneInfo) limits the number of path segments (1 = emitters seen directly), default none. */
 #include "lighting.h"
 
-INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
-    float3 L = (float3)(0.0f);
-    float3 beta = (float3)(1.0f);
-    float eta = 1.0f;
-    bool after_delta = true;   /* the camera ray counts as "delta": nothing else can find what it sees */
-    float prev_pdf = 0.0f;     /* solid-angle pdf of the BSDF sample that made this ray */
-    float3 prev_p = ray.o;
-    uint max_depth = sd->info->max_depth, rr_depth = sd->info->rr_depth;
-    for (uint depth = 0u;; ++depth) {
-        Intersection its;
-        bool hit = scene_intersect(sd, &ray, &its);
-        /* Emission reached by this ray. */
-        float3 le = hit ? hit_emission(sd, &its, ray.d) : escaped(sd, ray.d);
-        if (!is_black(le)) {
-            float w;
-            if (after_delta) w = 1.0f;
-#if defined(PATH_USE_MATS) && defined(PATH_USE_EMS)
-            else w = mis_balance(prev_pdf, hit ? hit_emitter_pdf(sd, prev_p, &its) : scene_environment_pdf(sd, ray.d));
-#elif defined(PATH_USE_MATS)
-            else w = 1.0f;
-#else
-            else w = 0.0f;
-#endif
-            L += beta * le * w;
-        }
-        if (!hit || depth + 1u >= max_depth) break;
+/* The state of one path between its stages. The megakernel below runs the stages in a loop per work-item (the
+   right shape for PoCL); a wavefront driver for GPUs can keep PathStates in a buffer and run each stage as its
+   own kernel over the paths that need it, with the same stage functions. */
+typedef struct {
+    Ray ray;            /* the segment to trace next */
+    float3 L;           /* radiance gathered so far */
+    float3 beta;        /* path throughput */
+    float eta;          /* product of the relative IORs crossed (Russian roulette uses beta * eta^2) */
+    float prev_pdf;     /* solid-angle pdf of the BSDF sample that made `ray` */
+    float3 prev_p;      /* where `ray` starts */
+    uint depth;         /* segments traced so far */
+    bool after_delta;   /* `ray` left a delta BSDF (or is the camera ray): only BSDF sampling finds its emission */
+    bool alive;
+} PathState;
 
-        __global const Bsdf* b = bsdf_at(sd, &its);
-        bool delta = bsdf_is_delta(b);
-        float3 wi = to_local(&its.sh, -ray.d);
-#if defined(PATH_USE_EMS)
-        if (!delta && depth + 2u <= max_depth) {
-#if defined(PATH_USE_MATS)
-            L += beta * sample_light(sd, &its, b, wi, smp, true);
+/* Stage 0: a camera ray. */
+INLINE void path_begin(PathState* ps, Ray ray) {
+    ps->ray = ray;
+    ps->L = (float3)(0.0f);
+    ps->beta = (float3)(1.0f);
+    ps->eta = 1.0f;
+    ps->prev_pdf = 0.0f;
+    ps->prev_p = ray.o;
+    ps->depth = 0u;
+    ps->after_delta = true;   /* the camera ray counts as "delta": nothing else can find what it sees */
+    ps->alive = true;
+}
+
+/* Stage 1: trace the segment and add the emission it reaches, MIS-weighted against emitter sampling at the
+   previous vertex. Returns whether it hit a surface (the path ends otherwise, or at max_depth). */
+INLINE bool path_intersect(const SceneData* sd, PathState* ps, Intersection* its) {
+    bool hit = scene_intersect(sd, &ps->ray, its);
+    float3 le = hit ? hit_emission(sd, its, ps->ray.d) : escaped(sd, ps->ray.d);
+    if (!is_black(le)) {
+        float w;
+        if (ps->after_delta) w = 1.0f;
+#if defined(PATH_USE_MATS) && defined(PATH_USE_EMS)
+        else w = mis_balance(ps->prev_pdf, hit ? hit_emitter_pdf(sd, ps->prev_p, its)
+                                               : scene_environment_pdf(sd, ps->ray.d));
+#elif defined(PATH_USE_MATS)
+        else w = 1.0f;
 #else
-            L += beta * sample_light(sd, &its, b, wi, smp, false);
+        else w = 0.0f;
 #endif
-        }
-#endif
-        if (depth >= rr_depth) {
-            float q = minf(max3(beta) * eta * eta, 0.99f);
-            if (!(next1d(smp) < q)) break;
-            beta /= q;
-        }
-        BsdfQuery bq = bsdf_query(&its, -ray.d);
-        float3 w = bsdf_sample(b, &bq, next2d(smp));
-        if (is_black(w)) break;
-        beta *= w;
-        eta *= bq.eta;
-        after_delta = bq.measure == MEASURE_DISCRETE;
-        prev_pdf = after_delta ? 0.0f : bsdf_pdf(b, &bq);
-        prev_p = its.p;
-        ray = spawn_ray_from(&its, to_world(&its.sh, bq.wo));
+        ps->L += ps->beta * le * w;
     }
-    return L;
+    if (!hit || ps->depth + 1u >= sd->info->max_depth) ps->alive = false;
+    return ps->alive;
+}
+
+/* Stage 2: emitter sampling at a non-delta vertex (path_ems, path_mis). */
+INLINE void path_sample_lights(const SceneData* sd, PathState* ps, const Intersection* its, __global const Bsdf* b,
+                               Sampler* smp) {
+#if defined(PATH_USE_EMS)
+    if (!bsdf_is_delta(b) && ps->depth + 2u <= sd->info->max_depth) {
+        float3 wi = to_local(&its->sh, -ps->ray.d);
+#if defined(PATH_USE_MATS)
+        ps->L += ps->beta * sample_light(sd, its, b, wi, smp, true);
+#else
+        ps->L += ps->beta * sample_light(sd, its, b, wi, smp, false);
+#endif
+    }
+#endif
+}
+
+/* Stage 3: Russian roulette as Nori's, then the BSDF sample that makes the next segment. */
+INLINE void path_continue(const SceneData* sd, PathState* ps, const Intersection* its, __global const Bsdf* b,
+                          Sampler* smp) {
+    if (ps->depth >= sd->info->rr_depth) {
+        float q = minf(max3(ps->beta) * ps->eta * ps->eta, 0.99f);
+        if (!(next1d(smp) < q)) { ps->alive = false; return; }
+        ps->beta /= q;
+    }
+    BsdfQuery bq = bsdf_query(its, -ps->ray.d);
+    float3 w = bsdf_sample(b, &bq, next2d(smp));
+    if (is_black(w)) { ps->alive = false; return; }
+    ps->beta *= w;
+    ps->eta *= bq.eta;
+    ps->after_delta = bq.measure == MEASURE_DISCRETE;
+    ps->prev_pdf = ps->after_delta ? 0.0f : bsdf_pdf(b, &bq);
+    ps->prev_p = its->p;
+    ps->ray = spawn_ray_from(its, to_world(&its->sh, bq.wo));
+    ps->depth += 1u;
+}
+
+/* The megakernel: the stages in a loop. The random numbers are drawn in the same order as before the stages
+   were split out (emitter sample, roulette, BSDF sample per vertex), so images are unchanged. */
+INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
+    PathState ps;
+    path_begin(&ps, ray);
+    for (;;) {
+        Intersection its;
+        if (!path_intersect(sd, &ps, &its)) break;
+        __global const Bsdf* b = bsdf_at(sd, &its);
+        path_sample_lights(sd, &ps, &its, b, smp);
+        path_continue(sd, &ps, &its, b, smp);
+        if (!ps.alive) break;
+    }
+    return ps.L;
 }
