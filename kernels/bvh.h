@@ -15,9 +15,6 @@
 #ifndef CLRENDER_BVH_H
 #define CLRENDER_BVH_H
 
-#ifndef BVH_STACK_SIZE
-#define BVH_STACK_SIZE 64   /* the builder keeps the tree depth below this */
-#endif
 #include "bvh_common.h"
 
 /* Slab test of one child box: is [entry, exit] non-empty within (tmin, tmax)? The exit distance is widened

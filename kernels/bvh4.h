@@ -14,13 +14,9 @@
 #ifndef CLRENDER_BVH4_H
 #define CLRENDER_BVH4_H
 
-#ifndef BVH4_STACK_SIZE
-#define BVH4_STACK_SIZE 64   /* KERNEL_STACK_SIZE in clrender/accel/bvh4.py */
-#endif
 #include "bvh_common.h"
 
-#define BVH4_COUNT_SHIFT 27
-#define BVH4_FIRST_MASK 0x07ffffffu
+#define BVH4_FIRST_MASK ((1u << BVH4_COUNT_SHIFT) - 1u)
 
 BVH_INLINE float4 bvh4_min(float4 a, float4 b) { return a < b ? a : b; }
 BVH_INLINE float4 bvh4_max(float4 a, float4 b) { return a > b ? a : b; }
@@ -79,7 +75,7 @@ BVH_INLINE bool bvh4_traverse(__global const float4* nodes, __global const float
                 continue;
             }
         } else {
-            if (bvh_isect_leaf(prims, cur & BVH4_FIRST_MASK, ((cur >> BVH4_COUNT_SHIFT) & 15u) + 1u, &ray, tmin,
+            if (bvh_isect_leaf(prims, cur & BVH4_FIRST_MASK, ((cur >> BVH4_COUNT_SHIFT) & (BVH4_MAX_LEAF_COUNT - 1u)) + 1u, &ray, tmin,
                                hit, any_hit)) {
                 found = true;
                 if (any_hit) return true;

@@ -10,8 +10,8 @@
 #ifndef CLRENDER_BVH_COMMON_H
 #define CLRENDER_BVH_COMMON_H
 
-#define BVH_LEAF_BIT 0x80000000u
-#define BVH_SPHERE_BIT 0x80000000u
+/* BVH_LEAF_BIT, BVH_SPHERE_BIT, BVH_STACK_SIZE, BVH4_STACK_SIZE, BVH4_COUNT_SHIFT, BVH4_MAX_LEAF_COUNT: generated
+   from clrender/device/layout.py ENUMS, which the host's builders read too. */
 #define BVH_INLINE static inline __attribute__((always_inline))
 
 typedef struct {

@@ -58,15 +58,14 @@ typedef struct {
    alone leaves a point on a 90-degree concave edge on the neighbouring wall's plane. */
 #define SPAWN_OFFSET 3.814697265625e-06f   /* 64 * 2^-24 */
 
-#define SPHERE_FLAG 0x80000000u
 
 INLINE bool scene_intersect(const SceneData* sd, const Ray* r, Intersection* its) {
     Hit h;
     COUNT_RAY(sd, n_closest);
     if (!bvh_closest_hit(sd->nodes, sd->prims, r->o, r->d, r->tmin, r->tmax, &h)) return false;
     its->t = h.t;
-    if (h.prim & SPHERE_FLAG) {
-        uint j = h.prim & ~SPHERE_FLAG;
+    if (h.prim & BVH_SPHERE_BIT) {
+        uint j = h.prim & ~BVH_SPHERE_BIT;
         float4 s = sd->spheres[j];
         float3 p = r->o + r->d * h.t;
         float3 n = normalize3(p - s.xyz);

@@ -181,7 +181,7 @@ def make_tracer(ctx, width):
     from clrender.device.program import build_program
 
     src = TRACE_SRC if width == 2 else TRACE_SRC.replace('#include "bvh.h"', '#include "bvh4.h"')
-    return Tracer(cl.Kernel(build_program(ctx, src, with_types=False), "trace"), width)
+    return Tracer(cl.Kernel(build_program(ctx, src), "trace"), width)
 
 
 @pytest.fixture(scope="module", params=[2, 4], ids=["bvh2", "bvh4"])

@@ -57,10 +57,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-LEAF_FLAG = 0x80000000
+from ..device.layout import ENUMS
+
+LEAF_FLAG = ENUMS["BVH_LEAF_BIT"]
 SAH_SAMPLES = 1024
 DP_MAX = 4
-KERNEL_STACK_SIZE = 64
+KERNEL_STACK_SIZE = ENUMS["BVH_STACK_SIZE"]
 
 
 @dataclass

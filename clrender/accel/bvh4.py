@@ -37,12 +37,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..device.layout import ENUMS
+
 from .bvh import LEAF_FLAG, BVH
 
 NODE_ROWS = 8                 # float4 rows per 4-wide node
-KERNEL_STACK_SIZE = 64        # BVH4_STACK_SIZE in kernels/bvh4.h
-COUNT_SHIFT = 27
-MAX_LEAF_COUNT = 16
+KERNEL_STACK_SIZE = ENUMS["BVH4_STACK_SIZE"]   # one source with kernels/bvh4.h (clrender/device/layout.py)
+COUNT_SHIFT = ENUMS["BVH4_COUNT_SHIFT"]
+MAX_LEAF_COUNT = ENUMS["BVH4_MAX_LEAF_COUNT"]
 MAX_FIRST = 1 << COUNT_SHIFT
 EMPTY_LO = np.float32(1e30)
 EMPTY_HI = np.float32(-1e30)

@@ -19,7 +19,9 @@ from __future__ import annotations
 
 import numpy as np
 
-SPHERE_FLAG = np.uint32(0x80000000)
+from ..device.layout import ENUMS
+
+SPHERE_FLAG = np.uint32(ENUMS["BVH_SPHERE_BIT"])
 
 
 def _as3(a, name):

@@ -57,6 +57,13 @@ UNION_STRUCTS = ("Camera", "Bsdf", "Emitter", "SceneInfo")
 # Type tags and flag bits, shared the same way (emitted as #defines).
 ENUMS: dict[str, int] = {
     "SHAPE_HAS_NORMALS": 1, "SHAPE_HAS_UVS": 2, "SHAPE_SPHERE": 4,
+    # BVH encodings shared by the builders (clrender/accel) and the traversals (kernels/bvh*.h)
+    "BVH_LEAF_BIT": 0x80000000,       # a node reference to a leaf
+    "BVH_SPHERE_BIT": 0x80000000,     # a primitive id of an analytic sphere
+    "BVH_STACK_SIZE": 64,             # 2-wide traversal stack (the builder keeps the depth below it)
+    "BVH4_STACK_SIZE": 64,            # 4-wide traversal stack (the collapse checks the tree needs no more)
+    "BVH4_COUNT_SHIFT": 27,           # 4-wide leaf reference: LEAF_BIT | (count - 1) << 27 | first
+    "BVH4_MAX_LEAF_COUNT": 16,
     "TEXTURE_NONE": 0, "TEXTURE_CHECKERBOARD": 1, "TEXTURE_UV": 2,
 }
 
