@@ -34,17 +34,30 @@ def wait_for(queue) -> None:
         delay = min(delay * 2, POLL_SECONDS)
 
 
-class CtrlC:
-    """Context manager: SIGINT raises KeyboardInterrupt and is remembered in `pressed`."""
+class SigintHandler:
+    """Context manager installing `_handle` for SIGINT (main thread only) and restoring the old handler."""
 
-    def __init__(self):
-        self.pressed = 0
-        self._old = None
+    _old = None
 
     def __enter__(self):
         if threading.current_thread() is threading.main_thread():
             self._old = signal.signal(signal.SIGINT, self._handle)
         return self
+
+    def __exit__(self, *exc):
+        if self._old is not None:
+            signal.signal(signal.SIGINT, self._old)
+        return False
+
+    def _handle(self, signum, frame):
+        raise NotImplementedError
+
+
+class CtrlC(SigintHandler):
+    """SIGINT raises KeyboardInterrupt and is remembered in `pressed`."""
+
+    def __init__(self):
+        self.pressed = 0
 
     def _handle(self, signum, frame):
         self.pressed += 1
@@ -54,8 +67,3 @@ class CtrlC:
         """Raise KeyboardInterrupt if Ctrl-C was pressed, even if someone swallowed the first one."""
         if self.pressed:
             raise KeyboardInterrupt
-
-    def __exit__(self, *exc):
-        if self._old is not None:
-            signal.signal(signal.SIGINT, self._old)
-        return False

@@ -8,19 +8,17 @@ clFinish, so Python's signal handler runs while the device works).
 """
 from __future__ import annotations
 
-import signal
-import threading
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from . import __version__
-from .device.context import describe, get_context
+from .device.context import get_context
 from .device.kernelargs import KernelArgs
 from .device.program import build_program
 from .film import Film
-from .interrupt import wait_for
+from .interrupt import SigintHandler, wait_for
 from .memcheck import check_film_fits
 from .pack import DEFAULT_BVH_WIDTH, pack_scene
 
@@ -60,27 +58,16 @@ class RenderStats:
         return None if self.rays is None else int(sum(self.rays))
 
 
-class _SigintFlag:
+class _SigintFlag(SigintHandler):
     """First Ctrl-C: ask the loop to stop after the pass in flight. Second: abort."""
 
     def __init__(self):
         self.requested = False
-        self._old = None
-
-    def __enter__(self):
-        if threading.current_thread() is threading.main_thread():
-            self._old = signal.signal(signal.SIGINT, self._handle)
-        return self
 
     def _handle(self, signum, frame):
         if self.requested:
             raise Interrupted("aborted by a second Ctrl-C")
         self.requested = True
-
-    def __exit__(self, *exc):
-        if self._old is not None:
-            signal.signal(signal.SIGINT, self._old)
-        return False
 
 
 class Renderer:
