@@ -18,6 +18,7 @@ from .accel.primitives import pack_primitives, primitive_bounds
 from .device import dispatch, layout
 from .device.layout import ENUMS, NONE
 from .filters.filter import with_guide
+from .textures.texture import TextureTable
 
 log = logging.getLogger("clrender")
 
@@ -94,11 +95,12 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     spheres, sphere_shape = [], []
     n_vert = 0
     n_tri = 0
+    textures = TextureTable()
     for i, sh in enumerate(shapes):
         key = id(sh.bsdf)
         if key not in bsdf_index:
             bsdf_index[key] = len(bsdf_rows)
-            bsdf_rows.append(sh.bsdf.pack())
+            bsdf_rows.append(sh.bsdf.pack(textures))
         row = shape_rows[i]
         row["bsdf"] = bsdf_index[key]
         row["emitter"] = NONE
@@ -195,5 +197,5 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
         normals=_nonempty(normals), uvs=_nonempty(uvs), tri_index=_nonempty(tri_index),
         spheres=_nonempty(sph), sphere_shape=_nonempty(np.asarray(sphere_shape, np.uint32)),
         shapes=_nonempty(shape_rows), bsdfs=np.array(bsdf_rows, layout.dtype("Bsdf")) if bsdf_rows
-        else layout.zeros("Bsdf"), emitters=emitters, emitter_cdf=cdf, infinite=_nonempty(infinite), info=info)
+        else layout.zeros("Bsdf"), emitters=emitters, emitter_cdf=cdf, textures=textures.array(), infinite=_nonempty(infinite), info=info)
     return SceneBuffers(tables=tables, camera=camera, filter_cdf=filter_cdf, stats=stats, bvh_width=bvh_width)

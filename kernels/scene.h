@@ -76,7 +76,7 @@ INLINE bool scene_intersect(const SceneData* sd, const Ray* r, Intersection* its
         its->sh = frame_from_normal(n);
         uint shape = sd->sphere_shape[j];
         /* Only textures read uv; atan2 and acos cost more than the rest of a sphere hit. */
-        if (sd->bsdfs[sd->shapes[shape].bsdf].texture != TEXTURE_NONE) {
+        if (sd->bsdfs[sd->shapes[shape].bsdf].flags & BSDF_UV) {
             float u = atan2(n.y, n.x) * INV_TWOPI;
             its->uv = (float2)(u < 0.0f ? u + 1.0f : u, acos(clampf(n.z, -1.0f, 1.0f)) * INV_PI);
         } else {

@@ -9,7 +9,7 @@ import pytest
 from scipy import stats
 
 from clrender import plugins  # noqa: F401  (registers the plugins)
-from clrender.device.layout import ENUMS
+from clrender.device.dispatch import flag_defines, tag_of
 from clrender.errors import SceneError
 from clrender.scene.registry import create
 from clrender.scene.xmlparser import parse_string
@@ -420,7 +420,9 @@ def _bsdf_from(xml):
 def test_checkerboard_texture(ctx, queue):
     bsdf = _bsdf_from(CHECKER_XML.format(kind="diffuse", name="albedo", extra=""))
     row = bsdf.pack()
-    assert row["texture"] == ENUMS["TEXTURE_CHECKERBOARD"]
+    assert row["flags"] & flag_defines()["BSDF_UV"] and row["diffuse"]["albedo_tex"] == 0
+    tex = bsdf.textures_table
+    assert len(tex) == 1 and tex[0]["type"] == tag_of(type(bsdf.texture))
     rng = np.random.default_rng(9)
     uv = rng.uniform(-2, 2, (4000, 2))
     # stay away from the cell edges, where float32 and float64 may disagree
@@ -429,15 +431,15 @@ def test_checkerboard_texture(ctx, queue):
     ref = bsdf.texture.eval(uv)
     assert 0.3 < np.mean(ref[:, 0] == 0.8) < 0.7
     pdf, f, alb = bsdf_pdf_eval_batch(ctx, queue, row, (0, 0, 1), np.tile([0.0, 0.0, 1.0], (len(uv), 1)), uv=uv,
-                                      with_albedo=True)
+                                      with_albedo=True, textures=tex)
     np.testing.assert_allclose(alb, ref, rtol=1e-6)
     np.testing.assert_allclose(f, ref / np.pi, rtol=1e-6)
-    s = bsdf_sample_batch(ctx, queue, row, (0, 0, 1), len(uv), 3, uv=uv)
+    s = bsdf_sample_batch(ctx, queue, row, (0, 0, 1), len(uv), 3, uv=uv, textures=tex)
     np.testing.assert_allclose(s.weight, ref, rtol=1e-6)
     # a few hand-checked points: cell (0,0) is value1, its neighbours value2
     pts = np.array([[0.1, 0.0], [0.35, 0.0], [0.1, 0.45], [0.35, 0.45], [-0.1, 0.0]])
     _, _, alb = bsdf_pdf_eval_batch(ctx, queue, row, (0, 0, 1), np.tile([0.0, 0.0, 1.0], (5, 1)), uv=pts,
-                                    with_albedo=True)
+                                    with_albedo=True, textures=tex)
     v1, v2 = [0.8, 0.1, 0.1], [0.1, 0.2, 0.7]
     np.testing.assert_allclose(alb, [v1, v2, v2, v1, v2], rtol=1e-6)
 
@@ -445,9 +447,10 @@ def test_checkerboard_texture(ctx, queue):
 def test_checkerboard_on_microfacet(ctx, queue):
     bsdf = _bsdf_from(CHECKER_XML.format(kind="microfacet", name="kd", extra=""))
     row = bsdf.pack()
+    tex = bsdf.textures_table
     assert abs(row["microfacet"]["ks"] - (1 - 0.8)) < 1e-6
     _, _, alb = bsdf_pdf_eval_batch(ctx, queue, row, (0, 0, 1), [[0, 0, 1], [0, 0, 1]],
-                                    uv=np.array([[0.1, 0.0], [0.35, 0.0]]), with_albedo=True)
+                                    uv=np.array([[0.1, 0.0], [0.35, 0.0]]), with_albedo=True, textures=tex)
     np.testing.assert_allclose(alb, [[0.8, 0.1, 0.1], [0.1, 0.2, 0.7]], rtol=1e-6)
 
 

@@ -29,9 +29,10 @@ class Tinted(Bsdf):
         self.albedo = nonnegative_color(props, "albedo", np.full(3, 0.5))
         self.tint = props.get_float("tint", 1.0)
 
-    def fill(self, p, row):
+    def fill(self, p, row, textures):
         p["albedo"][:3] = self.albedo
         p["tint"] = self.tint
+        return False
 
 
 class Skydome(Emitter):

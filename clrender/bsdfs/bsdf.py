@@ -2,8 +2,9 @@
 
 A plugin declares its kernel half (`kernel`, whose functions kernels/bsdf.h reaches through the generated
 switch), its parameter struct (`PARAMS`), its capabilities (`FLAGS`: DELTA, DIFFUSE, GLOSSY) and the methods its
-header defines (`METHODS`; `sample` is required); see clrender/device/dispatch.py. `fill(p, row)` writes its
-parameters into `p` (= row[prefix], the plugin's member of the row's union).
+header defines (`METHODS`; `sample` is required); see clrender/device/dispatch.py. `fill(p, row, textures)` writes
+its parameters into `p` (= row[prefix], the plugin's member of the row's union); a colour parameter declared
+("name", "texture") is filled by clrender.textures.texture.param, which adds its texture to `textures`.
 """
 from __future__ import annotations
 
@@ -25,13 +26,23 @@ class Bsdf:
         super().__init_subclass__(**kw)
         cls.is_delta = "DELTA" in cls.FLAGS
 
-    def pack(self) -> np.void:
+    def pack(self, textures=None) -> np.void:
+        """The Bsdf row; texture parameters go to `textures` (a TextureTable; by default the plugin's own, left
+        in `self.textures_table` as an array for tests that run a lone BSDF)."""
+        from ..textures.texture import TextureTable
+
         cls = type(self)
+        own = textures is None
+        table = TextureTable() if own else textures
         row = layout.zeros("Bsdf")[0]
         row["type"] = dispatch.tag_of(cls)
-        row["flags"] = dispatch.flags_of(cls)
-        self.fill(row[dispatch.member_of(cls)] if cls.PARAMS else None, row)
+        uses_uv = self.fill(row[dispatch.member_of(cls)] if cls.PARAMS else None, row, table)
+        row["flags"] = dispatch.flags_of(cls) | (dispatch.flag_defines()["BSDF_UV"] if uses_uv else 0)
+        if own:
+            self.textures_table = table.array()
         return row
 
-    def fill(self, p, row) -> None:
-        """Write the plugin's parameters into its member `p` of the row's union (`row`: header fields)."""
+    def fill(self, p, row, textures) -> bool:
+        """Write the plugin's parameters into its member `p` of the row's union (`row`: header fields); return
+        whether a parameter reads a texture over the surface (the kernels then compute uv)."""
+        return False

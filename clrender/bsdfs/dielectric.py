@@ -24,5 +24,5 @@ class Dielectric(Bsdf):
     def __init__(self, props, children, spec):
         self.int_ior, self.ext_ior = read_iors(props)
 
-    def fill(self, p, row):
+    def fill(self, p, row, textures):
         p["int_ior"], p["ext_ior"] = self.int_ior, self.ext_ior

@@ -6,21 +6,21 @@
 </bsdf>
 ```
 ETH variant: a nested `<texture type="checkerboard_color" name="albedo">` replaces the albedo colour
-(see checkerboard.py). Bsdf row (kernels/bsdfs/diffuse.h): p.diffuse.albedo (or the texture's value1, with
-the texture in the row's header).
+(see clrender/textures/). Bsdf row (kernels/bsdfs/diffuse.h): p.diffuse.albedo, albedo_tex (NONE, or the texture's
+row in the textures table).
 """
 import numpy as np
 
 from ..errors import SceneError
 from ..scene.registry import register
 from .bsdf import Bsdf
-from .checkerboard import texture_child
+from ..textures.texture import param, texture_child
 
 
 @register("bsdf", "diffuse")
 class Diffuse(Bsdf):
     kernel = "bsdfs/diffuse.h"
-    PARAMS = [("albedo", "float4")]
+    PARAMS = [("albedo", "texture")]
     FLAGS = ("DIFFUSE",)
     METHODS = ("eval", "pdf", "sample", "albedo")
     children = ("texture",)
@@ -41,5 +41,5 @@ class Diffuse(Bsdf):
         obj.spec = None
         return obj
 
-    def fill(self, p, row):
-        p["albedo"][:3] = self.albedo if self.texture is None else self.texture.fill(row)
+    def fill(self, p, row, textures):
+        return param(p, "albedo", self.albedo, self.texture, textures)

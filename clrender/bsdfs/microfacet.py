@@ -14,22 +14,22 @@ rational fit. Sampling picks the specular lobe with probability ks; the pdf is t
 ```
 A nested `<texture type="checkerboard_color" name="kd">` may replace kd (then ks = 1 - the largest
 component of either texture colour).
-Bsdf row (kernels/bsdfs/microfacet.h): p.microfacet = kd (or the texture's value1, with the texture in the
-row's header), alpha, int_ior, ext_ior, ks.
+Bsdf row (kernels/bsdfs/microfacet.h): p.microfacet = kd, kd_tex (NONE, or the texture's row in the textures
+table), alpha, int_ior, ext_ior, ks.
 """
 import numpy as np
 
 from ..errors import SceneError
 from ..scene.registry import register
 from .bsdf import Bsdf
-from .checkerboard import texture_child
+from ..textures.texture import param, texture_child
 from .ior import read_iors
 
 
 @register("bsdf", "microfacet")
 class Microfacet(Bsdf):
     kernel = "bsdfs/microfacet.h"
-    PARAMS = [("kd", "float4"), ("alpha", "float"), ("int_ior", "float"), ("ext_ior", "float"), ("ks", "float")]
+    PARAMS = [("kd", "texture"), ("alpha", "float"), ("int_ior", "float"), ("ext_ior", "float"), ("ks", "float")]
     FLAGS = ("DIFFUSE", "GLOSSY")
     METHODS = ("eval", "pdf", "sample", "albedo")
     children = ("texture",)
@@ -51,6 +51,6 @@ class Microfacet(Bsdf):
                 raise SceneError("a kd texture must stay within [0, 1]", getattr(self.texture.spec, "location", None))
             self.ks = 1.0 - self.texture.max_value()
 
-    def fill(self, p, row):
-        p["kd"][:3] = self.kd if self.texture is None else self.texture.fill(row)
+    def fill(self, p, row, textures):
         p["alpha"], p["int_ior"], p["ext_ior"], p["ks"] = self.alpha, self.int_ior, self.ext_ior, self.ks
+        return param(p, "kd", self.kd, self.texture, textures)

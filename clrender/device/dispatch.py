@@ -57,18 +57,27 @@ class Kind:
 
 BSDF = Kind(
     tag="bsdf", struct="Bsdf",
-    header=(("type", "uint"), ("flags", "uint"), ("texture", "uint"), ("pad", "uint"),
-            ("tex", "float4", 2)),   # the row's texture (TEXTURE_* kind and parameters; kernels/bsdfs/texture.h)
-    param_bytes=64, flags=("DELTA", "DIFFUSE", "GLOSSY"), dispatch_name="bsdf", row="b",
+    header=(("type", "uint"), ("flags", "uint"), ("pad", "uint", 2)),
+    # UV: a parameter reads a texture that varies over the surface (set at packing; intersection computes uv)
+    param_bytes=64, flags=("DELTA", "DIFFUSE", "GLOSSY", "UV"), dispatch_name="bsdf", row="b",
     methods=(
         Method("eval", "float3", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return (float3)(0.0f);"),
         Method("pdf", "float", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return 0.0f;"),
         Method("sample", "float3", "__global const Bsdf* b, BsdfQuery* q, float2 u", "b, q, u",
                "q->wo = (float3)(0.0f, 0.0f, 1.0f); q->eta = 1.0f; q->measure = MEASURE_SOLID_ANGLE; "
                "return (float3)(0.0f);", required=True),
-        Method("albedo", "float3", "__global const Bsdf* b, float2 uv", "b, uv", "return (float3)(1.0f);"),
+        Method("albedo", "float3", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return (float3)(1.0f);"),
     ),
-    after=("bsdfs/common.h", "bsdfs/texture.h"))
+    after=("bsdfs/common.h", "texture.h"))
+
+# Textures: rows of their own table (SCENE_TABLES "textures"); a BSDF colour parameter declared as "texture" is a
+# constant colour plus the index of a texture row (NONE: the constant), read through texture.h's param_color.
+TEXTURE = Kind(
+    tag="texture", struct="Texture", header=(("type", "uint"), ("pad", "uint", 3)), param_bytes=48, flags=(),
+    dispatch_name="texture", row="t",
+    methods=(Method("eval", "float3", "__global const Texture* t, float2 uv", "t, uv", "return (float3)(0.0f);",
+                    required=True),),
+    after=("math.h",))
 
 EMITTER = Kind(
     tag="emitter", struct="Emitter",
@@ -117,7 +126,7 @@ RFILTER = Kind(
                     required=True),),
     after=("math.h",))
 
-KINDS = {k.tag: k for k in (BSDF, EMITTER, INTEGRATOR, RFILTER)}
+KINDS = {k.tag: k for k in (TEXTURE, BSDF, EMITTER, INTEGRATOR, RFILTER)}
 
 
 def _registry():

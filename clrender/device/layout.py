@@ -44,6 +44,7 @@ SCENE_TABLES: list[tuple[str, str, str]] = [
     ("bsdfs", "Bsdf", "one row per BSDF"),
     ("emitters", "Emitter", "one row per emitter"),
     ("emitter_cdf", "float", "surface emitters' triangle-area CDFs, back to back"),
+    ("textures", "Texture", "one row per texture that a BSDF parameter refers to"),
     ("infinite", "uint", "indices of the infinite emitters (info->n_infinite of them)"),
     ("info", "SceneInfo", "scene-wide numbers and the integrator's parameters"),
 ]
@@ -51,7 +52,7 @@ SCENE_TABLES: list[tuple[str, str, str]] = [
 # Bsdf and Emitter rows are generated from the registered plugins (clrender/device/dispatch.py): the kind's
 # header fields, then a union `p` of every plugin's declared parameter struct.
 # SceneInfo: scene-wide numbers + the integrator's parameters; Camera: the camera + its filter's parameters.
-UNION_STRUCTS = ("Camera", "Bsdf", "Emitter", "SceneInfo")
+UNION_STRUCTS = ("Camera", "Texture", "Bsdf", "Emitter", "SceneInfo")
 
 
 # Type tags and flag bits, shared the same way (emitted as #defines).
@@ -64,14 +65,25 @@ ENUMS: dict[str, int] = {
     "BVH4_STACK_SIZE": 64,            # 4-wide traversal stack (the collapse checks the tree needs no more)
     "BVH4_COUNT_SHIFT": 27,           # 4-wide leaf reference: LEAF_BIT | (count - 1) << 27 | first
     "BVH4_MAX_LEAF_COUNT": 16,
-    "TEXTURE_NONE": 0, "TEXTURE_CHECKERBOARD": 1, "TEXTURE_UV": 2,
 }
+
+
+def _expand(fields):
+    """A "texture" parameter is a constant colour and the index of a texture row (NONE: the constant)."""
+    out = []
+    for f in fields:
+        if f[1] == "texture":
+            out += [(f[0], "float4"), (f[0] + "_tex", "uint")]
+        else:
+            out.append(f)
+    return out
 
 
 def _layout(fields):
     names, formats, offsets, c_lines = [], [], [], []
     off = 0
     align = 4
+    fields = _expand(fields)
     for f in fields:
         name, ctype = f[0], f[1]
         count = f[2] if len(f) > 2 else 1

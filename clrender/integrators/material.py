@@ -10,7 +10,7 @@ How we know (ETH Nori's pa1 `material` integrator; its test `scenes/pa1/test-mat
 repositories): wo is fixed at the shading normal and wi is the direction back to the camera. The course's
 unit disk (normal +y) with albedo 0.5 seen from above gives 0.5/π = 0.159155, the first reference (the disk of
 albedo 1 one unit further down is hidden); the same disk rotated 180° about z (normal −y) seen from above gives
-0, the second; a uvtexture on the disk gives 0.271853 against 0.2718496 (clrender/bsdfs/uvtexture.py).
+0, the second; a uvtexture on the disk gives 0.271853 against 0.2718496 (clrender/textures/uvtexture.py).
 Kernel: kernels/integrators/material.h.
 """
 from ..scene.registry import register

@@ -28,7 +28,7 @@ BSDF_SRC = r"""
 #include "bsdf.h"
 
 /* One bsdf_sample per work-item. args[i] = (wi.xyz, bitcast row index); uvs[i] = uv. */
-__kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const float4* args,
+__kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const Texture* textures, __global const float4* args,
                                 __global const float2* uvs, uint n, uint first, uint seed,
                                 __global float4* wo_out, __global float4* w_out, __global float4* f_out,
                                 __global float* pdf_out, __global uint* measure_out) {
@@ -44,6 +44,7 @@ __kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const float4
     q.eta = 1.0f;
     q.measure = MEASURE_SOLID_ANGLE;
     q.uv = uvs[i];
+    q.textures = textures;
     float3 w = bsdf_sample(b, &q, next2d(&s));
     wo_out[i] = (float4)(q.wo, q.eta);
     w_out[i] = (float4)(w, 0.0f);
@@ -53,7 +54,7 @@ __kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const float4
 }
 
 /* bsdf_pdf and bsdf_eval for given (wi, wo); wi[i].w = bitcast row index, wo[i].w unused. */
-__kernel void bsdf_pdf_eval_batch(__global const Bsdf* rows, __global const float4* wi_in,
+__kernel void bsdf_pdf_eval_batch(__global const Bsdf* rows, __global const Texture* textures, __global const float4* wi_in,
                                   __global const float4* wo_in, __global const float2* uvs, uint n,
                                   __global float* pdf_out, __global float4* f_out, __global float4* alb_out) {
     uint i = get_global_id(0);
@@ -66,9 +67,10 @@ __kernel void bsdf_pdf_eval_batch(__global const Bsdf* rows, __global const floa
     q.eta = 1.0f;
     q.measure = MEASURE_SOLID_ANGLE;
     q.uv = uvs[i];
+    q.textures = textures;
     pdf_out[i] = bsdf_pdf(b, &q);
     f_out[i] = (float4)(bsdf_eval(b, &q), bsdf_is_delta(b) ? 1.0f : 0.0f);
-    alb_out[i] = (float4)(bsdf_albedo(b, q.uv), 0.0f);
+    alb_out[i] = (float4)(bsdf_albedo(b, &q), 0.0f);
 }
 """
 
@@ -129,11 +131,19 @@ class BsdfSamples:
         return iter((self.wo, self.weight, self.pdf, self.measure))
 
 
+def _textures(ctx, textures):
+    """The texture table the rows refer to (a plugin's `bsdf.pack()` leaves it in `bsdf.textures_table`)."""
+    cl = _cl()
+    t = layout.zeros("Texture") if textures is None or len(textures) == 0 else np.asarray(textures, layout.dtype("Texture"))
+    return cl.Buffer(ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(t))
+
+
 def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 0.5), row_index=None,
-                      first: int = 0) -> BsdfSamples:
+                      first: int = 0, textures=None) -> BsdfSamples:
     """n calls of bsdf_sample on the device. `bsdf_row`: one packed row or an array of rows (then
     `row_index` (n,) picks each sample's row); `wi`: (3,) or (n,3) in the local frame (normalised here);
-    `uv`: (2,) or (n,2). Sample i uses the Sampler stream (seed, first + i, 0)."""
+    `uv`: (2,) or (n,2); `textures`: the table the rows' texture parameters index. Sample i uses the Sampler stream
+    (seed, first + i, 0)."""
     cl = _cl()
     rows = _rows(bsdf_row)
     wi = np.asarray(wi, np.float64)
@@ -147,6 +157,7 @@ def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 
     k = _kernel(ctx, "bsdf_sample_batch")
     mf = cl.mem_flags
     d_rows = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=rows)
+    d_tex = _textures(ctx, textures)
     out = BsdfSamples(np.empty((n, 3), np.float32), np.empty((n, 3), np.float32), np.empty(n, np.float32),
                       np.empty(n, np.uint32), np.empty(n, np.float32), np.empty((n, 3), np.float32))
     for s in range(0, n, CHUNK):
@@ -160,7 +171,7 @@ def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 
         pdf = np.empty(m, np.float32)
         meas = np.empty(m, np.uint32)
         bufs = [cl.Buffer(ctx, mf.WRITE_ONLY, a.nbytes) for a in (wo, w, f, pdf, meas)]
-        k(queue, (g,), (LOCAL,), d_rows, d_args, d_uv, np.uint32(m), np.uint32(first + s), np.uint32(seed),
+        k(queue, (g,), (LOCAL,), d_rows, d_tex, d_args, d_uv, np.uint32(m), np.uint32(first + s), np.uint32(seed),
           *bufs)
         for a, b in zip((wo, w, f, pdf, meas), bufs):
             cl.enqueue_copy(queue, a, b)
@@ -174,7 +185,8 @@ def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 
     return out
 
 
-def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=None, with_albedo=False):
+def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=None, with_albedo=False,
+                        textures=None):
     """bsdf_pdf and bsdf_eval at m direction pairs: wi (3,) or (m,3), wo (m,3). Returns (pdf (m,), f (m,3)),
     plus bsdf_albedo(uv) (m,3) if `with_albedo`."""
     cl = _cl()
@@ -189,6 +201,7 @@ def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=N
     k = _kernel(ctx, "bsdf_pdf_eval_batch")
     mf = cl.mem_flags
     d_rows = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=rows)
+    d_tex = _textures(ctx, textures)
     pdf = np.empty(m, np.float32)
     f = np.empty((m, 3), np.float32)
     alb = np.empty((m, 3), np.float32)
@@ -202,7 +215,7 @@ def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=N
         ff = np.empty((c, 4), np.float32)
         aa = np.empty((c, 4), np.float32)
         bufs = [cl.Buffer(ctx, mf.WRITE_ONLY, a.nbytes) for a in (p, ff, aa)]
-        k(queue, (g,), (LOCAL,), d_rows, d_wi, d_wo, d_uv, np.uint32(c), *bufs)
+        k(queue, (g,), (LOCAL,), d_rows, d_tex, d_wi, d_wo, d_uv, np.uint32(c), *bufs)
         for a, b in zip((p, ff, aa), bufs):
             cl.enqueue_copy(queue, a, b)
         queue.finish()

@@ -225,7 +225,8 @@ class Runner:
                 for ang in test.angles:
                     th = math.radians(ang)
                     wi = np.array([math.sin(th), 0.0, math.cos(th)])
-                    s = bsdf_sample_batch(self.ctx, self.queue, row, wi, n, seed=self.seed)
+                    s = bsdf_sample_batch(self.ctx, self.queue, row, wi, n, seed=self.seed,
+                                          textures=item.textures_table)
                     lum = s.weight.astype(np.float64) @ LUM
                     out.append(self._tcase(path, "bsdf", f"{_describe_plugin(item)}, angle {ang:g}°", lum,
                                            next(refs), a))
@@ -328,7 +329,8 @@ class Runner:
                 u = rng.random(2)
                 r, phi = math.sqrt(u[0]), 2 * math.pi * u[1]
                 wi = np.array([r * math.cos(phi), r * math.sin(phi), math.sqrt(max(0.0, 1 - u[0]))])
-                s = bsdf_sample_batch(self.ctx, self.queue, row, wi, test.sample_count, seed=self.seed + 7919 * t)
+                s = bsdf_sample_batch(self.ctx, self.queue, row, wi, test.sample_count, seed=self.seed + 7919 * t,
+                                      textures=item.textures_table)
                 ok_w = np.any(s.weight != 0, axis=1) & np.all(np.isfinite(s.weight), axis=1)
                 observed = bin_directions(s.wo[ok_w], res)
                 peaks = []
@@ -336,7 +338,8 @@ class Runner:
                     refl = np.array([-wi[0], -wi[1], wi[2]])
                     peaks = [(refl, min(math.pi, 12 * alpha)), (refl, min(math.pi, 3 * alpha))]
                 dirs, weights, cell = refined_direction_grid(res, sub=8, peaks=peaks, n_fine=200 if peaks else 0)
-                pdf, _ = bsdf_pdf_eval_batch(self.ctx, self.queue, row, np.broadcast_to(wi, dirs.shape), dirs)
+                pdf, _ = bsdf_pdf_eval_batch(self.ctx, self.queue, row, np.broadcast_to(wi, dirs.shape), dirs,
+                                             textures=item.textures_table)
                 expected = expected_from_grid(pdf, weights, cell, (res, 2 * res), test.sample_count)
                 r_ = chi2_test(observed, expected, test.min_exp, test.alpha, n_tests)
                 what = f"{_describe_plugin(item)}, wi = ({wi[0]:.3f}, {wi[1]:.3f}, {wi[2]:.3f})"

@@ -17,6 +17,7 @@ typedef struct {
     float eta;
     uint measure;
     float2 uv;
+    __global const Texture* textures;  /* the scene's texture table, for parameters that refer to a texture */
 } BsdfQuery;
 
 /* Unpolarised Fresnel reflectance of a smooth dielectric interface. cos_i is measured against the normal

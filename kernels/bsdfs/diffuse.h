@@ -1,14 +1,14 @@
 /* Lambertian: f = albedo/pi when wi and wo are both above the surface; cosine-weighted sampling.
-   Row: p.diffuse.albedo (value1 of the row's texture, if any: see texture.h). */
+   Row: p.diffuse.albedo, albedo_tex (a colour or a texture: see texture.h). */
 #ifndef CLRENDER_BSDFS_DIFFUSE_H
 #define CLRENDER_BSDFS_DIFFUSE_H
 #include "common.h"
-#include "texture.h"
+#include "../texture.h"
 #include "warp.h"
 
 INLINE float3 diffuse_eval(__global const Bsdf* b, const BsdfQuery* q) {
     if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return (float3)(0.0f);
-    return bsdf_texture(b, b->p.diffuse.albedo, q->uv) * INV_PI;
+    return param_color(q, b->p.diffuse.albedo, b->p.diffuse.albedo_tex) * INV_PI;
 }
 
 INLINE float diffuse_pdf(__global const Bsdf* b, const BsdfQuery* q) {
@@ -22,9 +22,11 @@ INLINE float3 diffuse_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     q->wo = square_to_cosine_hemisphere(u);
     /* f cos / pdf = albedo; a direction on the horizon has pdf 0 and gets no weight */
     if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return (float3)(0.0f);
-    return bsdf_texture(b, b->p.diffuse.albedo, q->uv);
+    return param_color(q, b->p.diffuse.albedo, b->p.diffuse.albedo_tex);
 }
 
-INLINE float3 diffuse_albedo(__global const Bsdf* b, float2 uv) { return bsdf_texture(b, b->p.diffuse.albedo, uv); }
+INLINE float3 diffuse_albedo(__global const Bsdf* b, const BsdfQuery* q) {
+    return param_color(q, b->p.diffuse.albedo, b->p.diffuse.albedo_tex);
+}
 
 #endif

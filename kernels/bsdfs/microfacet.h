@@ -1,6 +1,6 @@
 /* Nori's microfacet BRDF: a diffuse base plus a Beckmann specular lobe with dielectric Fresnel.
-   Row: p.microfacet = kd (value1 of the row's texture, if any), alpha, int_ior, ext_ior, ks = 1 - max(kd) (set by
-   the host).
+   Row: p.microfacet = kd, kd_tex (a colour or a texture: see texture.h), alpha, int_ior, ext_ior,
+   ks = 1 - max(kd) (set by the host).
      f   = kd/pi + ks D(h) F(h.wi) G1(wi,h) G1(wo,h) / (4 cos_i cos_o),   h = normalize(wi + wo)
      pdf = ks D(h) cos(theta_h) / (4 |h.wo|) + (1 - ks) cos_o / pi
    D is beckmann_d (warp.h, the standard D with cos^4), F the Fresnel term extIOR -> intIOR, G1 the rational
@@ -8,7 +8,7 @@
 #ifndef CLRENDER_BSDFS_MICROFACET_H
 #define CLRENDER_BSDFS_MICROFACET_H
 #include "common.h"
-#include "texture.h"
+#include "../texture.h"
 #include "warp.h"
 
 INLINE float microfacet_g1(float3 v, float3 h, float alpha) {
@@ -31,7 +31,7 @@ INLINE float3 microfacet_eval(__global const Bsdf* b, const BsdfQuery* q) {
     float F = fresnel_dielectric(dot3(h, wi), eta_ext, eta_int, &cos_t);
     float spec = beckmann_d(h, alpha) * F * microfacet_g1(wi, h, alpha) * microfacet_g1(wo, h, alpha)
                  / (4.0f * wi.z * wo.z);
-    return bsdf_texture(b, b->p.microfacet.kd, q->uv) * INV_PI + (float3)(ks * spec);
+    return param_color(q, b->p.microfacet.kd, b->p.microfacet.kd_tex) * INV_PI + (float3)(ks * spec);
 }
 
 INLINE float microfacet_pdf(__global const Bsdf* b, const BsdfQuery* q) {
@@ -62,6 +62,8 @@ INLINE float3 microfacet_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) 
     return microfacet_eval(b, q) * (q->wo.z / pdf);
 }
 
-INLINE float3 microfacet_albedo(__global const Bsdf* b, float2 uv) { return bsdf_texture(b, b->p.microfacet.kd, uv); }
+INLINE float3 microfacet_albedo(__global const Bsdf* b, const BsdfQuery* q) {
+    return param_color(q, b->p.microfacet.kd, b->p.microfacet.kd_tex);
+}
 
 #endif

@@ -13,7 +13,7 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
         q.ref = its.p;
         float3 le = emitter_sample(sd, e, &q, (float2)(0.5f, 0.5f));
         if (!q.delta || is_black(le)) continue;
-        BsdfQuery bq = bsdf_query(&its, -ray.d);
+        BsdfQuery bq = bsdf_query(sd, &its, -ray.d);
         bq.wi = wi;
         bq.wo = to_local(&its.sh, q.wi);
         float3 f = bsdf_eval(b, &bq);

@@ -6,7 +6,7 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     if (!scene_intersect(sd, &ray, &its)) return escaped(sd, ray.d);
     float3 L = hit_emission(sd, &its, ray.d);
     __global const Bsdf* b = bsdf_at(sd, &its);
-    BsdfQuery bq = bsdf_query(&its, -ray.d);
+    BsdfQuery bq = bsdf_query(sd, &its, -ray.d);
     float3 w = bsdf_sample(b, &bq, next2d(smp));
     if (is_black(w)) return L;
     float3 d = to_world(&its.sh, bq.wo);

@@ -9,7 +9,7 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     bool delta = bsdf_is_delta(b);
     float3 wi = to_local(&its.sh, -ray.d);
     if (!delta) L += sample_light(sd, &its, b, wi, smp, true);
-    BsdfQuery bq = bsdf_query(&its, -ray.d);
+    BsdfQuery bq = bsdf_query(sd, &its, -ray.d);
     float3 w = bsdf_sample(b, &bq, next2d(smp));
     if (is_black(w)) return L;
     float3 d = to_world(&its.sh, bq.wo);

@@ -13,8 +13,9 @@ INLINE __global const Bsdf* bsdf_at(const SceneData* sd, const Intersection* its
 
 INLINE float mis_balance(float a, float b) { return a + b > 0.0f ? a / (a + b) : 0.0f; }
 
-INLINE BsdfQuery bsdf_query(const Intersection* its, float3 wi_world) {
+INLINE BsdfQuery bsdf_query(const SceneData* sd, const Intersection* its, float3 wi_world) {
     BsdfQuery q;
+    q.textures = sd->textures;
     q.wi = to_local(&its->sh, wi_world);
     q.wo = (float3)(0.0f);
     q.eta = 1.0f;
@@ -61,12 +62,9 @@ INLINE float3 sample_light(const SceneData* sd, const Intersection* its, __globa
     float2 u = next2d(smp);
     float3 le = scene_sample_emitter(sd, &q, (float3)(a, u.x, u.y));
     if (is_black(le) || !(q.pdf > 0.0f)) return (float3)(0.0f);
-    BsdfQuery bq;
+    BsdfQuery bq = bsdf_query(sd, its, (float3)(0.0f));
     bq.wi = wi_local;
     bq.wo = to_local(&its->sh, q.wi);
-    bq.eta = 1.0f;
-    bq.measure = MEASURE_SOLID_ANGLE;
-    bq.uv = its->uv;
     float3 f = bsdf_eval(b, &bq);
     if (is_black(f)) return (float3)(0.0f);
     if (light_occluded(sd, its, &q)) return (float3)(0.0f);

@@ -4,7 +4,7 @@
 INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     Intersection its;
     if (!scene_intersect(sd, &ray, &its)) return (float3)(0.0f);
-    BsdfQuery bq = bsdf_query(&its, -ray.d);
+    BsdfQuery bq = bsdf_query(sd, &its, -ray.d);
     bq.wo = (float3)(0.0f, 0.0f, 1.0f);
     return bsdf_eval(bsdf_at(sd, &its), &bq);
 }

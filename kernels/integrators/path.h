@@ -80,7 +80,7 @@ INLINE void path_continue(const SceneData* sd, PathState* ps, const Intersection
         if (!(next1d(smp) < q)) { ps->alive = false; return; }
         ps->beta /= q;
     }
-    BsdfQuery bq = bsdf_query(its, -ps->ray.d);
+    BsdfQuery bq = bsdf_query(sd, its, -ps->ray.d);
     float3 w = bsdf_sample(b, &bq, next2d(smp));
     if (is_black(w)) { ps->alive = false; return; }
     ps->beta *= w;

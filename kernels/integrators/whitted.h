@@ -11,7 +11,7 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
         if (!bsdf_is_delta(b))
             return L + beta * sample_light(sd, &its, b, to_local(&its.sh, -ray.d), smp, false);
         if (!(next1d(smp) < 0.95f)) return L;
-        BsdfQuery bq = bsdf_query(&its, -ray.d);
+        BsdfQuery bq = bsdf_query(sd, &its, -ray.d);
         float3 w = bsdf_sample(b, &bq, next2d(smp));
         if (is_black(w)) return L;
         beta *= w * (1.0f / 0.95f);

@@ -22,19 +22,20 @@ direct illumination over each pixel footprint (4·10⁵ rays) gives 0.13223 / 0.
 against the references 0.132254 / 0.125814 / 0.362340 / 0.181265 with the rule above, while delta in uv
 units ((u - du)/su) gives 0.1214 / 0.1449 for the plane cases (8 % and 15 % off); the sphere cases (delta
 0) confirm the uv convention and the parity (value1 on even cells).
-Packed into the owning BSDF's row header: texture = TEXTURE_CHECKERBOARD, tex[0] = value2,
-tex[1] = (delta_u, delta_v, scale_u, scale_v); value1 takes the place of the BSDF's own colour parameter.
+Texture row (kernels/textures/checkerboard_color.h): p.checkerboard_color = value1, value2,
+delta_scale = (delta_u, delta_v, scale_u, scale_v).
 """
 import numpy as np
 
-from ..device.layout import ENUMS
 from ..errors import SceneError
 from ..scene.registry import register
+from .texture import Texture
 
 
 @register("texture", "checkerboard_color")
-class CheckerboardColor:
-    texture_type = ENUMS["TEXTURE_CHECKERBOARD"]
+class CheckerboardColor(Texture):
+    kernel = "textures/checkerboard_color.h"
+    PARAMS = [("value1", "float4"), ("value2", "float4"), ("delta_scale", "float4")]
 
     def __init__(self, props, children, spec):
         self.value1 = np.asarray(props.get_color("value1", np.zeros(3)), np.float64)
@@ -58,24 +59,8 @@ class CheckerboardColor:
         even = (np.mod(c, 2) == 0)[..., None]
         return np.where(even, self.value1, self.value2)
 
-    def fill(self, row) -> np.ndarray:
-        """Write the texture into a BSDF row's header; returns value1, for the BSDF's colour parameter."""
-        row["texture"] = self.texture_type
-        row["tex"][0][:3] = self.value2
-        row["tex"][1] = (*self.delta, *self.scale)
-        return self.value1
+    def fill(self, p) -> None:
+        p["value1"][:3] = self.value1
+        p["value2"][:3] = self.value2
+        p["delta_scale"] = (*self.delta, *self.scale)
 
-
-def texture_child(children, name: str, owner: str):
-    """The nested texture called `name` (None if there is none); any other nested texture is an error."""
-    found = None
-    for c in children:
-        spec = getattr(c, "spec", None)
-        cname = getattr(spec, "name", None)
-        if cname != name:
-            raise SceneError(f"{owner} takes a texture named '{name}', not {cname!r}",
-                             getattr(spec, "location", None))
-        if found is not None:
-            raise SceneError(f"{owner} has two '{name}' textures", getattr(spec, "location", None))
-        found = c
-    return found

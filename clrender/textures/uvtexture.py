@@ -19,21 +19,20 @@ fan-triangle uv interpolation) gives 0.271853 with the rule above against the re
 (`test-sphere.xml`) sends every ray exactly through the pole of a unit sphere (its lookat's up is parallel to
 the view direction, so the camera frame collapses as Eigen's normalized() leaves it); uv = (0, 0) there gives
 0.5 · 0.072169/π = 0.011486, the reference, and confirms the blue channel (u = 0.5 at the pole would give 0.04533).
-Packed into the owning BSDF's row header: texture = TEXTURE_UV, no parameters; the BSDF's own colour
-parameter is unused (zero).
+Texture row (kernels/textures/uvtexture.h): no parameters.
 """
 import numpy as np
 
-from ..device.layout import ENUMS
 from ..scene.registry import register
+from .texture import Texture
 
 RIPPLE = 0.2       # relative amplitude of the ripple
 FREQUENCY = 16.0   # the ripple is sin/cos(FREQUENCY · π · u): period 1/8 in uv
 
 
 @register("texture", "uvtexture")
-class UvTexture:
-    texture_type = ENUMS["TEXTURE_UV"]
+class UvTexture(Texture):
+    kernel = "textures/uvtexture.h"
 
     def __init__(self, props, children, spec):
         pass
@@ -49,8 +48,3 @@ class UvTexture:
         r = np.abs(np.fmod(u, 1.0)) * (1.0 - RIPPLE * su * sv)
         g = np.abs(np.fmod(v, 1.0)) * (1.0 - RIPPLE * cu * sv)
         return np.stack([r, g, np.full_like(u, 0.5)], axis=-1)
-
-    def fill(self, row) -> np.ndarray:
-        """Write the texture into a BSDF row's header; returns the (unused) colour for the BSDF's parameter."""
-        row["texture"] = self.texture_type
-        return np.zeros(3)

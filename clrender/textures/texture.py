@@ -1,0 +1,72 @@
+"""What the texture plugins share: one row of the textures table.
+
+A texture plugin declares its kernel half (`kernel`: <prefix>_eval(t, uv) in kernels/textures/<prefix>.h, reached
+through the generated texture_eval) and its parameters (`PARAMS`, written by `fill`); `max_value()` and a host
+`eval(uv)` serve validation and tests. A BSDF parameter declared as ("name", "texture") holds a constant colour
+and the index of a texture row (NONE: the constant), which `param` fills.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..device import dispatch, layout
+from ..errors import SceneError
+
+
+class Texture:
+    kernel: str = ""
+    PARAMS: list = []
+
+    def pack(self) -> np.void:
+        row = layout.zeros("Texture")[0]
+        row["type"] = dispatch.tag_of(type(self))
+        if self.PARAMS:
+            self.fill(row[dispatch.member_of(type(self))])
+        return row
+
+    def fill(self, p) -> None:
+        """Write the declared parameters into `p` (this texture's member of the row's union)."""
+
+    def max_value(self) -> float:
+        raise NotImplementedError
+
+
+class TextureTable:
+    """The textures table being packed: each texture object once, in the order first met."""
+
+    def __init__(self):
+        self.rows: list = []
+        self._index: dict[int, int] = {}
+
+    def add(self, texture) -> int:
+        key = id(texture)
+        if key not in self._index:
+            self._index[key] = len(self.rows)
+            self.rows.append(texture.pack())
+        return self._index[key]
+
+    def array(self) -> np.ndarray:
+        return np.array(self.rows, layout.dtype("Texture")) if self.rows else layout.zeros("Texture")
+
+
+def param(p, name: str, value, texture, table: TextureTable) -> bool:
+    """Fill a ("name", "texture") parameter: the constant `value`, or `texture`'s row in `table`. Returns whether
+    it refers to a texture (the BSDF then needs uv)."""
+    p[name][:3] = value
+    p[name + "_tex"] = layout.NONE if texture is None else table.add(texture)
+    return texture is not None
+
+
+def texture_child(children, name: str, owner: str):
+    """The nested texture called `name` (None if there is none); any other nested texture is an error."""
+    found = None
+    for c in children:
+        spec = getattr(c, "spec", None)
+        cname = getattr(spec, "name", None)
+        if cname != name:
+            raise SceneError(f"{owner} takes a texture named '{name}', not {cname!r}",
+                             getattr(spec, "location", None))
+        if found is not None:
+            raise SceneError(f"{owner} has two '{name}' textures", getattr(spec, "location", None))
+        found = c
+    return found
