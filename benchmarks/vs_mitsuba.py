@@ -86,66 +86,61 @@ def _f3(v):
     return ", ".join(f"{x:g}" for x in v)
 
 
-def nori_xml(t: dict) -> str:
+# The two formats differ only in names: one writer, one table of them.
+FORMATS = {
+    "nori": dict(
+        root="<scene>", integrator='<integrator type="path_mis"/>', sensor="camera", to_world="toWorld",
+        fov_axis="", sampler='<sampler type="independent"><integer name="sampleCount" value="{spp}"/></sampler>',
+        film='<integer name="width" value="{w}"/><integer name="height" value="{h}"/><rfilter type="box"/>',
+        shape="mesh", diffuse='<bsdf type="diffuse"><color name="albedo" value="{rho}"/></bsdf>',
+        mirror='<bsdf type="mirror"/>',
+        dielectric='<bsdf type="dielectric"><float name="intIOR" value="{i}"/><float name="extIOR" value="{e}"/></bsdf>',
+        area='<emitter type="area"><color name="radiance" value="{L}"/></emitter>', sampler_in_sensor=False),
+    "mitsuba": dict(
+        root='<scene version="3.0.0">', integrator='<integrator type="path"><integer name="max_depth" value="-1"/></integrator>',
+        sensor="sensor", to_world="to_world", fov_axis='<string name="fov_axis" value="x"/>',
+        sampler='<sampler type="independent"><integer name="sample_count" value="{spp}"/></sampler>',
+        film='<film type="hdrfilm"><integer name="width" value="{w}"/><integer name="height" value="{h}"/>'
+             '<rfilter type="box"/></film>',
+        shape="shape", diffuse='<bsdf type="diffuse"><rgb name="reflectance" value="{rho}"/></bsdf>',
+        mirror='<bsdf type="conductor"><string name="material" value="none"/></bsdf>',
+        dielectric='<bsdf type="dielectric"><float name="int_ior" value="{i}"/><float name="ext_ior" value="{e}"/></bsdf>',
+        area='<emitter type="area"><rgb name="radiance" value="{L}"/></emitter>', sampler_in_sensor=True),
+}
+
+
+def scene_xml(t: dict, fmt: str) -> str:
+    """The twin `t` in Nori's XML (fmt "nori") or Mitsuba 3's ("mitsuba")."""
+    f = FORMATS[fmt]
     c = t["camera"]
-    out = ['<scene>', '  <integrator type="path_mis"/>',
-           f'  <sampler type="independent"><integer name="sampleCount" value="{t["spp"]}"/></sampler>',
-           '  <camera type="perspective">',
-           f'    <float name="fov" value="{c["fov"]}"/><integer name="width" value="{c["width"]}"/>'
-           f'<integer name="height" value="{c["height"]}"/>',
-           f'    <transform name="toWorld"><lookat origin="{_f3(c["origin"])}" target="{_f3(c["target"])}" '
-           f'up="{_f3(c["up"])}"/></transform>',
-           '    <rfilter type="box"/>', '  </camera>']
+    sampler = f["sampler"].format(spp=t["spp"])
+    out = [f["root"], "  " + f["integrator"]]
+    if not f["sampler_in_sensor"]:
+        out.append("  " + sampler)
+    out += [f'  <{f["sensor"]} type="perspective">',
+            f'    <float name="fov" value="{c["fov"]}"/>{f["fov_axis"]}',
+            f'    <transform name="{f["to_world"]}"><lookat origin="{_f3(c["origin"])}" target="{_f3(c["target"])}" '
+            f'up="{_f3(c["up"])}"/></transform>']
+    if f["sampler_in_sensor"]:
+        out.append("    " + sampler)
+    out += ["    " + f["film"].format(w=c["width"], h=c["height"]), f'  </{f["sensor"]}>']
     for s in t["shapes"]:
-        out.append('  <mesh type="obj">')
+        out.append(f'  <{f["shape"]} type="obj">')
         out.append(f'    <string name="filename" value="{s["file"]}"/>')
         if "scale" in s:
-            out.append(f'    <transform name="toWorld"><scale value="{s["scale"]}"/>'
+            out.append(f'    <transform name="{f["to_world"]}"><scale value="{s["scale"]}"/>'
                        f'<translate value="{_f3(s["translate"])}"/></transform>')
         b = s["bsdf"]
         if b[0] == "diffuse":
-            out.append(f'    <bsdf type="diffuse"><color name="albedo" value="{_f3(b[1])}"/></bsdf>')
+            out.append("    " + f["diffuse"].format(rho=_f3(b[1])))
         elif b[0] == "mirror":
-            out.append('    <bsdf type="mirror"/>')
+            out.append("    " + f["mirror"])
         else:
-            out.append(f'    <bsdf type="dielectric"><float name="intIOR" value="{b[1]}"/>'
-                       f'<float name="extIOR" value="{b[2]}"/></bsdf>')
+            out.append("    " + f["dielectric"].format(i=b[1], e=b[2]))
         if "radiance" in s:
-            out.append(f'    <emitter type="area"><color name="radiance" value="{_f3(s["radiance"])}"/></emitter>')
-        out.append('  </mesh>')
-    out.append('</scene>')
-    return "\n".join(out) + "\n"
-
-
-def mitsuba_xml(t: dict) -> str:
-    c = t["camera"]
-    out = ['<scene version="3.0.0">', '  <integrator type="path"><integer name="max_depth" value="-1"/></integrator>',
-           '  <sensor type="perspective">',
-           f'    <float name="fov" value="{c["fov"]}"/><string name="fov_axis" value="x"/>',
-           f'    <transform name="to_world"><lookat origin="{_f3(c["origin"])}" target="{_f3(c["target"])}" '
-           f'up="{_f3(c["up"])}"/></transform>',
-           f'    <sampler type="independent"><integer name="sample_count" value="{t["spp"]}"/></sampler>',
-           f'    <film type="hdrfilm"><integer name="width" value="{c["width"]}"/>'
-           f'<integer name="height" value="{c["height"]}"/><rfilter type="box"/></film>',
-           '  </sensor>']
-    for s in t["shapes"]:
-        out.append('  <shape type="obj">')
-        out.append(f'    <string name="filename" value="{s["file"]}"/>')
-        if "scale" in s:
-            out.append(f'    <transform name="to_world"><scale value="{s["scale"]}"/>'
-                       f'<translate value="{_f3(s["translate"])}"/></transform>')
-        b = s["bsdf"]
-        if b[0] == "diffuse":
-            out.append(f'    <bsdf type="diffuse"><rgb name="reflectance" value="{_f3(b[1])}"/></bsdf>')
-        elif b[0] == "mirror":
-            out.append('    <bsdf type="conductor"><string name="material" value="none"/></bsdf>')
-        else:
-            out.append(f'    <bsdf type="dielectric"><float name="int_ior" value="{b[1]}"/>'
-                       f'<float name="ext_ior" value="{b[2]}"/></bsdf>')
-        if "radiance" in s:
-            out.append(f'    <emitter type="area"><rgb name="radiance" value="{_f3(s["radiance"])}"/></emitter>')
-        out.append('  </shape>')
-    out.append('</scene>')
+            out.append("    " + f["area"].format(L=_f3(s["radiance"])))
+        out.append(f'  </{f["shape"]}>')
+    out.append("</scene>")
     return "\n".join(out) + "\n"
 
 
@@ -201,8 +196,8 @@ def relmse(img, ref):
 
 
 def bench_twin(t: dict, d: Path, spp: int, repeat: int, ref_spp: int, say) -> dict:
-    (d / "clrender.xml").write_text(nori_xml(t))
-    (d / "mitsuba.xml").write_text(mitsuba_xml(t))
+    (d / "clrender.xml").write_text(scene_xml(t, "nori"))
+    (d / "mitsuba.xml").write_text(scene_xml(t, "mitsuba"))
     rs = [Clrender(d / "clrender.xml"), Mitsuba(d / "mitsuba.xml")]
     say(f"{t['name']}: reference ({ref_spp} spp, Mitsuba)")
     ref, _ = rs[1].render(ref_spp, 12345)

@@ -8,6 +8,7 @@ the exception (a library's broad ``except``) cannot make the program carry on as
 """
 from __future__ import annotations
 
+import abc
 import signal
 import threading
 import time
@@ -34,7 +35,7 @@ def wait_for(queue) -> None:
         delay = min(delay * 2, POLL_SECONDS)
 
 
-class SigintHandler:
+class SigintHandler(abc.ABC):
     """Context manager installing `_handle` for SIGINT (main thread only) and restoring the old handler."""
 
     _old = None
@@ -49,8 +50,9 @@ class SigintHandler:
             signal.signal(signal.SIGINT, self._old)
         return False
 
+    @abc.abstractmethod
     def _handle(self, signum, frame):
-        raise NotImplementedError
+        """What a Ctrl-C does while this handler is installed."""
 
 
 class CtrlC(SigintHandler):

@@ -7,13 +7,15 @@ and the index of a texture row (NONE: the constant), which `param` fills.
 """
 from __future__ import annotations
 
+import abc
+
 import numpy as np
 
 from ..device import dispatch, layout
 from ..errors import SceneError
 
 
-class Texture:
+class Texture(abc.ABC):
     kernel: str = ""
     PARAMS: list = []
 
@@ -27,8 +29,13 @@ class Texture:
     def fill(self, p) -> None:
         """Write the declared parameters into `p` (this texture's member of the row's union)."""
 
+    @abc.abstractmethod
     def max_value(self) -> float:
-        raise NotImplementedError
+        """The largest value of any channel (BSDFs that need colours within [0, 1] check it)."""
+
+    @abc.abstractmethod
+    def eval(self, uv) -> np.ndarray:
+        """The colour at uv (..., 2) on the host (the reference the tests hold the kernel to)."""
 
 
 class TextureTable:
