@@ -71,8 +71,30 @@ def test_duplicate_registration_is_a_programming_error():
         @register("bsdf", T + "diffuse")
         class Again:
             pass
-    with pytest.raises(RuntimeError, match="unknown object tag"):
+    with pytest.raises(RuntimeError, match="unknown Nori object tag"):
         register("bdsf", T + "x")
+    with pytest.raises(RuntimeError, match="unknown Mitsuba 3 object tag"):
+        register("mesh", T + "x", fmt="mitsuba")
+    with pytest.raises(RuntimeError, match="unknown scene format"):
+        register("bsdf", T + "x", fmt="pbrt")
+
+
+def test_formats_are_separate_namespaces():
+    """A Mitsuba file's <bsdf type=...> never finds a Nori plugin of that name, and errors say which reader."""
+    @register("bsdf", T + "diffuse", fmt="mitsuba")
+    class MitsubaDiffuse:
+        def __init__(self, props, children, spec):
+            self.reflectance = props.get_color("reflectance", 0.5)
+    try:
+        assert lookup("bsdf", T + "diffuse", fmt="mitsuba") is MitsubaDiffuse
+        assert lookup("bsdf", T + "diffuse").__name__ == "Diffuse"
+        assert T + "fails" not in registered("bsdf", "mitsuba")
+        with pytest.raises(SceneError, match=r"read as a Mitsuba 3 scene.*known: .*" + T + "diffuse"):
+            lookup("bsdf", T + "fails", fmt="mitsuba")
+        b = registry.instantiate("bsdf", T + "diffuse", {"reflectance": ("color", [0.25, 0.25, 0.25])}, fmt="mitsuba")
+        assert np.allclose(b.reflectance, 0.25) and b.spec.format == "mitsuba"
+    finally:
+        registry.unregister("bsdf", T + "diffuse", fmt="mitsuba")
 
 
 def test_create_builds_children_first_and_attaches_spec():

@@ -141,13 +141,19 @@ def prefix_of(cls) -> str:
 
 
 def plugins(kind: str) -> list[type]:
-    """The registered device plugins of `kind`, in tag order (sorted by prefix)."""
+    """The registered device plugins of `kind` in every scene format, in tag order (sorted by prefix). Classes
+    that share a prefix (a Mitsuba-format subclass of a Nori plugin, say) share its kernel, tag and row: the first
+    in (format, type name) order stands for them, and they must agree on PARAMS and FLAGS."""
     reg = _registry()
     found = {}
-    for name in reg.registered(kind):
-        cls = reg.lookup(kind, name)
-        if getattr(cls, "kernel", None):
-            found.setdefault(prefix_of(cls), cls)
+    for cls in reg.registered_classes(kind):
+        if not getattr(cls, "kernel", None):
+            continue
+        first = found.setdefault(prefix_of(cls), cls)
+        if first is not cls and (cls.kernel != first.kernel or
+                                 list(getattr(cls, "PARAMS", ())) != list(getattr(first, "PARAMS", ()))):
+            raise RuntimeError(f"{cls.__qualname__} and {first.__qualname__} share the kernel prefix "
+                               f"{prefix_of(cls)!r} but not their kernel file or PARAMS")
     return [found[p] for p in sorted(found)]
 
 
@@ -193,7 +199,7 @@ def methods_of(cls, kind: Kind) -> list[str]:
 def tag_of(cls) -> int:
     """The type tag the kernels switch on (the plugin's position among its kind's prefixes)."""
     kind = KINDS[_kind_tag(cls)]
-    return plugins(kind.tag).index(cls)
+    return [prefix_of(c) for c in plugins(kind.tag)].index(prefix_of(cls))
 
 
 def flags_of(cls) -> int:
@@ -208,7 +214,8 @@ def flags_of(cls) -> int:
 
 def _kind_tag(cls) -> str:
     for tag in KINDS:
-        if cls in plugins(tag):
+        if getattr(cls, "kernel", None) and cls in _registry().registered_classes(tag):
+            plugins(tag)    # checks that classes sharing its prefix agree
             return tag
     raise RuntimeError(f"{cls.__qualname__} is not a registered device plugin (it needs @register and `kernel`)")
 

@@ -1,4 +1,8 @@
-"""Plugin registry: maps (tag, type) such as ("bsdf", "diffuse") to a class, and instantiates specs.
+"""Plugin registry: maps (format, tag, type) such as ("nori", "bsdf", "diffuse") to a class, and instantiates specs.
+
+Each scene format has its own namespace: a Nori file's ``<bsdf type="diffuse">`` and a Mitsuba 3 file's are
+different plugins (names, parameters and defaults differ) even where they share a kernel. A class may be
+registered in several formats.
 
 A plugin class declares the tags it accepts as nested objects in a ``children`` class attribute and
 is constructed as ``cls(props, children, spec)``. This module deliberately imports no plugin modules:
@@ -9,22 +13,25 @@ from __future__ import annotations
 from typing import Callable
 
 from ..errors import SceneError, SourceLocation
-from .spec import OBJECT_TAGS, PluginSpec
+from .spec import FORMAT_NAMES, FORMAT_TAGS, PluginSpec
 
-_REGISTRY: dict[tuple[str, str], type] = {}
+_REGISTRY: dict[tuple[str, str, str], type] = {}
 
 
-def register(tag: str, type_name: str) -> Callable[[type], type]:
-    """Class decorator registering a plugin for ``<tag type="type_name">``."""
-    if tag not in OBJECT_TAGS:
-        raise RuntimeError(f"cannot register for unknown object tag {tag!r}; "
-                           f"expected one of {', '.join(OBJECT_TAGS)}")
+def register(tag: str, type_name: str, fmt: str = "nori") -> Callable[[type], type]:
+    """Class decorator registering a plugin for ``<tag type="type_name">`` in files of format ``fmt``
+    ("nori" or "mitsuba"); stack two decorators to register one class in both."""
+    if fmt not in FORMAT_TAGS:
+        raise RuntimeError(f"cannot register for unknown scene format {fmt!r}; expected one of {', '.join(FORMAT_TAGS)}")
+    if tag not in FORMAT_TAGS[fmt]:
+        raise RuntimeError(f"cannot register for unknown {FORMAT_NAMES[fmt]} object tag {tag!r}; "
+                           f"expected one of {', '.join(FORMAT_TAGS[fmt])}")
 
     def deco(cls: type) -> type:
-        key = (tag, type_name)
+        key = (fmt, tag, type_name)
         if key in _REGISTRY:
             old = _REGISTRY[key]
-            raise RuntimeError(f"{tag} type {type_name!r} registered twice: "
+            raise RuntimeError(f"{FORMAT_NAMES[fmt]} {tag} type {type_name!r} registered twice: "
                                f"{old.__module__}.{old.__qualname__} and {cls.__module__}.{cls.__qualname__}")
         _REGISTRY[key] = cls
         return cls
@@ -32,39 +39,50 @@ def register(tag: str, type_name: str) -> Callable[[type], type]:
     return deco
 
 
-def unregister(tag: str, type_name: str) -> None:
+def unregister(tag: str, type_name: str, fmt: str = "nori") -> None:
     """Remove a registration (for tests that register throwaway plugins)."""
-    _REGISTRY.pop((tag, type_name), None)
+    _REGISTRY.pop((fmt, tag, type_name), None)
 
 
-def registered(tag: str) -> list[str]:
-    """Known type names for ``tag``, sorted."""
-    return sorted(t for (g, t) in _REGISTRY if g == tag)
+def registered(tag: str, fmt: str | None = "nori") -> list[str]:
+    """Known type names for ``tag`` in format ``fmt`` (None: in any format), sorted."""
+    return sorted({t for (f, g, t) in _REGISTRY if g == tag and (fmt is None or f == fmt)})
 
 
-def lookup(tag: str, type_name: str, location: SourceLocation | None = None) -> type:
+def registered_classes(tag: str) -> list[type]:
+    """Every class registered for ``tag`` in any format (each once), in (format, type name) order."""
+    out = []
+    for key in sorted(k for k in _REGISTRY if k[1] == tag):
+        if _REGISTRY[key] not in out:
+            out.append(_REGISTRY[key])
+    return out
+
+
+def lookup(tag: str, type_name: str, location: SourceLocation | None = None, fmt: str = "nori") -> type:
     try:
-        return _REGISTRY[(tag, type_name)]
+        return _REGISTRY[(fmt, tag, type_name)]
     except KeyError:
-        known = ", ".join(registered(tag)) or "(none registered)"
-        raise SceneError(f"unknown {tag} type '{type_name}'; known: {known}", location) from None
+        known = ", ".join(registered(tag, fmt)) or "(none registered)"
+        reader = f" (read as a {FORMAT_NAMES[fmt]} scene)" if fmt != "nori" else ""
+        raise SceneError(f"unknown {tag} type '{type_name}'{reader}; known: {known}", location) from None
 
 
-def instantiate(tag: str, type_name: str, props: dict | None = None, location: SourceLocation | None = None):
-    """Make a plugin from code as if a file had written ``<tag type="type_name">`` with ``props``
-    ({name: (property tag, value)}); unknown types and unused properties are errors, as in a file."""
+def instantiate(tag: str, type_name: str, props: dict | None = None, location: SourceLocation | None = None,
+                fmt: str = "nori"):
+    """Make a plugin from code as if a file of format ``fmt`` had written ``<tag type="type_name">`` with
+    ``props`` ({name: (property tag, value)}); unknown types and unused properties are errors, as in a file."""
     from .properties import PropertyList
     from .spec import describe
 
     plist = PropertyList(describe(tag, type_name), location)
     for name, (ptag, value) in (props or {}).items():
         plist.add(name, ptag, value)
-    return create(PluginSpec(tag, type_name, None, plist, [], location))
+    return create(PluginSpec(tag, type_name, None, plist, [], location, format=fmt))
 
 
 def create(spec: PluginSpec):
     """Instantiate ``spec`` and, first, its nested objects; then reject unused properties."""
-    cls = lookup(spec.tag, spec.type, spec.location)
+    cls = lookup(spec.tag, spec.type, spec.location, spec.format)
     accepted = tuple(getattr(cls, "children", ()))
     # Check every nesting before building anything, so the reported error is the structural one
     # rather than some failure deep inside an earlier child.

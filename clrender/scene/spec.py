@@ -9,6 +9,13 @@ from .properties import PropertyList
 
 OBJECT_TAGS = ("scene", "mesh", "bsdf", "emitter", "camera", "integrator", "sampler", "rfilter",
                "test", "texture", "medium", "phase")
+#: object tags of Mitsuba 3's scene format
+MITSUBA_OBJECT_TAGS = ("scene", "shape", "bsdf", "emitter", "sensor", "film", "rfilter", "sampler", "integrator",
+                       "texture", "medium", "phase", "volume", "spectrum")
+#: the object tags of each scene format the registry keeps a namespace for
+FORMAT_TAGS = {"nori": OBJECT_TAGS, "mitsuba": MITSUBA_OBJECT_TAGS}
+#: how messages name each format
+FORMAT_NAMES = {"nori": "Nori", "mitsuba": "Mitsuba 3"}
 
 
 @dataclass(eq=False)
@@ -24,6 +31,8 @@ class PluginSpec:
     location: SourceLocation | None = None
     #: the Nori dialect the file was read in ("upstream" or "eth"; see clrender.scene.dialect)
     dialect: str = "upstream"
+    #: the scene format the file was read as ("nori" or "mitsuba"); picks the registry's namespace
+    format: str = "nori"
 
     def describe(self) -> str:
         """How errors refer to this object, e.g. ``<bsdf type="diffuse">``."""
