@@ -222,11 +222,13 @@ def test_direct_delta_lights_count_once_per_emitter_sample(tmp_path):
 # --- aov -----------------------------------------------------------------------------------------------------------
 
 def test_aovs_of_the_plane(tmp_path):
-    """Every pixel sees the plane near X0 (fov 0.05 degrees): depth = |camera - X0|, position = X0, both normals
-    = +z (the plane's winding); 0 where rays escape."""
-    xml = A.polygon_light_scene(tmp_path, "path_mis")
+    """Every pixel sees the plane near X0 (fov 0.05 degrees): depth = |camera - X0| less the near clip distance
+    (Mitsuba's camera rays start on the near plane; Nori's default near clip is 1e-4, so make it 0.25 here),
+    position = X0, both normals = +z (the plane's winding); 0 where rays escape."""
+    xml = A.polygon_light_scene(tmp_path, "path_mis").replace(
+        '<float name="fov"', '<float name="nearClip" value="0.25"/><float name="fov"')
     origin = np.array([2.5, 0.1, 1.5])
-    expected = {"depth": np.full(3, np.linalg.norm(origin - A.X0)), "position": A.X0,
+    expected = {"depth": np.full(3, np.linalg.norm(origin - A.X0) - 0.25), "position": A.X0,
                 "geo_normal": np.array([0.0, 0.0, 1.0]), "sh_normal": np.array([0.0, 0.0, 1.0])}
     for kind, value in expected.items():
         film = render(tmp_path, xml, "aov", spp=4, aovs=f"out:{kind}")

@@ -5,7 +5,8 @@
     <string name="aovs" value="dd.y:depth"/>   <!-- required: one <name>:<type> pair -->
 </integrator>
 ```
-Types: `depth` (distance from the camera along the ray, written to all three channels), `position` (world
+Types: `depth` (distance along the ray from the near clip plane, where Mitsuba's camera rays start: Mitsuba's
+value, not quite the distance from the pinhole; written to all three channels), `position` (world
 x, y, z), `geo_normal` and `sh_normal` (the geometric and the shading normal, signed, as Mitsuba writes them);
 0 where the ray escapes. Our film holds one RGB image, so one AOV only: a list of several, a nested integrator
 (whose image Mitsuba writes beside the AOVs) or Mitsuba's other types (albedo, uv, dp_du, ...) are errors.
