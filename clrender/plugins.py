@@ -3,7 +3,8 @@
 from .scene import scene  # noqa: F401
 from .shapes import obj, ply, sphere  # noqa: F401
 from .cameras import perspective  # noqa: F401
-from .filters import box, gaussian, mitchell, tent  # noqa: F401
+from .filters import box, gaussian, lanczos, mitchell, tent  # noqa: F401
+from .films import hdrfilm  # noqa: F401
 from .samplers import independent  # noqa: F401
 from .textures import checkerboard_color, uvtexture  # noqa: F401
 from .bsdfs import dielectric, diffuse, microfacet, mirror  # noqa: F401

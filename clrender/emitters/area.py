@@ -45,3 +45,24 @@ class AreaEmitter(Emitter):
             row["count"] = len(areas)
             row["cdf_offset"] = ctx.add_cdf(cdf)
         p["area"] = area
+
+
+@register("emitter", "area", fmt="mitsuba")
+class MitsubaAreaEmitter(AreaEmitter):
+    """Mitsuba 3's area light, nested in (or referenced by) a shape: one-sided, on the side its normals face.
+
+    ```xml
+    <shape type="obj">
+        ...
+        <emitter type="area">
+            <rgb name="radiance" value="10, 10, 10"/>   <!-- required; rgb, spectrum (emitter convention) or float -->
+        </emitter>
+    </shape>
+    ```
+    """
+
+    def __init__(self, props, children, spec):
+        c = np.asarray(props.get_color("radiance", emitter=True), np.float64)
+        if np.any(c < 0) or not np.all(np.isfinite(c)):
+            raise SceneError(f"radiance must be non-negative and finite, got {c.tolist()}", props.location("radiance"))
+        self.radiance = c

@@ -59,6 +59,16 @@ def compare_to_value(film, reference, alpha: float = 0.01, mask=None) -> ZTestRe
     return _ztest(img - ref, var, alpha, "film vs reference")
 
 
+def compare_to_reference(film, mean, stderr, alpha: float = 0.01, mask=None) -> ZTestResult:
+    """Each pixel's estimate against an independent reference image with its own per-pixel standard error
+    (e.g. a Mitsuba render): both errors combined."""
+    diff = film.image.astype(np.float64) - np.asarray(mean, np.float64)
+    var = film.variance() + np.asarray(stderr, np.float64) ** 2
+    if mask is not None:
+        diff, var = diff[mask], var[mask]
+    return _ztest(diff, var, alpha, "film vs reference image")
+
+
 def compare_films(a, b, alpha: float = 0.01, mask=None) -> ZTestResult:
     """Two independent renders of the same scene (e.g. two integrators): equal per pixel?"""
     da, db = a.image.astype(np.float64), b.image.astype(np.float64)
