@@ -9,7 +9,7 @@ from .spec import PluginSpec
 
 log = logging.getLogger("clrender")
 
-_FILE_MESHES = ("obj", "ply")
+_FILE_MESHES = ("obj", "ply", "serialized")
 
 
 def check_mesh_files(root: PluginSpec) -> None:

@@ -15,19 +15,21 @@ log = logging.getLogger("clrender")
 class TriangleMesh(Shape):
     is_sphere = False
 
-    def _load(self, props, children, spec, loader, to_world_name: str = "toWorld", prepare=None):
-        """Read, transform and clean the mesh; ``prepare(mesh)`` (Mitsuba's options) runs on the world-space
-        mesh before degenerate triangles are dropped."""
-        filename = props.get_string("filename")
+    def _load(self, props, children, spec, loader, to_world_name: str = "toWorld", prepare=None, generate=None,
+              name: str | None = None):
+        """Read (``loader``, or ``generate()`` for a built-in mesh called ``name``), transform and clean the mesh;
+        ``prepare(mesh)`` (Mitsuba's options) runs on the world-space mesh before degenerate triangles are
+        dropped."""
+        filename = props.get_string("filename") if loader is not None else None
         to_world: Transform = props.get_transform(to_world_name)
         m = to_world.matrix
         if not np.all(np.isfinite(m)) or abs(np.linalg.det(m[:3, :3])) < 1e-300:
             raise SceneError("mesh toWorld is singular or not finite (e.g. a lookat whose up is parallel to "
                              "its viewing direction): points cannot be mapped to world space",
                              props.location(to_world_name))
-        where = props.location("filename")
+        where = props.location("filename") if filename is not None else None
         try:
-            mesh = loader(filename, where)
+            mesh = loader(filename, where) if filename is not None else generate()
         except SceneError as e:
             if e.location == where:
                 raise
@@ -38,9 +40,9 @@ class TriangleMesh(Shape):
             mesh = prepare(mesh)
         mesh, dropped = mesh.drop_degenerate()
         if dropped:
-            log.warning("%s: dropped %d degenerate triangle(s) of %s", spec.location, dropped, filename)
+            log.warning("%s: dropped %d degenerate triangle(s) of %s", spec.location, dropped, filename or name)
         if len(mesh.faces) == 0:
-            raise SceneError(f"mesh '{filename}' has no non-degenerate triangles", spec.location)
+            raise SceneError(f"mesh '{filename or name}' has no non-degenerate triangles", spec.location)
         self.mesh = mesh
         self.filename = filename
         self.dropped = dropped
@@ -75,8 +77,8 @@ class MitsubaMeshOptions:
     ones; ``flip_normals`` turns the surface around (reversed winding and negated normals: the side an area light
     emits from and a one-sided BSDF reflects on)."""
 
-    def _load_mitsuba(self, props, children, spec, loader):
-        face_normals = props.get_bool("face_normals", False)
+    def _load_mitsuba(self, props, children, spec, loader, generate=None, name=None):
+        face_normals = props.get_bool("face_normals", False) if loader is not None else False
         flip = props.get_bool("flip_normals", False)
 
         def prepare(mesh):
@@ -90,4 +92,7 @@ class MitsubaMeshOptions:
                 normals = None if normals is None else -normals
             return MeshData(positions=mesh.positions, normals=normals, uvs=mesh.uvs, faces=faces)
 
-        self._load(props, children, spec, loader, "to_world", prepare)
+        self._load(props, children, spec, loader, "to_world", prepare, generate, name)
+
+    def _load_generated(self, props, children, spec, generate, name: str):
+        self._load_mitsuba(props, children, spec, None, generate, name)
