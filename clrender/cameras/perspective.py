@@ -184,3 +184,29 @@ class MitsubaPerspectiveCamera(PerspectiveCamera):
         row["inv_aspect"] = f.full_height / f.full_width
         row["clip_window"] = 0 if f.sample_border else 1
         row["lens_radius"], row["focus_distance"] = self.lens_radius, self.focus_distance
+
+
+@register("sensor", "thinlens", fmt="mitsuba")
+class MitsubaThinLensCamera(MitsubaPerspectiveCamera):
+    """Mitsuba 3's thin lens sensor: the perspective sensor with a circular aperture (depth of field).
+
+    ```xml
+    <sensor type="thinlens">
+        <float name="aperture_radius" value="0.1"/>   <!-- required, in scene units -->
+        <float name="focus_distance" value="5"/>      <!-- along the viewing axis; default far_clip -->
+        ... every parameter of perspective ...
+    </sensor>
+    ```
+    A ray leaves from a uniformly chosen point of the aperture disk towards the point where the pinhole ray
+    through the same film position meets the plane in focus (kernels/camera.h, camera_ray_lens).
+    """
+
+    def read_lens(self, props) -> None:
+        self.lens_radius = props.get_float("aperture_radius")
+        self.focus_distance = props.get_float("focus_distance", self.far_clip)
+        if not 0 <= self.lens_radius < 1e30:
+            raise SceneError(f"aperture_radius must be 0 or more, got {self.lens_radius}",
+                             props.location("aperture_radius"))
+        if not 0 < self.focus_distance < 1e30:
+            raise SceneError(f"focus_distance must be positive, got {self.focus_distance}",
+                             props.location("focus_distance"))
