@@ -1,5 +1,8 @@
-"""What every shape plugin shares: its nested BSDF (default: diffuse, albedo 0.5) and optional emitter."""
+"""What every shape plugin shares: its nested BSDF (default: diffuse, albedo 0.5; in a Mitsuba scene black for a
+shape that emits, as Mitsuba's default) and optional emitter."""
 from __future__ import annotations
+
+import numpy as np
 
 from ..errors import SceneError
 
@@ -28,3 +31,5 @@ class Shape:
             from ..bsdfs.diffuse import Diffuse
 
             self.bsdf = Diffuse.default()
+            if self.emitter is not None and getattr(spec, "format", "nori") == "mitsuba":
+                self.bsdf.albedo = np.zeros(3)   # Mitsuba: an emitting shape without a BSDF reflects nothing
