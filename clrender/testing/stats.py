@@ -68,21 +68,23 @@ def footprint_sample_variance(mean, sample_var, rfilter) -> np.ndarray:
     image: ``mean`` (H, W, 3) and the variance of one sample within each pixel, ``sample_var``.
 
     A sample of pixel p lands at an offset drawn with density |f| (kernels/filter.h) and carries sign(f)·C·L,
-    C = ∫|f| / ∫f per axis; taking L within pixel q to have q's mean and variance (the law of total variance),
-    its second moment is C² Σ_q a_q (var_q + mean_q²), a_q the share of |f| over pixel q, and its variance that
-    minus mean_p². Pixels outside the image count as absent (their share is given to the others)."""
-    x = np.linspace(-rfilter.radius, rfilter.radius, 8001)
+    C = ∫|f| / ∫f per axis. Taking L within pixel q to have q's mean m_q and variance v_q (the law of total
+    variance; the reference is itself filtered, so this is a proxy that understates sharp detail), with a_q the
+    share of |f| over pixel q: the variance is C² Σ_q a_q (v_q + m_q²) - (C Σ_q a_q sign_q m_q)². Pixels outside
+    the image count as absent (their share is given to the others)."""
+    x = (np.arange(8000) + 0.5) / 8000 * 2 * rfilter.radius - rfilter.radius   # midpoints
     f = np.asarray(rfilter.eval(x), np.float64)
-    dx = x[1] - x[0]
     c = np.abs(f).sum() / f.sum()
     k = int(np.ceil(rfilter.radius + 0.5))
     offsets = np.arange(-k, k + 1)
-    share = np.array([np.abs(f[(x >= o - 0.5) & (x < o + 0.5)]).sum() * dx for o in offsets])
-    share /= share.sum()
+    cells = [(x >= o - 0.5) & (x < o + 0.5) for o in offsets]
+    share = np.array([np.abs(f[m]).sum() for m in cells])
+    signed = np.array([f[m].sum() for m in cells])
+    share, signed = share / share.sum(), signed / np.abs(f).sum()
     mean = np.asarray(mean, np.float64)
     second = np.asarray(sample_var, np.float64) + mean ** 2
     h, w = mean.shape[:2]
-    acc = np.zeros_like(mean)
+    acc2, acc1 = np.zeros_like(mean), np.zeros_like(mean)
     norm = np.zeros(mean.shape[:2] + (1,))
     for i, oy in enumerate(offsets):
         for j, ox in enumerate(offsets):
@@ -91,9 +93,11 @@ def footprint_sample_variance(mean, sample_var, rfilter) -> np.ndarray:
                 continue
             ys, xs = slice(max(0, -oy), min(h, h - oy)), slice(max(0, -ox), min(w, w - ox))
             yq, xq = slice(max(0, oy), min(h, h + oy)), slice(max(0, ox), min(w, w + ox))
-            acc[ys, xs] += a * second[yq, xq]
+            acc2[ys, xs] += a * second[yq, xq]
+            acc1[ys, xs] += signed[i] * signed[j] * mean[yq, xq]
             norm[ys, xs] += a
-    return np.maximum(c * c * acc / np.maximum(norm, 1e-300) - mean ** 2, 0.0)
+    norm = np.maximum(norm, 1e-300)
+    return np.maximum(c * c * acc2 / norm - (c * acc1 / norm) ** 2, 0.0)
 
 
 def _film_variance(film, stderr, ref_samples, ref_mean, rfilter):
