@@ -100,11 +100,27 @@ def footprint_sample_variance(mean, sample_var, rfilter) -> np.ndarray:
     return np.maximum(c * c * acc2 / norm - (c * acc1 / norm) ** 2, 0.0)
 
 
+def neighbourhood_mean(a: np.ndarray) -> np.ndarray:
+    """Each pixel's mean over its 3 x 3 neighbourhood (as far as it lies in the image)."""
+    h, w = a.shape[:2]
+    total = np.zeros_like(a, dtype=np.float64)
+    count = np.zeros((h, w) + (1,) * (a.ndim - 2))
+    for oy in (-1, 0, 1):
+        for ox in (-1, 0, 1):
+            ys, xs = slice(max(0, -oy), min(h, h - oy)), slice(max(0, -ox), min(w, w - ox))
+            yq, xq = slice(max(0, oy), min(h, h + oy)), slice(max(0, ox), min(w, w + ox))
+            total[ys, xs] += a[yq, xq]
+            count[ys, xs] += 1
+    return total / count
+
+
 def _film_variance(film, stderr, ref_samples, ref_mean, rfilter):
-    """The film's per-pixel variance, at least what the reference predicts for it (see compare_to_reference)."""
+    """The film's per-pixel variance, at least what the reference predicts for it and what the film's own
+    neighbouring pixels show (see compare_to_reference)."""
     var = film.variance()
     if ref_samples is None:
         return var
+    var = np.maximum(var, neighbourhood_mean(var))
     per_sample = np.asarray(stderr, np.float64) ** 2 * ref_samples
     if rfilter is not None:
         per_sample = np.maximum(per_sample, footprint_sample_variance(ref_mean, per_sample, rfilter))
@@ -119,9 +135,10 @@ def compare_to_reference(film, mean, stderr, alpha: float = 0.01, mask=None,
     With ``ref_samples`` (the reference's samples per pixel) the film's variance is taken to be at least what the
     reference predicts for the film's sample count: its per-sample variance within the pixel and, given the
     film's reconstruction filter ``rfilter``, the spread of the reference over the filter's footprint
-    (:func:`footprint_sample_variance`). A pixel whose rare bright paths or rare far filter offsets the film
-    happened not to sample has a sample variance far below its true error, and a test trusting it would fail on
-    noise; a biased pixel still fails, since its difference does not shrink."""
+    (:func:`footprint_sample_variance`), and at least the mean variance of its 3 x 3 neighbourhood in the film. A
+    pixel whose rare bright paths or rare far filter offsets the film happened not to sample has a sample variance
+    far below its true error, and a test trusting it would fail on noise; a biased pixel still fails, since its
+    difference does not shrink."""
     diff = film.image.astype(np.float64) - np.asarray(mean, np.float64)
     ref_var = np.asarray(stderr, np.float64) ** 2
     var = _film_variance(film, stderr, ref_samples, mean, rfilter) + ref_var
