@@ -369,7 +369,7 @@ def _with_textures(kind, names, **kw):
         tp.add("value1", "color", (0.2, 0.4, 0.6))
         tp.add("value2", "color", (0.7, 0.5, 0.3))
         kids.append(PluginSpec("texture", "checkerboard_color", name, tp, [], None, format="nori"))
-    pl = PropertyList(f'<bsdf type="{kind}">')
+    pl = PropertyList(f'<bsdf type="{kind}">', fmt="mitsuba")
     for k, (t, v) in _props(**kw).items():
         pl.add(k, t, v)
     return create(PluginSpec("bsdf", kind, None, pl, kids, None, format="mitsuba"))
@@ -399,6 +399,13 @@ def test_textured_parameters(ctx, queue):
             assert f2.max() > 0
             np.testing.assert_allclose(f1, f2, rtol=1e-5, atol=1e-7)
             np.testing.assert_allclose(p1, p2, rtol=1e-5, atol=1e-7)
+    # one textured alpha of an anisotropic pair
+    b = _with_textures("roughconductor", ("alpha_u",), alpha_v=0.3, distribution="ggx")
+    for uv, a in ((uv1, 0.2), (uv2, 0.7)):
+        _, f1 = bsdf_pdf_eval_batch(ctx, queue, b.pack(), wi, wo, uv=uv, textures=b.textures_table)
+        _, f2 = bsdf_pdf_eval_batch(ctx, queue, row("roughconductor", alpha_u=a, alpha_v=0.3, distribution="ggx"),
+                                    wi, wo, uv=uv)
+        np.testing.assert_allclose(f1, f2, rtol=1e-5, atol=1e-7)
     b = _with_textures("conductor", ("specular_reflectance",))
     s = bsdf_sample_batch(ctx, queue, b.pack(), wi_at(20.0), 2, 1, uv=uv2, textures=b.textures_table)
     np.testing.assert_allclose(s.weight, [[0.7, 0.5, 0.3]] * 2, rtol=1e-6)

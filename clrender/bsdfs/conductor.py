@@ -94,8 +94,8 @@ def read_eta_k(props, owner_location=None):
     if props.has("eta") or props.has("k") or material == "none":
         if material != "none":
             raise SceneError("give either material or eta and k, not both", props.location("material"))
-        eta = np.asarray(props.get_color("eta", np.zeros(3)), np.float64)
-        k = np.asarray(props.get_color("k", np.ones(3)), np.float64)
+        eta = np.asarray(props.get_color("eta", np.zeros(3), unbounded=True), np.float64)
+        k = np.asarray(props.get_color("k", np.ones(3), unbounded=True), np.float64)
         for name, v in (("eta", eta), ("k", k)):
             if np.any(v < 0) or not np.all(np.isfinite(v)):
                 raise SceneError(f"{name} must be non-negative and finite, got {v.tolist()}", props.location(name))

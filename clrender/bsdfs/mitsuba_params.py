@@ -45,8 +45,10 @@ def color_or_texture(props, textures, name, default=1.0):
 def float_or_texture(props, textures, name, default):
     """(value, texture or None) of a positive float parameter (a texture's first channel is read)."""
     _check_single(props, textures, name)
-    if props.has(name) and props.tag(name) == "color":     # a grey <spectrum>/<rgb> as Mitsuba's float textures
-        c = props.get_color(name)
+    if name in textures:
+        return 1.0, textures[name]     # the constant is not read
+    if props.has(name) and props.tag(name) in ("rgb", "spectrum", "color"):   # grey, as Mitsuba's float textures
+        c = props.get_color(name, unbounded=True)
         if not np.all(c == c[0]):
             raise SceneError(f"{name} is a float parameter; got the colour {c.tolist()}", props.location(name))
         v = float(c[0])
