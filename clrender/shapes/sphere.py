@@ -7,6 +7,8 @@
 </mesh>
 ```
 Normals point outward; uv = (atan2(n.y, n.x) / 2pi wrapped to [0,1), acos(n.z) / pi).
+Tables (kernels/shapes/sphere.h): one row of `spheres` (centre, radius) and of `sphere_shape` (this shape); the
+row's first is that row. An emitting sphere is sampled analytically (the cone it subtends), so it has no CDF.
 """
 import numpy as np
 
@@ -17,6 +19,7 @@ from .shape import Shape
 
 @register("mesh", "sphere")
 class Sphere(Shape):
+    kernel = "shapes/sphere.h"
     is_sphere = True
 
     def __init__(self, props, children, spec):
@@ -30,3 +33,12 @@ class Sphere(Shape):
 
     def area(self) -> float:
         return 4.0 * np.pi * self.radius ** 2
+
+    def fill(self, ctx, index, row):
+        row["first"] = ctx.add_table("spheres", "float4", [[*self.center, self.radius]])
+        ctx.add_table("sphere_shape", "uint", [index])
+        row["count"] = 1
+        row["flags"] = 0
+
+    def area_distribution(self):
+        return None, self.area()
