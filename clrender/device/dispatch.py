@@ -153,7 +153,12 @@ RFILTER = Kind(
             ("width", "uint"), ("height", "uint"),
             ("filter_type", "uint"),     # the filter's tag
             ("filter_bins", "uint"),     # size of the filter's 1-D sampling table
-            ("filter_radius", "float")),
+            ("filter_radius", "float"),
+            # the image is the window (crop_x, crop_y, width, height) of a film_width x film_height film
+            ("crop_x", "float"), ("crop_y", "float"), ("film_width", "float"), ("film_height", "float"),
+            ("clip_window", "uint"),     # 1: samples whose filter offset leaves the window count with weight 0
+            ("lens_radius", "float"),    # thin lens aperture radius (0: pinhole)
+            ("focus_distance", "float")),  # distance of the plane in focus along the viewing axis
     param_bytes=16, flags=(), dispatch_name="filter_profile", row="cam", type_field="filter_type",
     methods=(Method("eval", "float", "__global const Camera* cam, float x", "cam, x", "return 0.0f;",
                     required=True),),

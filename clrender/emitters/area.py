@@ -13,6 +13,9 @@ on it; the area density is converted to solid angle with dist² / |cos at the li
 Emitter row (kernels/emitters/area.h): p.area.radiance.xyz = radiance, shape = the emitting shape, which
 samples its own surface (its area distribution is packed with it: clrender/shapes/shape.py).
 """
+import numpy as np
+
+from ..errors import SceneError
 from ..scene.registry import register
 from .emitter import Emitter, nonnegative_color
 
@@ -28,3 +31,22 @@ class AreaEmitter(Emitter):
 
     def fill(self, p, row, ctx, shape):
         p["radiance"][:3] = self.radiance
+@register("emitter", "area", fmt="mitsuba")
+class MitsubaAreaEmitter(AreaEmitter):
+    """Mitsuba 3's area light, nested in (or referenced by) a shape: one-sided, on the side its normals face.
+
+    ```xml
+    <shape type="obj">
+        ...
+        <emitter type="area">
+            <rgb name="radiance" value="10, 10, 10"/>   <!-- required; rgb, spectrum (emitter convention) or float -->
+        </emitter>
+    </shape>
+    ```
+    """
+
+    def __init__(self, props, children, spec):
+        c = np.asarray(props.get_color("radiance", emitter=True), np.float64)
+        if np.any(c < 0) or not np.all(np.isfinite(c)):
+            raise SceneError(f"radiance must be non-negative and finite, got {c.tolist()}", props.location("radiance"))
+        self.radiance = c
