@@ -32,7 +32,7 @@ def rgb(*v):
 
 def spec_from_dict(d, tag="bsdf"):
     """A clrender plugin spec from a Mitsuba-style plugin dict (nested dicts with a type: child plugins)."""
-    props = PropertyList(f'<{tag} type="{d["type"]}">')
+    props = PropertyList(f'<{tag} type="{d["type"]}">', None, fmt="mitsuba")
     children = []
     for k, v in d.items():
         if k == "type":

@@ -24,7 +24,7 @@ FILES = ("plastic.json", "roughplastic.json", "composites.json")
 
 def spec_from_dict(d, tag="bsdf"):
     """The clrender plugin spec of a Mitsuba plugin dict (nested dicts with a type other than rgb: children)."""
-    props = PropertyList(f'<{tag} type="{d["type"]}">')
+    props = PropertyList(f'<{tag} type="{d["type"]}">', None, fmt="mitsuba")
     children = []
     for k, v in d.items():
         if k == "type":
