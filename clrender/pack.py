@@ -119,7 +119,7 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
         key = id(sh.bsdf)
         if key not in bsdf_index:
             bsdf_index[key] = len(bsdf_rows)
-            bsdf_rows.append(sh.bsdf.pack(ctx.textures))
+            bsdf_rows.extend(sh.bsdf.pack_rows(ctx.textures))
         row = shape_rows[i]
         row["bsdf"] = bsdf_index[key]
         row["emitter"] = NONE

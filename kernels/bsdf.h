@@ -12,7 +12,11 @@
 #define CLRENDER_BSDF_H
 #include "gen/bsdf_dispatch.h"
 
-/* Delta BSDFs (samples have q->measure == MEASURE_DISCRETE) get no emitter sampling. */
-INLINE bool bsdf_is_delta(__global const Bsdf* b) { return (b->flags & BSDF_DELTA) != 0u; }
+/* BSDFs with only delta lobes (every sample has q->measure == MEASURE_DISCRETE) get no emitter sampling. One with
+   both (a smooth plastic, a blend of a conductor and a diffuse) is sampled like a smooth BSDF: eval/pdf hold its
+   non-delta part only, and a delta sample comes back with MEASURE_DISCRETE (then no MIS, see the integrators). */
+INLINE bool bsdf_is_delta(__global const Bsdf* b) {
+    return (b->flags & BSDF_DELTA) != 0u && (b->flags & (BSDF_DIFFUSE | BSDF_GLOSSY)) == 0u;
+}
 
 #endif

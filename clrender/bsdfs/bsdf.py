@@ -24,7 +24,13 @@ class Bsdf:
 
     def __init_subclass__(cls, **kw):
         super().__init_subclass__(**kw)
-        cls.is_delta = "DELTA" in cls.FLAGS
+        # delta only when every lobe is (kernels/bsdf.h's bsdf_is_delta): a plastic has a delta and a diffuse lobe
+        cls.is_delta = "DELTA" in cls.FLAGS and not {"DIFFUSE", "GLOSSY"} & set(cls.FLAGS)
+
+    def pack_rows(self, textures) -> list:
+        """This BSDF's rows for the scene's Bsdf table: its own first, then (composites) its children's, which
+        the first refers to by offset (see clrender/bsdfs/composite.py)."""
+        return [self.pack(textures)]
 
     def pack(self, textures=None) -> np.void:
         """The Bsdf row; texture parameters go to `textures` (a TextureTable; by default the plugin's own, left

@@ -1,0 +1,71 @@
+"""What the composite BSDFs (twosided, blendbsdf, mask) share: nested BSDFs packed as rows after their parent's.
+
+A composite's row refers to each child by its offset from the composite's own row (`b + offset` in C: rows are
+one array), and the generated dispatch (clrender/device/dispatch.py) calls the child through the switch one
+level down: OpenCL C has neither recursion nor function pointers, so the supported depth of nesting is fixed
+(dispatch.BSDF.composite_levels); deeper nesting is a located error. The composite's flags are its own plus the
+union of its children's (DELTA, DIFFUSE, GLOSSY, UV).
+"""
+from __future__ import annotations
+
+from ..device import dispatch
+from ..errors import SceneError
+from .bsdf import Bsdf
+
+_CHILD_FLAGS = ("DELTA", "DIFFUSE", "GLOSSY", "UV")
+
+
+def composite_depth(bsdf) -> int:
+    """0 for a leaf BSDF, 1 + the deepest child's for a composite."""
+    kids = getattr(bsdf, "bsdfs", ())
+    return 1 + max(composite_depth(c) for c in kids) if kids else 0
+
+
+class Composite(Bsdf):
+    COMPOSITE = True
+    children = ("bsdf", "texture")
+    owner = ""
+
+    def read_children(self, spec, children, counts: tuple, textures: tuple = ()):
+        """Split nested objects into BSDFs (`counts`: the numbers allowed) and named textures."""
+        where = getattr(spec, "location", None)
+        self.bsdfs = [c for c in children if isinstance(c, Bsdf)]
+        self.textures = {}
+        for c in children:
+            if isinstance(c, Bsdf):
+                continue
+            spec = getattr(c, "spec", None)
+            name = getattr(spec, "name", None)
+            if name not in textures:
+                takes = f"a texture named {' or '.join(repr(t) for t in textures)}" if textures else "no texture"
+                raise SceneError(f"{self.owner} takes {takes}, not {name!r}", getattr(spec, "location", None))
+            if name in self.textures:
+                raise SceneError(f"{self.owner} has two '{name}' textures", getattr(spec, "location", None))
+            self.textures[name] = c
+        if len(self.bsdfs) not in counts:
+            want = " or ".join(str(n) for n in counts)
+            raise SceneError(f"{self.owner} needs {want} nested <bsdf>, got {len(self.bsdfs)}", where)
+        depth = composite_depth(self)
+        levels = dispatch.BSDF.composite_levels
+        if depth > levels:
+            raise SceneError(f"composite BSDFs (twosided, blendbsdf, mask) nested {depth} deep; at most {levels} "
+                             f"levels are supported", where)
+
+    def pack_rows(self, textures) -> list:
+        rows, offsets = [None], []
+        for c in self.bsdfs:
+            offsets.append(len(rows))
+            rows += c.pack_rows(textures)
+        self.child_offsets = offsets
+        own = self.pack(textures)
+        defs = dispatch.flag_defines()
+        for off in offsets:
+            for f in _CHILD_FLAGS:
+                own["flags"] |= rows[off]["flags"] & defs[f"BSDF_{f}"]
+        rows[0] = own
+        return rows
+
+    def pack(self, textures=None):
+        if not hasattr(self, "child_offsets"):
+            raise RuntimeError(f"{type(self).__name__}: pack the composite with pack_rows (its children follow it)")
+        return super().pack(textures)

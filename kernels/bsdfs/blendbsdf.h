@@ -1,0 +1,44 @@
+/* blendbsdf: f = (1-w) f_first + w f_second, w = weight (a constant or a texture's first channel). Sampling picks
+   a child with probability 1-w / w; a delta sample keeps that child's weight; a non-delta one is weighted by the
+   mixture's eval and pdf (which hold the non-delta parts only), so weight == f cos / pdf for every sample with
+   MEASURE_SOLID_ANGLE. Row: p.blendbsdf = weight(_tex), first, second (offsets of the children's rows).
+   Included once per nesting level (see twosided.h). */
+#ifndef CLRENDER_BSDFS_BLENDBSDF_H
+#define CLRENDER_BSDFS_BLENDBSDF_H
+INLINE float blendbsdf_weight(__global const Bsdf* b, const BsdfQuery* q) {
+    return clamp(param_color(q, b->p.blendbsdf.weight, b->p.blendbsdf.weight_tex).x, 0.0f, 1.0f);
+}
+#endif
+
+INLINE float3 COMPOSITE_FN(blendbsdf_eval)(__global const Bsdf* b, const BsdfQuery* q) {
+    float w = blendbsdf_weight(b, q);
+    float3 f = (float3)(0.0f);
+    if (w < 1.0f) f += (1.0f - w) * CHILD_FN(eval)(b + b->p.blendbsdf.first, q);
+    if (w > 0.0f) f += w * CHILD_FN(eval)(b + b->p.blendbsdf.second, q);
+    return f;
+}
+
+INLINE float COMPOSITE_FN(blendbsdf_pdf)(__global const Bsdf* b, const BsdfQuery* q) {
+    float w = blendbsdf_weight(b, q);
+    float p = 0.0f;
+    if (w < 1.0f) p += (1.0f - w) * CHILD_FN(pdf)(b + b->p.blendbsdf.first, q);
+    if (w > 0.0f) p += w * CHILD_FN(pdf)(b + b->p.blendbsdf.second, q);
+    return p;
+}
+
+INLINE float3 COMPOSITE_FN(blendbsdf_sample)(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+    float w = blendbsdf_weight(b, q);
+    bool second = u.x < w;
+    u.x = second ? u.x / w : (u.x - w) / (1.0f - w);   /* uniform again on [0,1) */
+    float3 r = CHILD_FN(sample)(b + (second ? b->p.blendbsdf.second : b->p.blendbsdf.first), q, u);
+    if (q->measure == MEASURE_DISCRETE || is_black(r)) return r;
+    float pdf = COMPOSITE_FN(blendbsdf_pdf)(b, q);
+    if (!(pdf > 0.0f)) return (float3)(0.0f);
+    return COMPOSITE_FN(blendbsdf_eval)(b, q) * (fabs(q->wo.z) / pdf);
+}
+
+INLINE float3 COMPOSITE_FN(blendbsdf_albedo)(__global const Bsdf* b, const BsdfQuery* q) {
+    float w = blendbsdf_weight(b, q);
+    return (1.0f - w) * CHILD_FN(albedo)(b + b->p.blendbsdf.first, q) +
+           w * CHILD_FN(albedo)(b + b->p.blendbsdf.second, q);
+}
