@@ -5,7 +5,7 @@ from .shapes import obj, ply, sphere  # noqa: F401
 from .cameras import perspective  # noqa: F401
 from .filters import box, gaussian, mitchell, tent  # noqa: F401
 from .samplers import independent  # noqa: F401
-from .textures import checkerboard_color, uvtexture  # noqa: F401
+from .textures import bitmap, checkerboard, checkerboard_color, uvtexture  # noqa: F401
 from .bsdfs import dielectric, diffuse, microfacet, mirror  # noqa: F401
 from .emitters import area, constant, distant, distantdisk, envmap, point, spot  # noqa: F401
 from .integrators import (ao, av, direct, direct_ems, direct_mats, direct_mis, material, normals,  # noqa: F401
