@@ -13,10 +13,12 @@ import pytest
 import clrender
 from clrender.errors import SceneError
 from clrender.loader import load_scene
-from clrender.pack import pack_scene
+from clrender.device.layout import NONE
+from clrender.pack import pack_scene, selection_cdf
 from clrender.scene import registry
 from clrender.scene.transform import Transform
-from clrender.testing.stats import compare_mean_to_value, compare_to_value
+from clrender.testing.stats import compare_films, compare_mean_to_value
+from scipy import stats
 from clrender.textures.imagefile import read_image, write_rgbe
 
 from test_emitters import HEADER, Dev, kernels, run_chi2, tris_obj, quad  # noqa: F401  (kernels: a fixture)
@@ -27,14 +29,14 @@ def mitsuba(type_name, **props):
     return registry.instantiate("emitter", type_name, props, fmt="mitsuba")
 
 
-def device(tmp, ctx, queue, kernels, emitters, stem="s"):
+def device(tmp, ctx, queue, kernels, emitters, stem="s", selection="uniform"):
     """A ground quad (for the scene bounds) lit by the given emitter objects, packed and on the device."""
     (tmp / "ground.obj").write_text(tris_obj(quad([0, 0, 0], [0, 0, 5], [5, 0, 0])))
     path = tmp / f"{stem}.xml"
     path.write_text(HEADER + '<mesh type="obj"><string name="filename" value="ground.obj"/></mesh>\n</scene>\n')
     scene = load_scene(path)
     scene.emitters.extend(emitters)
-    return Dev(ctx, queue, kernels, pack_scene(scene))
+    return Dev(ctx, queue, kernels, pack_scene(scene, emitter_selection=selection))
 
 
 def unit(v):
@@ -208,3 +210,83 @@ def test_envmap_mis_furnace(tmp_path):
     assert abs(centre.mean() - 0.6 * L) < 0.02 * L, centre.mean()
     res = compare_mean_to_value(film, float(film.image.mean()), 0.01)   # sanity: the helper runs on this film
     assert res.passed
+
+
+# ------------------------------------------------------------------------------- selection in proportion to power
+def test_power_selection_chi2_and_pdfs(tmp_path, ctx, queue, kernels, envmaps):
+    env, _ = envmaps
+    lights = [mitsuba("point", intensity=("color", 100.0), position=("point", [0.5, 2.0, 0.5])),
+              mitsuba("spot", intensity=("color", [500.0, 900.0, 200.0]), to_world=("transform", Transform.lookat(
+                  [1, 3, 1], [1, 0, 1], [0, 0, 1]))),
+              mitsuba("directional", irradiance=("color", 3.0), direction=("vector", [0, -1, 0.2])),
+              mitsuba("constant", radiance=("color", 0.2)),
+              env]
+    d = device(tmp_path, ctx, queue, kernels, lights, selection="power")
+    radius = float(d.b.info["bounds_center"][0][3])
+    prob = np.diff(np.concatenate([[0.0], selection_cdf([em.selection_power(radius, 0.0) for em in lights])]))
+    assert prob.min() > 0.01 and prob.max() < 0.9 and np.ptp(prob) > 0.1      # far from uniform
+    n = 200_000
+    rng = np.random.default_rng(21)
+    refs = np.concatenate([rng.uniform(0.2, 4.8, (n, 1)), np.full((n, 1), 0.01), rng.uniform(0.2, 4.8, (n, 1))], 1)
+    s = d.sample(NONE, refs.astype(np.float32), rng.random((n, 3), dtype=np.float32))
+    counts = np.bincount(s["emitter"], minlength=len(lights))
+    res = stats.chisquare(counts, prob * n)
+    assert res.pvalue > 1e-3, (counts, prob * n)
+    em = s["emitter"]
+    delta = np.isin(em, [0, 1, 2])
+    # the pdfs carry the same selection probability: sampling, pdf(), and the environment's sum
+    np.testing.assert_allclose(s["pdf"][delta], prob[em[delta]], rtol=1e-5)
+    smooth = ~delta & (s["pdf"] > 0)
+    np.testing.assert_allclose(s["pdf"][smooth], s["pdf_one"][smooth] * prob[em[smooth]], rtol=2e-4)
+    np.testing.assert_allclose(s["pdf_again"][smooth], s["pdf"][smooth], rtol=2e-4)
+    np.testing.assert_allclose(s["w"][smooth], s["eval"][smooth] / s["pdf"][smooth, None], rtol=2e-4, atol=1e-6)
+    dirs = unit(rng.normal(size=(2000, 3))).astype(np.float32)
+    envs = d.environment(dirs)
+    one = Dev(d.ctx, d.queue, d.k, d.b)    # the same scene, each infinite light's own pdf
+    pdf_c = 1 / (4 * np.pi)
+    pdf_env = one.pdf_dirs(4, np.zeros(3), dirs)
+    np.testing.assert_allclose(envs[:, 3], prob[3] * pdf_c + prob[4] * pdf_env, rtol=2e-4)
+    # uniform selection stays what it was
+    u = device(tmp_path, ctx, queue, kernels, lights, stem="u")
+    su = u.sample(NONE, refs[:1000].astype(np.float32), rng.random((1000, 3), dtype=np.float32))
+    dl = np.isin(su["emitter"], [0, 1, 2])
+    np.testing.assert_allclose(su["pdf"][dl], 1 / len(lights))
+
+
+def test_power_selection_keeps_mis_unbiased(tmp_path):
+    """path_mis with a dim large ceiling light, an environment and a very bright small light that faces away
+    (most of the power, none of the image): choosing lights by power must give the image of the uniform choice.
+    The MIS weights of BSDF samples must use the same selection probabilities as light sampling (with 1/N there,
+    the ceiling light's BSDF-sampled share is off by ~30 % here)."""
+    write_exr(tmp_path / "sky.exr", sky_image())
+    (tmp_path / "small.obj").write_text(tris_obj(quad([2.0, 3.0, 2.0], [0, 0, 0.1], [0.1, 0, 0])))   # faces up, above the ceiling
+    (tmp_path / "big.obj").write_text(tris_obj(quad([-2, 2.5, -2], [4, 0, 0], [0, 0, 4])))            # faces down
+    (tmp_path / "ground.obj").write_text(tris_obj(quad([-3, 0, -3], [0, 0, 6], [6, 0, 0])))
+    xml = ('<scene><integrator type="path_mis"/><camera type="perspective"><float name="fov" value="60"/>'
+           '<transform name="toWorld"><lookat origin="0, 2, 1.5" target="0, 0, 0" up="0, 1, 0"/></transform>'
+           '<integer name="width" value="10"/><integer name="height" value="8"/></camera>'
+           '<mesh type="obj"><string name="filename" value="ground.obj"/><bsdf type="diffuse"/></mesh>'
+           '<mesh type="sphere"><point name="center" value="0, 0.5, 0"/><float name="radius" value="0.5"/></mesh>'
+           '<mesh type="obj"><string name="filename" value="small.obj"/>'
+           '<emitter type="area"><color name="radiance" value="30000"/></emitter></mesh>'
+           '<mesh type="obj"><string name="filename" value="big.obj"/>'
+           '<emitter type="area"><color name="radiance" value="1"/></emitter></mesh></scene>')
+    (tmp_path / "s.xml").write_text(xml)
+    films = []
+    for sel, seed in (("uniform", 1), ("power", 2)):
+        scene = clrender.load_scene(tmp_path / "s.xml")
+        scene.emitters.append(mitsuba("envmap", filename=("string", str(tmp_path / "sky.exr")), scale=("float", 0.02)))
+        scene.emitter_selection = sel
+        films.append(clrender.render(scene, spp=256, seed=seed))
+    res = compare_films(*films, alpha=0.01)
+    assert res.passed, res.message
+    assert films[0].image.mean() > 0.05
+
+
+def test_cli_power_selection_is_for_mitsuba_scenes(tmp_path, capsys):
+    from clrender.cli import main
+
+    (tmp_path / "n.xml").write_text('<scene><integrator type="normals"/><camera type="perspective"><integer '
+                                    'name="width" value="4"/><integer name="height" value="4"/></camera></scene>')
+    assert main(["render", str(tmp_path / "n.xml"), "--emitter-selection", "power", "-q"]) == 2
+    assert "is for Mitsuba scenes" in capsys.readouterr().err

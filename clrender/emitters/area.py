@@ -13,8 +13,10 @@ on it; the area density is converted to solid angle with dist² / |cos at the li
 Emitter row (kernels/emitters/area.h): p.area.radiance.xyz = radiance, shape = the emitting shape, which
 samples its own surface (its area distribution is packed with it: clrender/shapes/shape.py).
 """
+import numpy as np
+
 from ..scene.registry import register
-from .emitter import Emitter, nonnegative_color
+from .emitter import Emitter, luminance, nonnegative_color
 
 
 @register("emitter", "area")
@@ -28,3 +30,6 @@ class AreaEmitter(Emitter):
 
     def fill(self, p, row, ctx, shape):
         p["radiance"][:3] = self.radiance
+
+    def selection_power(self, radius, area):
+        return np.pi * area * luminance(self.radiance)   # one-sided Lambertian emitter

@@ -11,7 +11,7 @@ Emitter row (kernels/emitters/constant.h): p.constant_.radiance.xyz = radiance.
 import numpy as np
 
 from ..scene.registry import register
-from .emitter import Emitter, nonnegative_color
+from .emitter import Emitter, luminance, nonnegative_color
 
 
 @register("emitter", "constant")
@@ -25,6 +25,9 @@ class ConstantEmitter(Emitter):
 
     def fill(self, p, row, ctx, shape):
         p["radiance"][:3] = self.radiance
+
+    def selection_power(self, radius, area):
+        return np.pi * radius ** 2 * 4.0 * np.pi * luminance(self.radiance)   # through the scene's disk
 
 
 @register("emitter", "constant", fmt="mitsuba")

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..scene.registry import register
-from .emitter import Emitter, nonnegative_color
+from .emitter import Emitter, luminance, nonnegative_color
 
 
 @register("emitter", "distant")
@@ -36,6 +36,9 @@ class DistantEmitter(Emitter):
     def fill(self, p, row, ctx, shape):
         p["irradiance"][:3] = self.irradiance
         p["direction"][:3] = self.direction
+
+    def selection_power(self, radius, area):
+        return np.pi * radius ** 2 * luminance(self.irradiance)
 
 
 @register("emitter", "directional", fmt="mitsuba")

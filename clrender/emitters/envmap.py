@@ -32,9 +32,7 @@ import numpy as np
 from ..errors import SceneError
 from ..scene.registry import register
 from ..textures.imagefile import read_image
-from .emitter import Emitter
-
-LUMINANCE = np.array([0.212671, 0.715160, 0.072169])   # linear sRGB (Rec. 709) luminance weights
+from .emitter import LUMINANCE, Emitter
 
 
 @register("emitter", "envmap", fmt="mitsuba")
@@ -99,6 +97,15 @@ class EnvMap(Emitter):
         top = d[iy, ix] * (1 - fx) + d[iy, ix + 1] * fx
         bot = d[iy + 1, ix] * (1 - fx) + d[iy + 1, ix + 1] * fx
         return (top * (1 - fy) + bot * fy) * self.scale
+
+    def selection_power(self, radius, area):
+        # radiance integrated over the sphere: the mean of the cells' luminance weighted by their solid angle
+        lum = self.data[:, :-1].astype(np.float64) @ LUMINANCE
+        h = lum.shape[0]
+        theta = np.arange(h) * np.pi / (h - 1)
+        band = np.sin(theta)
+        flux = (lum * band[:, None]).sum() / (band.sum() * lum.shape[1]) * 4.0 * np.pi
+        return np.pi * radius ** 2 * self.scale * flux
 
     def fill(self, p, row, ctx, shape):
         h, w1 = self.data.shape[:2]

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..scene.registry import register
-from .emitter import Emitter, nonnegative_color
+from .emitter import Emitter, luminance, nonnegative_color
 
 
 @register("emitter", "point")
@@ -32,6 +32,9 @@ class PointEmitter(Emitter):
     @property
     def intensity(self) -> np.ndarray:
         return self.power / (4.0 * np.pi)
+
+    def selection_power(self, radius, area):
+        return luminance(self.power)
 
     def fill(self, p, row, ctx, shape):
         p["intensity"][:3] = self.intensity

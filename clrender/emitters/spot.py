@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..scene.registry import register
-from .emitter import Emitter, nonnegative_color
+from .emitter import Emitter, luminance, nonnegative_color
 
 
 @register("emitter", "spot", fmt="mitsuba")
@@ -59,6 +59,11 @@ class SpotEmitter(Emitter):
         ramp = (c - theta) / (c - b) if c > b else np.zeros_like(theta)
         inner = np.where(local[..., 2] >= np.cos(b), 1.0, ramp)
         return np.where(local[..., 2] > np.cos(c), inner, 0.0)
+
+    def selection_power(self, radius, area):
+        # the solid angle of the cone out to the middle of the falloff ramp
+        half = np.radians(0.5 * (self.cutoff + self.beam_width))
+        return 2.0 * np.pi * (1.0 - np.cos(half)) * luminance(self.intensity)
 
     def fill(self, p, row, ctx, shape):
         c, b = np.radians(self.cutoff), np.radians(self.beam_width)
