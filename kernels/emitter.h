@@ -35,6 +35,7 @@ INLINE void emitter_query_from_hit(EmitterQuery* q, float3 ref, const Intersecti
     q->pdf = 0.0f;
     q->delta = 0u;
     q->emitter = NONE;
+    q->uv = its->uv;
 }
 
 /* A query for an escaping direction d (infinite emitters only need wi). */
@@ -156,6 +157,7 @@ INLINE float3 area_emitter_Le(const SceneData* sd, const Intersection* its, floa
     EmitterQuery q;
     q.n = its->sh.n;
     q.wi = -wo_world;
+    q.uv = its->uv;
     return emitter_row_eval(sd, em, &q);
 }
 
