@@ -113,8 +113,9 @@ SHAPE = Kind(
             ("cdf", "uint"),         # emitting meshes: offset of their triangle-area CDF in the `cdf` table
             ("area", "float")),      # emitting shapes: total surface area
     # per shape, set at packing (not capabilities of the plugin): HAS_NORMALS / HAS_UVS: per-vertex data present;
-    # NEEDS_UV: its BSDF reads a texture over the surface (analytic shapes compute uv only then)
-    param_bytes=16, flags=("HAS_NORMALS", "HAS_UVS", "NEEDS_UV"), dispatch_name="shape", row="s",
+    # NEEDS_UV: its BSDF reads a texture over the surface (analytic shapes compute uv only then); FLIP_NORMALS:
+    # analytic shapes turned inside out (meshes flip their winding and normals at loading instead)
+    param_bytes=16, flags=("HAS_NORMALS", "HAS_UVS", "NEEDS_UV", "FLIP_NORMALS"), dispatch_name="shape", row="s",
     methods=(
         Method("surface", "bool",
                "const SceneData* sd, __global const Shape* s, const Ray* r, const Hit* h, Intersection* its",
@@ -149,7 +150,12 @@ RFILTER = Kind(
             ("width", "uint"), ("height", "uint"),
             ("filter_type", "uint"),     # the filter's tag
             ("filter_bins", "uint"),     # size of the filter's 1-D sampling table
-            ("filter_radius", "float")),
+            ("filter_radius", "float"),
+            # the image is the window (crop_x, crop_y, width, height) of a film_width x film_height film
+            ("crop_x", "float"), ("crop_y", "float"), ("film_width", "float"), ("film_height", "float"),
+            ("clip_window", "uint"),     # 1: samples whose filter offset leaves the window count with weight 0
+            ("lens_radius", "float"),    # thin lens aperture radius (0: pinhole)
+            ("focus_distance", "float")),  # distance of the plane in focus along the viewing axis
     param_bytes=16, flags=(), dispatch_name="filter_profile", row="cam", type_field="filter_type",
     methods=(Method("eval", "float", "__global const Camera* cam, float x", "cam, x", "return 0.0f;",
                     required=True),),

@@ -17,8 +17,9 @@ own surface (its area distribution is packed with it: clrender/shapes/shape.py).
 import numpy as np
 
 from ..device import dispatch
+from ..errors import SceneError
 from ..scene.registry import register
-from ..textures.texture import param
+from ..textures.texture import param, texture_child
 from .emitter import Emitter, luminance, nonnegative_color
 
 
@@ -45,3 +46,33 @@ class AreaEmitter(Emitter):
         # one-sided Lambertian emitter; a texture counts with its largest value (an upper bound)
         scale = self.texture.max_value() if self.texture is not None else luminance(self.radiance)
         return np.pi * area * scale
+
+
+@register("emitter", "area", fmt="mitsuba")
+class MitsubaAreaEmitter(AreaEmitter):
+    """Mitsuba 3's area light, nested in (or referenced by) a shape: one-sided, on the side its normals face. The
+    radiance may be a texture over the shape's uv (sampling stays uniform by area).
+
+    ```xml
+    <shape type="obj">
+        ...
+        <emitter type="area">
+            <rgb name="radiance" value="10, 10, 10"/>   <!-- required; rgb, spectrum (emitter convention) or float -->
+            <!-- or <texture type="bitmap" name="radiance"> ... </texture> -->
+        </emitter>
+    </shape>
+    ```
+    """
+    children = ("texture",)
+
+    def __init__(self, props, children, spec):
+        self.texture = texture_child(children, "radiance", '<emitter type="area">')
+        if self.texture is not None:
+            if props.has("radiance"):
+                raise SceneError("radiance given both as a colour and as a texture", props.location("radiance"))
+            self.radiance = np.ones(3)   # unused: the texture gives the radiance
+            return
+        c = np.asarray(props.get_color("radiance", emitter=True), np.float64)
+        if np.any(c < 0) or not np.all(np.isfinite(c)):
+            raise SceneError(f"radiance must be non-negative and finite, got {c.tolist()}", props.location("radiance"))
+        self.radiance = c

@@ -42,4 +42,4 @@ class MitsubaConstant(ConstantEmitter):
     """
 
     def __init__(self, props, children, spec):
-        self.radiance = nonnegative_color(props, "radiance", np.ones(3))
+        self.radiance = nonnegative_color(props, "radiance", np.ones(3), emitter=True)

@@ -66,4 +66,4 @@ class MitsubaDirectional(DistantEmitter):
             raise SceneError(f"the direction must be a non-zero vector, got {np.asarray(d).tolist()}",
                              props.location(where))
         self.direction = d / n
-        self.irradiance = nonnegative_color(props, "irradiance", np.ones(3))
+        self.irradiance = nonnegative_color(props, "irradiance", np.ones(3), emitter=True)

@@ -48,8 +48,10 @@ class Emitter:
         return None
 
 
-def nonnegative_color(props, name, default=None):
-    c = props.get_color(name) if default is None else props.get_color(name, default)
+def nonnegative_color(props, name, default=None, **kw):
+    """A colour property that must be >= 0 (``kw``: get_color's options, e.g. ``emitter=True`` for a Mitsuba
+    emitter's spectrum)."""
+    c = props.get_color(name, **kw) if default is None else props.get_color(name, default, **kw)
     c = np.asarray(c, np.float64)
     if np.any(c < 0) or not np.all(np.isfinite(c)):
         raise SceneError(f"{name} must be non-negative and finite, got {c.tolist()}", props.location(name))

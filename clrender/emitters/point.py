@@ -64,4 +64,4 @@ class MitsubaPoint(PointEmitter):
             self.position = np.asarray(props.get_point("position", np.zeros(3)), np.float64)
         if not np.all(np.isfinite(self.position)):
             raise SceneError(f"position must be finite, got {self.position.tolist()}", props.location("position"))
-        self.power = 4.0 * np.pi * nonnegative_color(props, "intensity", np.ones(3))
+        self.power = 4.0 * np.pi * nonnegative_color(props, "intensity", np.ones(3), emitter=True)

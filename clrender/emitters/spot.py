@@ -34,7 +34,7 @@ class SpotEmitter(Emitter):
     METHODS = ("sample",)
 
     def __init__(self, props, children, spec):
-        self.intensity = nonnegative_color(props, "intensity", np.ones(3))
+        self.intensity = nonnegative_color(props, "intensity", np.ones(3), emitter=True)
         self.cutoff = float(props.get_float("cutoff_angle", 20.0))
         self.beam_width = float(props.get_float("beam_width", self.cutoff * 0.75))
         if not (0.0 < self.cutoff <= 180.0):
