@@ -354,3 +354,22 @@ def test_textured_area_light_strategies_agree(tmp_path):
         films.append(clrender.render(scene, spp=512, seed=k + 1))
     res = compare_films(*films, alpha=0.01)
     assert res.passed, res.message
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["spot_point", "checkerboard"])
+def test_power_selection_twins_match_mitsuba(name):
+    """The twin scenes choosing lights in proportion to power converge to Mitsuba's image (which chooses
+    uniformly): only the noise may change."""
+    from pathlib import Path
+
+    from clrender.testing.stats import compare_to_reference
+
+    here = Path(__file__).resolve().parent / "mitsuba"
+    with np.load(here / "refs" / f"{name}.npz") as z:
+        mean, stderr, spp = z["mean"], z["stderr"], int(z["spp"])
+    scene = clrender.load_scene(here / "scenes" / f"{name}.xml")
+    scene.emitter_selection = "power"
+    film = clrender.render(scene, seed=11)
+    res = compare_to_reference(film, mean, stderr, ref_samples=spp)
+    assert res.passed, res.message
