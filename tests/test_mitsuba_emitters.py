@@ -134,6 +134,47 @@ def test_rgbe_reader_round_trip(tmp_path):
     assert np.all(np.abs(back - img) <= img.max(axis=-1, keepdims=True) / 128 + 1e-7)
 
 
+def write_rgbe_rle(path, img):
+    """Radiance's run-length scanlines (each component in turn; runs of equal bytes, literals otherwise)."""
+    from clrender.textures.imagefile import write_rgbe
+
+    write_rgbe(path, img)          # flat: reuse its header and RGBE bytes
+    data = path.read_bytes()
+    head_end = data.index(b"+X") + data[data.index(b"+X"):].index(b"\n") + 1
+    h, w = img.shape[:2]
+    px = np.frombuffer(data[head_end:], np.uint8).reshape(h, w, 4)
+    out = bytearray(data[:head_end])
+    for y in range(h):
+        out += bytes([2, 2, w >> 8, w & 255])
+        for c in range(4):
+            row, x = px[y, :, c], 0
+            while x < w:
+                run = 1
+                while x + run < w and run < 127 and row[x + run] == row[x]:
+                    run += 1
+                if run >= 3:
+                    out += bytes([128 + run, row[x]])
+                    x += run
+                else:
+                    n = 1
+                    while x + n < w and n < 128 and not (x + n + 2 < w and row[x + n] == row[x + n + 1] == row[x + n + 2]):
+                        n += 1
+                    out += bytes([n]) + bytes(row[x:x + n])
+                    x += n
+    path.write_bytes(bytes(out))
+
+
+def test_rgbe_run_length_scanlines(tmp_path):
+    img = sky_image(w=24, h=12)
+    write_rgbe(tmp_path / "flat.hdr", img)
+    write_rgbe_rle(tmp_path / "rle.hdr", img)
+    assert (tmp_path / "rle.hdr").stat().st_size < (tmp_path / "flat.hdr").stat().st_size
+    np.testing.assert_array_equal(read_image(tmp_path / "rle.hdr"), read_image(tmp_path / "flat.hdr"))
+    (tmp_path / "bad.hdr").write_bytes(b"#?RADIANCE\nFORMAT=32-bit_rle_xyze\n\n-Y 2 +X 2\n" + bytes(16))
+    with pytest.raises(SceneError, match="32-bit_rle_xyze"):
+        read_image(tmp_path / "bad.hdr")
+
+
 def test_envmap_lookup_matches_reference(envmaps):
     em, d = envmaps
     dirs = unit(np.random.default_rng(3).normal(size=(4000, 3))).astype(np.float32)
