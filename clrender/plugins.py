@@ -9,5 +9,5 @@ from .samplers import independent  # noqa: F401
 from .textures import bitmap, checkerboard, checkerboard_color, uvtexture  # noqa: F401
 from .bsdfs import dielectric, diffuse, microfacet, mirror  # noqa: F401
 from .emitters import area, constant, distant, distantdisk, envmap, point, spot  # noqa: F401
-from .integrators import (ao, av, direct, direct_ems, direct_mats, direct_mis, material, normals,  # noqa: F401
-                          path_ems, path_mats, path_mis, simple, whitted)
+from .integrators import (ao, aov, av, direct, direct_ems, direct_mats, direct_mis, material,  # noqa: F401
+                          normals, path, path_ems, path_mats, path_mis, simple, whitted)
