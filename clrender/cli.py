@@ -37,6 +37,10 @@ def cmd_render(args) -> int:
     from .output import output_paths
     from .renderer import Interrupted, Renderer
 
+    if (args.cluster or args.sample_range) and args.emitter_selection != "uniform":
+        print("clrender: error: --emitter-selection power is not supported with --cluster or --sample-range yet",
+              file=sys.stderr)
+        return 2
     if args.cluster or args.sample_range:
         from .cli_cluster import cmd_render_distributed
 
@@ -44,6 +48,12 @@ def cmd_render(args) -> int:
     t0 = time.perf_counter()
     out, png = output_paths(args.output, args.scene)  # before any work: an unwritable -o fails now
     scene = load_scene(args.scene, nori_dialect=args.nori_dialect, **_defines(args.define))
+    if args.emitter_selection == "power":
+        if getattr(getattr(scene, "spec", None), "format", "nori") != "mitsuba":
+            print(f"clrender: error: {args.scene}: --emitter-selection power is for Mitsuba scenes (a Nori file "
+                  "chooses its lights uniformly)", file=sys.stderr)
+            return 2
+        scene.emitter_selection = "power"
     args.ctrl_c.check()  # a Ctrl-C that a library swallowed still stops us
     renderer = Renderer(scene, device=args.device)
     args.ctrl_c.check()
@@ -169,6 +179,9 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--device", help="OpenCL device: index, cpu, gpu or name substring (default: PoCL CPU)")
     r.add_argument("--time-limit", type=_seconds, metavar="SEC", help="stop after about SEC seconds")
     r.add_argument("-D", "--define", action="append", metavar="NAME=VALUE", help="set $NAME in the scene")
+    r.add_argument("--emitter-selection", choices=("uniform", "power"), default="uniform",
+                   help="how light sampling picks an emitter in a Mitsuba scene: uniformly (default, as Mitsuba) or "
+                        "in proportion to each emitter's power")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     r.add_argument("--progress", action="store_true",
                    help="show the progress bar even when stderr is not a terminal (e.g. a log file)")

@@ -102,12 +102,35 @@ def _nonempty(a: np.ndarray, dtype=None, shape=None) -> np.ndarray:
 DEFAULT_BVH_WIDTH = 4   # kernels/scene.h's default for BVH_WIDTH; measured faster on PoCL (benchmarks/README.md)
 
 
-def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | None = None) -> SceneBuffers:
+EMITTER_SELECTIONS = ("uniform", "power")
+
+
+def selection_cdf(powers) -> np.ndarray:
+    """The light-selection CDF for emitters of the given powers (None: unknown, given the mean of the known ones;
+    all zero or unknown: uniform)."""
+    known = [p for p in powers if p is not None and np.isfinite(p) and p >= 0]
+    fill = float(np.mean(known)) if known else 1.0
+    w = np.array([fill if p is None or not (np.isfinite(p) and p >= 0) else p for p in powers], np.float64)
+    if not w.sum() > 0:
+        w = np.ones(len(w))
+    cdf = np.cumsum(w) / w.sum()
+    cdf[-1] = 1.0
+    return cdf.astype(np.float32)
+
+
+def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | None = None,
+               emitter_selection: str | None = None) -> SceneBuffers:
     """Pack ``scene`` into device tables; ``bvh_width`` 4 collapses the binary BVH into 4-wide nodes (falls back
     to 2 when the tree does not fit the 4-wide kernel, see clrender/accel/bvh4.py); ``bvh_options`` go to
-    :func:`clrender.accel.bvh.build_bvh` (e.g. ``max_leaf_size``, ``traversal_cost``)."""
+    :func:`clrender.accel.bvh.build_bvh` (e.g. ``max_leaf_size``, ``traversal_cost``); ``emitter_selection``
+    ("uniform" or "power"; default: the scene's ``emitter_selection`` attribute, else uniform) is how light
+    sampling chooses an emitter (kernels/emitter.h scene_pick_emitter)."""
     if bvh_width not in (2, 4):
         raise ValueError(f"bvh_width must be 2 or 4, got {bvh_width}")
+    if emitter_selection is None:
+        emitter_selection = getattr(scene, "emitter_selection", "uniform")
+    if emitter_selection not in EMITTER_SELECTIONS:
+        raise ValueError(f"emitter_selection must be one of {EMITTER_SELECTIONS}, got {emitter_selection!r}")
     t0 = time.perf_counter()
     shapes = scene.shapes
     ctx = PackContext()
@@ -128,13 +151,15 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
             row["flags"] |= flags["SHAPE_NEEDS_UV"]
 
     # Emitters: area emitters in shape order, then the scene-level ones in document order.
-    emitter_rows = []
+    emitter_rows, emitter_objs = [], []
     for i, sh in enumerate(shapes):
         if sh.emitter is not None:
             shape_rows[i]["emitter"] = len(emitter_rows)
             emitter_rows.append(sh.emitter.pack(ctx, shape_index=i, shape=sh, shape_row=shape_rows[i]))
+            emitter_objs.append((sh.emitter, i))
     for em in scene.emitters:
         emitter_rows.append(em.pack(ctx, shape_index=NONE, shape=None, shape_row=None))
+        emitter_objs.append((em, None))
 
     # The BVH's primitives: every triangle (its tri_index row is its id) and every sphere.
     tri_index = ctx.array("tri_index")[:ctx.size("tri_index")]
@@ -170,6 +195,12 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
         info["bounds_center"][0] = [*c, max(float(np.linalg.norm(bmax - c)), 1e-6)]
     else:
         info["bounds_center"][0] = [0, 0, 0, 1]
+    info["emitter_cdf"] = NONE
+    if emitter_selection == "power" and emitter_rows:
+        radius = float(info["bounds_center"][0][3])
+        powers = [em.selection_power(radius, float(shape_rows[i]["area"]) if i is not None else 0.0)
+                  for em, i in emitter_objs]
+        info["emitter_cdf"] = ctx.add_table("cdf", "float", selection_cdf(powers))
     scene.integrator.pack(info[0])
     camera, filter_cdf = scene.camera.pack()
     filter_cdf = with_guide(filter_cdf)     # + the guide that render.cl's filter_sample_guided reads

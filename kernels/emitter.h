@@ -1,6 +1,7 @@
 /* Emitters: the query record (emitters/common.h), per-plugin sample/pdf/eval (kernels/emitters/<prefix>.h) reached
    through switches generated from the registered plugins (gen/emitter_dispatch.h: emitter_row_sample/pdf/eval,
-   see clrender/device/dispatch.py), and scene-level light selection (a uniform choice among the N emitters).
+   see clrender/device/dispatch.py), and scene-level light selection (a uniform choice among the N emitters, or
+   one proportional to their power: scene_pick_emitter).
    Kernels test the row's flags (EMITTER_DELTA, EMITTER_INFINITE, EMITTER_SURFACE), never its type; infinite
    emitters are also listed in the `infinite` index table.
 
@@ -19,6 +20,7 @@
 #define CLRENDER_EMITTER_H
 
 #include "gen/emitter_dispatch.h"
+#include "shapes/common.h"   /* shape_cdf_search */
 
 /* Fill a query from a surface hit seen from ref (for emitter_pdf/emitter_eval of a BSDF-sampled ray). */
 INLINE void emitter_query_from_hit(EmitterQuery* q, float3 ref, const Intersection* its) {
@@ -33,6 +35,7 @@ INLINE void emitter_query_from_hit(EmitterQuery* q, float3 ref, const Intersecti
     q->pdf = 0.0f;
     q->delta = 0u;
     q->emitter = NONE;
+    q->uv = its->uv;
 }
 
 /* A query for an escaping direction d (infinite emitters only need wi). */
@@ -70,25 +73,53 @@ INLINE float3 emitter_eval(const SceneData* sd, uint e, const EmitterQuery* q) {
 
 /* ---------------------------------------------------------------------------------- scene-level selection */
 
-/* Choose one of the N emitters uniformly with u3.x, let it sample with u3.yz. Returns radiance / (pdf / N);
-   q->pdf = emitter pdf / N, q->emitter = the chosen one. No emitters: returns 0 with pdf 0. */
+/* Which emitter u picks, and with what probability: uniformly among the N (Nori files, and Mitsuba files by
+   default), or by the selection CDF that pack_scene built from the emitters' powers (info->emitter_cdf != NONE;
+   clrender/pack.py). Every pdf that MIS compares goes through scene_emitter_prob, so both strategies agree. */
+INLINE uint scene_pick_emitter(const SceneData* sd, float u, float* prob) {
+    uint n = sd->info->n_emitters;
+    uint off = sd->info->emitter_cdf;
+    if (off == NONE) {
+        uint e = (uint)(u * (float)n);
+        if (e >= n) e = n - 1u;
+        *prob = 1.0f / (float)n;
+        return e;
+    }
+    __global const float* cdf = sd->cdf + off;
+    uint e = shape_cdf_search(cdf, n, u);
+    *prob = cdf[e] - (e > 0u ? cdf[e - 1u] : 0.0f);
+    return e;
+}
+
+INLINE float scene_emitter_prob(const SceneData* sd, uint e) {
+    uint n = sd->info->n_emitters;
+    if (n == 0u) return 0.0f;
+    uint off = sd->info->emitter_cdf;
+    if (off == NONE) return 1.0f / (float)n;
+    __global const float* cdf = sd->cdf + off;
+    return cdf[e] - (e > 0u ? cdf[e - 1u] : 0.0f);
+}
+
+/* Choose one of the N emitters with u3.x (scene_pick_emitter), let it sample with u3.yz. Returns
+   radiance / (pdf * P(e)); q->pdf = emitter pdf * P(e), q->emitter = the chosen one. No emitters: returns 0 with
+   pdf 0. */
 INLINE float3 scene_sample_emitter(const SceneData* sd, EmitterQuery* q, float3 u3) {
     uint n = sd->info->n_emitters;
-    if (n == 0u) {
+    float prob = 0.0f;
+    uint e = n ? scene_pick_emitter(sd, u3.x, &prob) : 0u;
+    if (n == 0u || !(prob > 0.0f)) {
         q->pdf = 0.0f; q->dist = 0.0f; q->delta = 0u; q->emitter = NONE; q->wi = (float3)(0.0f, 0.0f, 1.0f);
         q->p = q->ref; q->n = q->ng = (float3)(0.0f, 0.0f, 1.0f);
         return (float3)(0.0f);
     }
-    uint e = (uint)(u3.x * (float)n);
-    if (e >= n) e = n - 1u;
     float3 w = emitter_sample(sd, e, q, (float2)(u3.y, u3.z));
-    q->pdf *= 1.0f / (float)n;
-    return w * (float)n;
+    q->pdf *= prob;
+    return w * (1.0f / prob);
 }
 
 INLINE float scene_emitter_pdf(const SceneData* sd, uint e, const EmitterQuery* q) {
-    uint n = sd->info->n_emitters;
-    return n ? emitter_pdf(sd, e, q) / (float)n : 0.0f;
+    float prob = scene_emitter_prob(sd, e);
+    return prob > 0.0f ? emitter_pdf(sd, e, q) * prob : 0.0f;
 }
 
 /* Radiance of an escaping ray (direction d): the sum over the infinite emitters (an index list, so an escaped
@@ -102,15 +133,18 @@ INLINE float3 scene_eval_environment(const SceneData* sd, float3 d) {
     return L;
 }
 
-/* Light-selection pdf of an escaping direction: sum over infinite emitters of (1/N) pdf_e(d). */
+/* Light-selection pdf of an escaping direction: sum over infinite emitters of P(e) pdf_e(d). */
 INLINE float scene_environment_pdf(const SceneData* sd, float3 d) {
     uint n = sd->info->n_infinite;
     float pdf = 0.0f;
     EmitterQuery q;
     q.wi = d;  /* all an infinite emitter's pdf reads */
-    for (uint i = 0u; i < n; ++i) pdf += emitter_row_pdf(sd, &sd->emitters[sd->infinite[i]], &q);
-    uint total = sd->info->n_emitters;
-    return total ? pdf / (float)total : 0.0f;
+    for (uint i = 0u; i < n; ++i) {
+        uint e = sd->infinite[i];
+        float prob = scene_emitter_prob(sd, e);
+        if (prob > 0.0f) pdf += emitter_row_pdf(sd, &sd->emitters[e], &q) * prob;
+    }
+    return pdf;
 }
 
 /* Radiance leaving the hit surface toward the viewer (wo_world points at the viewer); 0 if the shape does
@@ -123,6 +157,7 @@ INLINE float3 area_emitter_Le(const SceneData* sd, const Intersection* its, floa
     EmitterQuery q;
     q.n = its->sh.n;
     q.wi = -wo_world;
+    q.uv = its->uv;
     return emitter_row_eval(sd, em, &q);
 }
 

@@ -140,7 +140,7 @@ INTEGRATOR = Kind(
             ("max_depth", "uint"),        # path length limit (0xFFFFFFFF: none)
             ("rr_depth", "uint"),         # Russian roulette starts at this depth
             ("n_infinite", "uint"),       # entries of the infinite-emitter index table
-            ("pad", "uint")),
+            ("emitter_cdf", "uint")),     # NONE: choose a light uniformly; else its selection CDF's offset in `cdf`
     param_bytes=32, flags=(), dispatch_name="integrator", row="info", methods=(), dispatched=False)
 
 # Reconstruction filters: their parameters are a union in the Camera row; the kernels evaluate the profile f(x)

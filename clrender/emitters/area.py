@@ -10,42 +10,68 @@ on it; the area density is converted to solid angle with dist² / |cos at the li
     </emitter>
 </mesh>
 ```
-Emitter row (kernels/emitters/area.h): p.area.radiance.xyz = radiance, shape = the emitting shape, which
-samples its own surface (its area distribution is packed with it: clrender/shapes/shape.py).
+Emitter row (kernels/emitters/area.h): p.area.radiance.xyz = radiance, radiance_tex = NONE (or, for a textured
+radiance, the texture's row: the shape then gets SHAPE_NEEDS_UV), shape = the emitting shape, which samples its
+own surface (its area distribution is packed with it: clrender/shapes/shape.py).
 """
 import numpy as np
 
+from ..device import dispatch
 from ..errors import SceneError
 from ..scene.registry import register
-from .emitter import Emitter, nonnegative_color
+from ..textures.texture import param, texture_child
+from .emitter import Emitter, luminance, nonnegative_color
 
 
 @register("emitter", "area")
 class AreaEmitter(Emitter):
     kernel = "emitters/area.h"
-    PARAMS = [("radiance", "float4")]
+    PARAMS = [("radiance", "texture")]
     FLAGS = ("SURFACE",)
+    texture = None   # a texture object for the radiance (Mitsuba files), else the constant `radiance`
 
     def __init__(self, props, children, spec):
         self.radiance = nonnegative_color(props, "radiance")
 
+    def pack(self, ctx, shape_index, shape, shape_row):
+        row = super().pack(ctx, shape_index, shape, shape_row)
+        if self.texture is not None and shape_row is not None:   # hits and samples on the shape need its uv
+            shape_row["flags"] |= dispatch.flag_defines()["SHAPE_NEEDS_UV"]
+        return row
+
     def fill(self, p, row, ctx, shape):
-        p["radiance"][:3] = self.radiance
+        param(p, "radiance", self.radiance, self.texture, ctx.textures)
+
+    def selection_power(self, radius, area):
+        # one-sided Lambertian emitter; a texture counts with its largest value (an upper bound)
+        scale = self.texture.max_value() if self.texture is not None else luminance(self.radiance)
+        return np.pi * area * scale
+
+
 @register("emitter", "area", fmt="mitsuba")
 class MitsubaAreaEmitter(AreaEmitter):
-    """Mitsuba 3's area light, nested in (or referenced by) a shape: one-sided, on the side its normals face.
+    """Mitsuba 3's area light, nested in (or referenced by) a shape: one-sided, on the side its normals face. The
+    radiance may be a texture over the shape's uv (sampling stays uniform by area).
 
     ```xml
     <shape type="obj">
         ...
         <emitter type="area">
             <rgb name="radiance" value="10, 10, 10"/>   <!-- required; rgb, spectrum (emitter convention) or float -->
+            <!-- or <texture type="bitmap" name="radiance"> ... </texture> -->
         </emitter>
     </shape>
     ```
     """
+    children = ("texture",)
 
     def __init__(self, props, children, spec):
+        self.texture = texture_child(children, "radiance", '<emitter type="area">')
+        if self.texture is not None:
+            if props.has("radiance"):
+                raise SceneError("radiance given both as a colour and as a texture", props.location("radiance"))
+            self.radiance = np.ones(3)   # unused: the texture gives the radiance
+            return
         c = np.asarray(props.get_color("radiance", emitter=True), np.float64)
         if np.any(c < 0) or not np.all(np.isfinite(c)):
             raise SceneError(f"radiance must be non-negative and finite, got {c.tolist()}", props.location("radiance"))

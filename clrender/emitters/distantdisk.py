@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..scene.registry import register
-from .emitter import Emitter, nonnegative_color
+from .emitter import Emitter, luminance, nonnegative_color
 
 
 @register("emitter", "distantdisk")
@@ -55,6 +55,10 @@ class DistantDiskEmitter(Emitter):
     def axis(self) -> np.ndarray:
         """Unit direction from the scene toward the light (the cone's axis)."""
         return self.frame[2]
+
+    def selection_power(self, radius, area):
+        solid_angle = 4.0 * np.pi * np.sin(np.radians(self.theta_a) / 2.0) ** 2
+        return np.pi * radius ** 2 * solid_angle * luminance(self.radiance)
 
     def fill(self, p, row, ctx, shape):
         t = np.radians(self.theta_a)

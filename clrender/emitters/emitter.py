@@ -41,10 +41,25 @@ class Emitter:
     def fill(self, p, row, ctx, shape) -> None:
         """Write the plugin's parameters into its member `p` of the row's union."""
 
+    def selection_power(self, radius: float, area: float) -> float | None:
+        """The emitted power (luminance of the flux, W) for light selection in proportion to power: `radius` is the
+        scene's bounding-sphere radius (lights at infinity deliver power through its disk), `area` the emitting
+        shape's area (surface emitters). None: unknown (pack_scene then gives it the mean of the others)."""
+        return None
 
-def nonnegative_color(props, name, default=None):
-    c = props.get_color(name) if default is None else props.get_color(name, default)
+
+def nonnegative_color(props, name, default=None, **kw):
+    """A colour property that must be >= 0 (``kw``: get_color's options, e.g. ``emitter=True`` for a Mitsuba
+    emitter's spectrum)."""
+    c = props.get_color(name, **kw) if default is None else props.get_color(name, default, **kw)
     c = np.asarray(c, np.float64)
     if np.any(c < 0) or not np.all(np.isfinite(c)):
         raise SceneError(f"{name} must be non-negative and finite, got {c.tolist()}", props.location(name))
     return c
+
+
+LUMINANCE = np.array([0.212671, 0.715160, 0.072169])   # linear sRGB (Rec. 709) luminance weights
+
+
+def luminance(c) -> float:
+    return float(np.asarray(c, np.float64) @ LUMINANCE)

@@ -29,6 +29,10 @@ class Texture(abc.ABC):
     def fill(self, p) -> None:
         """Write the declared parameters into `p` (this texture's member of the row's union)."""
 
+    def texels(self) -> np.ndarray | None:
+        """Pixels (N, 4) float32 stored right after the texture's row (TextureTable.add), or None."""
+        return None
+
     @abc.abstractmethod
     def max_value(self) -> float:
         """The largest value of any channel (BSDFs that need colours within [0, 1] check it)."""
@@ -50,7 +54,22 @@ class TextureTable:
         if key not in self._index:
             self._index[key] = len(self.rows)
             self.rows.append(texture.pack())
+            px = texture.texels()
+            if px is not None:
+                self.add_texels(px)
         return self._index[key]
+
+    def add_texels(self, px) -> int:
+        """Append pixels (N, 4) float32 as raw rows (a Texture row holds four float4s; the kernels read them as
+        `(__global const float4*)(textures + row)`, since a texture's eval sees only this table); returns the
+        first row."""
+        px = np.ascontiguousarray(px, np.float32).reshape(-1, 4)
+        per_row = layout.dtype("Texture").itemsize // 16
+        pad = (-len(px)) % per_row
+        px = np.concatenate([px, np.zeros((pad, 4), np.float32)])
+        first = len(self.rows)
+        self.rows.extend(np.frombuffer(px.tobytes(), layout.dtype("Texture")))
+        return first
 
     def array(self) -> np.ndarray:
         return np.array(self.rows, layout.dtype("Texture")) if self.rows else layout.zeros("Texture")

@@ -18,6 +18,7 @@ typedef struct {
     /* additions to the agreed API: */
     float3 ng;    /* geometric normal at p (area lights): used for the area -> solid angle Jacobian */
     uint emitter; /* index of the emitter that produced the sample (NONE if unknown) */
+    float2 uv;    /* surface uv at p (area lights: a textured radiance reads it) */
 } EmitterQuery;
 
 /* A point well outside the scene's bounding sphere, seen from ref along a unit direction. */

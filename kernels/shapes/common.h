@@ -12,6 +12,7 @@
 typedef struct {
     float3 p, n, ng, wi;
     float dist;
+    float2 uv;   /* the surface's uv at p, as at a hit (spheres compute it only with SHAPE_NEEDS_UV; else 0) */
 } ShapeSample;
 
 /* Solid-angle density at ref of a point p with area density `inv_area` (dist^2 / (area |cos at p|)); 0 when
@@ -33,6 +34,7 @@ INLINE float shape_point_sample(ShapeSample* ss, float3 ref, float3 p, float3 n,
     ss->n = n;
     ss->ng = ng;
     ss->dist = l;
+    ss->uv = (float2)(0.0f);
     return shape_solid_angle_pdf(inv_area, ref, p, ng, ss->wi);
 }
 

@@ -60,7 +60,10 @@ INLINE float mesh_sample(const SceneData* sd, __global const Shape* s, float3 re
     float3 p = p0 * b0 + p1 * b.x + p2 * b.y;
     float3 ng = normalize3(cross3(p1 - p0, p2 - p0));
     float3 n = mesh_shading_normal(sd, s, idx, b0, b.x, b.y, ng);
-    return shape_point_sample(ss, ref, p, n, ng, 1.0f / s->area);
+    float pdf = shape_point_sample(ss, ref, p, n, ng, 1.0f / s->area);
+    /* the uv mesh_surface gives at this point (textured emission) */
+    ss->uv = (s->flags & SHAPE_HAS_UVS) ? sd->uvs[idx.x] * b0 + sd->uvs[idx.y] * b.x + sd->uvs[idx.z] * b.y : b;
+    return pdf;
 }
 
 /* The density of the point p (hit along wi) that mesh_sample would give: per point, so a direction that meets

@@ -17,6 +17,13 @@ INLINE float sphere_one_minus_cos(float r2, float d2) {
     return sin2 / (1.0f + cosm);
 }
 
+/* uv of the unit normal n (only where SHAPE_NEEDS_UV: atan2 and acos cost more than the rest of a hit). */
+INLINE float2 sphere_uv(__global const Shape* s, float3 n) {
+    if (!(s->flags & SHAPE_NEEDS_UV)) return (float2)(0.0f);
+    float u = atan2(n.y, n.x) * INV_TWOPI;
+    return (float2)(u < 0.0f ? u + 1.0f : u, acos(clampf(n.z, -1.0f, 1.0f)) * INV_PI);
+}
+
 INLINE bool sphere_surface(const SceneData* sd, __global const Shape* s, const Ray* r, const Hit* h,
                            Intersection* its) {
     float4 sp = sd->spheres[s->first];
@@ -28,12 +35,7 @@ INLINE bool sphere_surface(const SceneData* sd, __global const Shape* s, const R
     float3 nf = (s->flags & SHAPE_FLIP_NORMALS) ? -n : n;
     its->ng = nf;
     its->sh = frame_from_normal(nf);
-    if (s->flags & SHAPE_NEEDS_UV) {
-        float u = atan2(n.y, n.x) * INV_TWOPI;
-        its->uv = (float2)(u < 0.0f ? u + 1.0f : u, acos(clampf(n.z, -1.0f, 1.0f)) * INV_PI);
-    } else {
-        its->uv = (float2)(0.0f);
-    }
+    its->uv = sphere_uv(s, n);
     its->tri = NONE;
     return true;
 }
@@ -60,6 +62,7 @@ INLINE float sphere_sample(const SceneData* sd, __global const Shape* s, float3 
         float t = d * cos_t - safe_sqrt(r2 - d2 * sin2);
         float3 n = normalize3(ref + wi * t - sp.xyz);
         float3 p = sp.xyz + n * sp.w;
+        ss->uv = sphere_uv(s, n);
         if (s->flags & SHAPE_FLIP_NORMALS) n = -n;
         ss->wi = wi;
         ss->p = p;
@@ -71,7 +74,9 @@ INLINE float sphere_sample(const SceneData* sd, __global const Shape* s, float3 
     /* inside: uniform on the sphere */
     float3 n = square_to_uniform_sphere(u);
     float3 nf = (s->flags & SHAPE_FLIP_NORMALS) ? -n : n;
-    return shape_point_sample(ss, ref, sp.xyz + n * sp.w, nf, nf, 1.0f / s->area);
+    float pdf = shape_point_sample(ss, ref, sp.xyz + n * sp.w, nf, nf, 1.0f / s->area);
+    ss->uv = sphere_uv(s, n);
+    return pdf;
 }
 
 INLINE float sphere_pdf(const SceneData* sd, __global const Shape* s, float3 ref, float3 p, float3 ng, float3 wi) {

@@ -1,0 +1,96 @@
+/* Mitsuba 3's environment map (clrender/emitters/envmap.py gives the conventions): bilinear radiance over a
+   latitude-longitude image, importance sampled by a piecewise-constant 2-D distribution over its cells.
+
+   Emitter row: flags EMITTER_INFINITE; p.envmap.dims = (first texel row in the textures table, W, H, offset of the
+   CDFs in `cdf`: H-1 marginal values, then H-1 conditional CDFs of W values each); inv[0..2].xyz = rows of the
+   world-to-local rotation, inv[0].w = scale. Texels: H rows of W+1 float4 (the last column repeats the first). */
+#ifndef CLRENDER_EMITTERS_ENVMAP_H
+#define CLRENDER_EMITTERS_ENVMAP_H
+#include "common.h"
+#include "../shapes/common.h"   /* shape_cdf_search */
+
+INLINE float3 envmap_to_local(__global const Emitter* em, float3 d) {
+    return (float3)(dot3(em->p.envmap.inv[0].xyz, d), dot3(em->p.envmap.inv[1].xyz, d),
+                    dot3(em->p.envmap.inv[2].xyz, d));
+}
+
+/* Grid coordinates of a local unit direction: x in [0, W) (shifted by half a texel), y in [0, H-1]. */
+INLINE float2 envmap_grid(__global const Emitter* em, float3 v) {
+    uint4 dims = em->p.envmap.dims;
+    float u = atan2(v.x, -v.z) * INV_TWOPI - 0.5f / (float)dims.y;
+    u -= floor(u);
+    float t = acos(clampf(v.y, -1.0f, 1.0f)) * INV_PI;
+    return (float2)(u * (float)dims.y, t * (float)(dims.z - 1u));
+}
+
+/* Probability of cell (ix, iy) and the row's conditional CDF. */
+INLINE float envmap_cell_pmf(const SceneData* sd, __global const Emitter* em, uint ix, uint iy) {
+    uint4 dims = em->p.envmap.dims;
+    __global const float* marg = sd->cdf + dims.w;
+    __global const float* cond = marg + (dims.z - 1u) + iy * dims.y;
+    float pr = marg[iy] - (iy > 0u ? marg[iy - 1u] : 0.0f);
+    float pc = cond[ix] - (ix > 0u ? cond[ix - 1u] : 0.0f);
+    return pr * pc;
+}
+
+/* Solid-angle density of local direction v (unit). */
+INLINE float envmap_local_pdf(const SceneData* sd, __global const Emitter* em, float3 v) {
+    uint4 dims = em->p.envmap.dims;
+    float sin_t = sqrt(v.x * v.x + v.z * v.z);
+    if (!(sin_t > 0.0f)) return 0.0f;
+    float2 g = envmap_grid(em, v);
+    uint ix = min((uint)g.x, dims.y - 1u), iy = min((uint)g.y, dims.z - 2u);
+    float pdf_uv = envmap_cell_pmf(sd, em, ix, iy) * (float)dims.y * (float)(dims.z - 1u);
+    return pdf_uv / (2.0f * M_PI_F_ * M_PI_F_ * sin_t);
+}
+
+INLINE float3 envmap_lookup(const SceneData* sd, __global const Emitter* em, float3 v) {
+    uint4 dims = em->p.envmap.dims;
+    __global const float4* px = (__global const float4*)(sd->textures + dims.x);
+    float2 g = envmap_grid(em, v);
+    uint ix = min((uint)g.x, dims.y - 1u), iy = min((uint)g.y, dims.z - 2u);
+    float fx = g.x - (float)ix, fy = g.y - (float)iy;
+    uint w1 = dims.y + 1u, i = iy * w1 + ix;
+    float3 top = px[i].xyz * (1.0f - fx) + px[i + 1u].xyz * fx;
+    float3 bot = px[i + w1].xyz * (1.0f - fx) + px[i + w1 + 1u].xyz * fx;
+    return (top * (1.0f - fy) + bot * fy) * em->p.envmap.inv[0].w;
+}
+
+INLINE float3 envmap_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
+    uint4 dims = em->p.envmap.dims;
+    uint rows = dims.z - 1u;
+    __global const float* marg = sd->cdf + dims.w;
+    uint iy = shape_cdf_search(marg, rows, u.y);
+    float lo = iy > 0u ? marg[iy - 1u] : 0.0f, hi = marg[iy];
+    float fy = hi > lo ? clampf((u.y - lo) / (hi - lo), 0.0f, 0x1.fffffep-1f) : 0.5f;
+    __global const float* cond = marg + rows + iy * dims.y;
+    uint ix = shape_cdf_search(cond, dims.y, u.x);
+    lo = ix > 0u ? cond[ix - 1u] : 0.0f;
+    hi = cond[ix];
+    float fx = hi > lo ? clampf((u.x - lo) / (hi - lo), 0.0f, 0x1.fffffep-1f) : 0.5f;
+    float uu = ((float)ix + fx) / (float)dims.y + 0.5f / (float)dims.y;
+    float vv = ((float)iy + fy) / (float)rows;
+    float2 sp = sin_cos(M_PI_F_ * vv), sc = sin_cos(2.0f * M_PI_F_ * uu);
+    float3 v = (float3)(sc.x * sp.x, sp.y, -sc.y * sp.x);
+    float3 wi = normalize3(em->p.envmap.inv[0].xyz * v.x + em->p.envmap.inv[1].xyz * v.y
+                           + em->p.envmap.inv[2].xyz * v.z);
+    q->wi = wi;
+    q->p = q->ref + wi * emitter_far(sd, q->ref);
+    q->n = -wi;
+    q->ng = -wi;
+    q->dist = INFINITY;
+    /* the density of the direction as pdf() will see it, so that sample and pdf agree exactly */
+    float pdf = envmap_local_pdf(sd, em, envmap_to_local(em, wi));
+    q->pdf = pdf;
+    return pdf > 0.0f ? envmap_lookup(sd, em, envmap_to_local(em, wi)) * (1.0f / pdf) : (float3)(0.0f);
+}
+
+INLINE float envmap_pdf(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
+    return envmap_local_pdf(sd, em, envmap_to_local(em, q->wi));
+}
+
+INLINE float3 envmap_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
+    return envmap_lookup(sd, em, envmap_to_local(em, q->wi));
+}
+
+#endif

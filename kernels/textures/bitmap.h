@@ -1,0 +1,46 @@
+/* Mitsuba 3's bitmap texture (clrender/textures/bitmap.py gives the conventions, checked against Mitsuba).
+   Row: p.bitmap.dims = (W, H, filter: 0 bilinear / 1 nearest, wrap: 0 repeat / 1 mirror / 2 clamp);
+   to_uv[0..1].xyz = rows of the 2-D affine uv map. The W*H pixels (float4, row by row, row 0 at t = 0) follow the
+   row in the textures table: a texture's eval sees that table only. */
+#ifndef CLRENDER_TEXTURES_BITMAP_H
+#define CLRENDER_TEXTURES_BITMAP_H
+
+INLINE int bitmap_wrap(int i, int n, uint mode) {
+    if (mode == 2u) return clamp(i, 0, n - 1);
+    if (mode == 1u) {
+        int k = i % (2 * n);
+        if (k < 0) k += 2 * n;
+        return k >= n ? 2 * n - 1 - k : k;
+    }
+    int k = i % n;
+    return k < 0 ? k + n : k;
+}
+
+/* Float pixel coordinate to int, kept in a range where the wrap arithmetic cannot overflow. */
+INLINE int bitmap_floor(float x) { return (int)floor(clampf(x, -1.0e8f, 1.0e8f)); }
+
+INLINE float3 bitmap_texel(__global const Texture* t, int x, int y) {
+    __global const float4* px = (__global const float4*)(t + 1);
+    return px[y * (int)t->p.bitmap.dims.x + x].xyz;
+}
+
+INLINE float3 bitmap_eval(__global const Texture* t, float2 uv) {
+    uint4 d = t->p.bitmap.dims;
+    int w = (int)d.x, h = (int)d.y;
+    float4 r0 = t->p.bitmap.to_uv[0], r1 = t->p.bitmap.to_uv[1];
+    float s = r0.x * uv.x + r0.y * uv.y + r0.z, tt = r1.x * uv.x + r1.y * uv.y + r1.z;
+    if (d.z == 1u)
+        return bitmap_texel(t, bitmap_wrap(bitmap_floor(s * (float)w), w, d.w),
+                            bitmap_wrap(bitmap_floor(tt * (float)h), h, d.w));
+    float fx = s * (float)w - 0.5f, fy = tt * (float)h - 0.5f;
+    float x0f = floor(fx), y0f = floor(fy);
+    float a = fx - x0f, b = fy - y0f;
+    int x0 = bitmap_floor(x0f), y0 = bitmap_floor(y0f);
+    int xa = bitmap_wrap(x0, w, d.w), xb = bitmap_wrap(x0 + 1, w, d.w);
+    int ya = bitmap_wrap(y0, h, d.w), yb = bitmap_wrap(y0 + 1, h, d.w);
+    float3 top = bitmap_texel(t, xa, ya) * (1.0f - a) + bitmap_texel(t, xb, ya) * a;
+    float3 bot = bitmap_texel(t, xa, yb) * (1.0f - a) + bitmap_texel(t, xb, yb) * a;
+    return top * (1.0f - b) + bot * b;
+}
+
+#endif
