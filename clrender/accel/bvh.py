@@ -61,6 +61,9 @@ from ..device.layout import ENUMS
 
 LEAF_FLAG = ENUMS["BVH_LEAF_BIT"]
 SAH_SAMPLES = 1024
+DEVICE_MIN = 65536          # "auto" builds smaller scenes on the host (fast enough; no kernel compile)
+DEVICE_TASKS = 64           # the top levels stop where nodes hold <= N / DEVICE_TASKS primitives ...
+DEVICE_SUBTREE_MIN = 4096   # ... or <= this many
 DP_MAX = 4
 KERNEL_STACK_SIZE = ENUMS["BVH_STACK_SIZE"]
 
@@ -316,9 +319,16 @@ def _small_subtrees(nodes, Lg, Hg, ids_g, node_id, start, depth, order, max_leaf
 
 
 def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersection_cost=1.0,
-              sah_samples=SAH_SAMPLES):
-    """Build a binned-SAH BVH over boxes ``lo``/``hi`` (N, 3) and flatten it (layout: module docstring)."""
+              sah_samples=SAH_SAMPLES, method="auto", subtree_size=None):
+    """Build a binned-SAH BVH over boxes ``lo``/``hi`` (N, 3) and flatten it (layout: module docstring).
+
+    ``method``: "host" builds every level with numpy; "device" hands nodes of at most ``subtree_size``
+    primitives (default: N / 64, at least 4096) to an OpenCL kernel that builds their subtrees, one per
+    work-item (clrender/accel/bvh_device.py); "auto" does that for N >= DEVICE_MIN when an OpenCL device is
+    there, else builds on the host."""
     t0 = time.perf_counter()
+    if method not in ("auto", "host", "device"):
+        raise ValueError(f"build_bvh: method must be 'auto', 'host' or 'device', not {method!r}")
     lo = np.ascontiguousarray(lo, np.float32).reshape(-1, 3)
     hi = np.ascontiguousarray(hi, np.float32).reshape(-1, 3)
     N = len(lo)
@@ -329,6 +339,18 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
     ct, ci = float(traversal_cost), float(intersection_cost)
     if N == 0:
         return BVH(_empty_nodes(), np.zeros(0, np.int64), 1, 0, time.perf_counter() - t0, 0.0, 0, 0)
+    device = None
+    if method == "device" or (method == "auto" and N >= DEVICE_MIN):
+        from .bvh_device import device_context
+
+        device = device_context()
+        if device is None and method == "device":
+            from ..errors import DeviceError
+
+            raise DeviceError("build_bvh(method='device'): no OpenCL device")
+    if subtree_size is None:
+        subtree_size = max(DEVICE_SUBTREE_MIN, N // DEVICE_TASKS)
+    tasks = []                                                  # nodes handed to the device, per level
 
     # The active set: primitives of the frontier nodes only, each node a contiguous run, in frontier order;
     # one float32 row per coordinate (doubled centroids are L + H, computed when needed).
@@ -349,6 +371,19 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
     f_cmax = np.array([[x.max() for x in (L[a] + H[a] for a in range(3))]], np.float32)
     depth = 0
     while len(f_id):
+        if device is not None:
+            dev = f_n <= subtree_size
+            if dev.any():
+                # These nodes leave the active set; their subtrees are built on the device after the loop.
+                m = _spreader(f_n)(dev)
+                tasks.append(([x[m] for x in L], [x[m] for x in H], ids[m], f_id[dev], f_start[dev], f_n[dev],
+                              np.full(int(dev.sum()), depth)))
+                keep = ~m
+                L, H, ids = [x[keep] for x in L], [x[keep] for x in H], ids[keep]
+                f_id, f_start, f_n = f_id[~dev], f_start[~dev], f_n[~dev]
+                f_lo, f_hi, f_cmin, f_cmax = f_lo[~dev], f_hi[~dev], f_cmin[~dev], f_cmax[~dev]
+                if not len(f_id):
+                    break
         F = len(f_id)
         M = len(ids)
         off = np.cumsum(f_n) - f_n
@@ -454,6 +489,9 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
         f_start, f_n = c_start, c_n
         f_lo, f_hi, f_cmin, f_cmax = c_lo, c_hi, c_cmin, c_cmax
 
+    if tasks:
+        _device_subtrees(device, tasks, nodes, order, max_leaf_size, ct, ci, force_depth)
+
     blo = np.concatenate(nodes.lo)
     bhi = np.concatenate(nodes.hi)
     bstart = np.concatenate(nodes.start)
@@ -471,6 +509,31 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
     return BVH(nodes=nodes_arr, order=order, node_count=node_count, depth=int(bdepth.max()) + 1,
                build_seconds=time.perf_counter() - t0, sah_cost=float(sah),
                leaf_count=int((~inner).sum()), max_leaf_prims=int(bcount[~inner].max()))
+
+
+def _device_subtrees(device, tasks, nodes, order, max_leaf, ct, ci, force_depth):
+    """Build the subtrees of the handed-over nodes with the OpenCL kernel and add them to ``nodes``."""
+    from .bvh_device import build_subtrees
+
+    cat = lambda i: np.concatenate([t[i] for t in tasks])      # noqa: E731
+    L = [np.concatenate([t[0][a] for t in tasks]) for a in range(3)]
+    H = [np.concatenate([t[1][a] for t in tasks]) for a in range(3)]
+    ids, t_id, t_start, t_n, t_depth = cat(2), cat(3), cat(4), cat(5), cat(6)
+    t_off = np.cumsum(t_n) - t_n
+    pid, counts, nlo, nhi, meta = build_subtrees(device, L, H, ids, t_off, t_n, t_depth, max_leaf, ct, ci,
+                                                 force_depth)
+    order[np.repeat(t_start - t_off, t_n) + np.arange(len(pid))] = pid
+    # Local node j of task s: j = 0 is the task's node itself (already in ``nodes``), j >= 1 get new ids.
+    task = np.repeat(np.arange(len(counts)), counts)
+    local = np.arange(len(task)) - np.repeat(np.cumsum(counts) - counts, counts)
+    base = nodes.n + np.cumsum(counts - 1) - (counts - 1) - 1   # id of local node j >= 1: base[s] + j
+    gid = np.where(local == 0, t_id[task], base[task] + local)
+    new = local > 0
+    meta = meta.astype(np.int64)
+    nodes.add(nlo[new], nhi[new], (t_start[task] + meta[:, 1])[new], meta[new, 2],
+              (t_depth[task] + meta[:, 3])[new])
+    inner = meta[:, 0] >= 0
+    nodes.links.append((gid[inner], base[task[inner]] + meta[inner, 0]))
 
 
 def _flatten(blo, bhi, bstart, bcount, bleft, bdepth):
