@@ -1,7 +1,13 @@
 """Time the BVH build (and optionally traversal on PoCL) for a noisy subdivided sphere of N triangles.
 
     python benchmarks/bvh_build.py 100000 1000000 [--trace] [--repeat 3]
-    python benchmarks/bvh_build.py --mesh scenes/largemesh/meshes/blob_1m.ply --trace
+    python benchmarks/bvh_build.py --mesh scenes/largemesh/meshes/blob_1m.ply --trace --embree \
+        --methods host,device --json benchmarks/results/bvh_build-DATE.json
+
+Each build method ("host": every level in numpy; "device": top levels in numpy, subtrees in OpenCL; see
+build_bvh) is timed ``--repeat`` times, interleaved with the others, and the median is reported. ``--embree``
+also times Embree's build of the same triangles (``pip install embreex``: benchmark-only, never a
+dependency): scene creation + commit, on all the cores it wants (TBB).
 
 Rays for --trace: "incoherent" = random origins inside the sphere's box with random directions; "camera" =
 a pinhole grid looking at the sphere. Both do closest hit with tmax = inf.
@@ -9,6 +15,9 @@ a pinhole grid looking at the sphere. Both do closest hit with tmax = inf.
 from __future__ import annotations
 
 import argparse
+import json
+import platform
+import statistics
 import sys
 import time
 from pathlib import Path
@@ -52,6 +61,34 @@ __kernel void trace(__global const float4* nodes, __global const float4* prims, 
 """
 
 
+def embree_build_seconds(v):
+    """Embree's BVH build of the triangles v (scene + mesh creation and commit), or None without embreex."""
+    try:
+        from embreex import rtcore_scene
+        from embreex.mesh_construction import TriangleMesh
+    except ImportError:
+        print("  (embreex is not installed: pip install embreex)")
+        return None
+    tris = np.ascontiguousarray(np.stack(v, axis=1), np.float32)       # (N, 3, 3)
+    one = np.zeros((1, 3), np.float32), np.array([[0, 0, 1]], np.float32)
+    t = time.perf_counter()
+    scene = rtcore_scene.EmbreeScene()
+    TriangleMesh(scene, tris)
+    scene.run(*one)                                                     # the first query commits (builds)
+    return time.perf_counter() - t
+
+
+def cpu_name():
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
 def trace_bench(v, bvh, n_rays=1 << 20, repeat=3):
     import pyopencl as cl
 
@@ -64,6 +101,7 @@ def trace_bench(v, bvh, n_rays=1 << 20, repeat=3):
     mf = cl.mem_flags
     nodes_b = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=bvh.nodes)
     prims_b = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=prims)
+    res = {}
     rng = np.random.default_rng(1)
     side = int(np.sqrt(n_rays))
     x, y = np.meshgrid(np.linspace(-1.2, 1.2, side), np.linspace(-1.2, 1.2, side))
@@ -87,7 +125,9 @@ def trace_bench(v, bvh, n_rays=1 << 20, repeat=3):
             t = time.perf_counter()
             k(queue, (G,), (64,), nodes_b, prims_b, ob, db, np.uint32(R), out).wait()
             dts.append(time.perf_counter() - t)
-        print(f"  trace {name:10s}: {R / min(dts) / 1e6:6.2f} M rays/s (best of {repeat})")
+        res[name] = R / statistics.median(dts) / 1e6
+        print(f"  trace {name:10s}: {res[name]:6.2f} M rays/s (median of {repeat})")
+    return res
 
 
 def main():
@@ -95,21 +135,59 @@ def main():
     ap.add_argument("sizes", nargs="*", type=int, default=[100_000, 1_000_000])
     ap.add_argument("--trace", action="store_true", help="also time closest-hit traversal on the default device")
     ap.add_argument("--mesh", action="append", default=[], help="a PLY mesh to build over (instead of spheres)")
-    ap.add_argument("--repeat", type=int, default=3, help="builds (and trace launches) per input; best is shown")
+    ap.add_argument("--repeat", type=int, default=3, help="builds (and trace launches) per input; median shown")
+    ap.add_argument("--methods", default="auto", help="comma-separated build_bvh methods: auto, host, device")
+    ap.add_argument("--embree", action="store_true", help="also time Embree's build (needs embreex)")
+    ap.add_argument("--json", help="write the results here")
     a = ap.parse_args()
+    methods = a.methods.split(",")
     inputs = [(f"mesh {m}", lambda m=m: load_mesh(m)) for m in a.mesh]
     if not a.mesh:
         inputs = [(f"sphere {n}", lambda n=n: noisy_sphere(n)) for n in a.sizes]
+    rows = []
     for label, make in inputs:
         v = make()
         t = time.perf_counter()
         lo, hi = primitive_bounds(*v, None)
         tb = time.perf_counter() - t
-        bvh = min((build_bvh(lo, hi) for _ in range(max(1, a.repeat))), key=lambda b: b.build_seconds)
-        print(f"{label} (N={len(lo)}): bounds {tb:.3f}s, build {bvh.build_seconds:.3f}s (best of {a.repeat}), "
-              f"nodes {bvh.node_count}, depth {bvh.depth}, SAH {bvh.sah_cost:.2f}, leaves {bvh.leaf_count}")
-        if a.trace:
-            trace_bench(v, bvh, repeat=max(1, a.repeat))
+        for m in methods:
+            build_bvh(lo[:20000], hi[:20000], method=m)                 # warm-up: compiles the kernel
+        times = {m: [] for m in methods}
+        times["embree"] = []
+        trees = {}
+        for _ in range(max(1, a.repeat)):                              # interleaved: noise hits all alike
+            for m in methods:
+                trees[m] = build_bvh(lo, hi, method=m)
+                times[m].append(trees[m].build_seconds)
+            if a.embree:
+                e = embree_build_seconds(v)
+                if e is not None:
+                    times["embree"].append(e)
+        row = {"input": label, "n_prims": len(lo), "bounds_seconds": tb, "builds": {}}
+        if times["embree"]:
+            row["embree_seconds"] = times["embree"]
+            row["embree_median"] = statistics.median(times["embree"])
+            print(f"{label}: Embree build {row['embree_median']:.3f}s (median of {len(times['embree'])})")
+        for m in methods:
+            bvh = trees[m]
+            med = statistics.median(times[m])
+            r = {"seconds": times[m], "median": med, "sah_cost": bvh.sah_cost, "node_count": bvh.node_count,
+                 "depth": bvh.depth, "leaves": bvh.leaf_count}
+            ratio = f", {med / row['embree_median']:.2f}x Embree" if times["embree"] else ""
+            print(f"{label} (N={len(lo)}) [{m}]: bounds {tb:.3f}s, build {med:.3f}s (median of {a.repeat}"
+                  f"{ratio}), nodes {bvh.node_count}, depth {bvh.depth}, SAH {bvh.sah_cost:.3f}, "
+                  f"leaves {bvh.leaf_count}")
+            if a.trace:
+                r["trace_mrays"] = trace_bench(v, bvh, repeat=max(1, a.repeat))
+            row["builds"][m] = r
+        rows.append(row)
+    if a.json:
+        import os
+
+        out = {"cpu": cpu_name(), "cpu_count": os.cpu_count(), "loadavg": os.getloadavg(),
+               "numpy": np.__version__, "timestamp": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "rows": rows}
+        Path(a.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(a.json).write_text(json.dumps(out, indent=1) + "\n")
 
 
 if __name__ == "__main__":

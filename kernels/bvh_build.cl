@@ -1,20 +1,20 @@
 /* Binary SAH BVH subtrees, one work-item per subtree (clrender/accel/bvh_device.py drives it).
 
    The host builds the top of the tree level by level and hands every node of at most a few thousand
-   primitives to this kernel. A work-item builds its node's whole subtree depth-first with an explicit stack:
-   binned SAH on all three axes (BVH_BINS bins, every primitive binned, so the children's boxes are exact),
-   an in-place partition of its own range of the primitive arrays, and for nodes of 2..4 primitives the
-   exact SAH optimum over every two-way partition (a dynamic programme over subsets), as the host builder
-   does. Work-items touch disjoint ranges, so no synchronisation is needed; the arrays stay in memory order
-   so the binning passes read sequentially.
+   primitives (a "task") to this kernel. A work-item builds its task's whole subtree depth-first with an
+   explicit stack: binned SAH on all three axes (BVH_BINS bins, every primitive binned, so the children's
+   boxes are exact), an in-place partition of its own range of the primitive arrays, and for nodes of 2..4
+   primitives the exact SAH optimum over every two-way partition (a dynamic programme over subsets), as the
+   host builder does. Work-items touch disjoint ranges, so they need no synchronisation, and the primitive
+   arrays stay in memory order so the binning passes read sequentially.
 
-   Per subtree s (active range [off, off + n) of the primitive arrays, node slots [2*off, 2*off + 2n - 1)):
-   node slot 2*off + j is local node j (j = 0 is the subtree's root, already known to the host):
-     nlo[j] = (box lo, 0), nhi[j] = (box hi, 0),
-     nmeta[j] = (left child's local index or -1, first primitive (relative to off) for a leaf, primitive
-                 count for a leaf (0 for an interior node), depth below the subtree's root);
-   the right child of an interior node is its left child + 1. The leaves' primitives end up in leaf order
-   in the arrays: plo/phi/pid[off .. off + n). task_nodes[s] = the subtree's node count. */
+   Output: the subtree already in the final node layout of kernels/bvh.h (2-wide nodes of 4 float4, interior
+   nodes only, depth-first: an interior left child directly follows its parent). Task s owns primitive rows
+   [off, off + n) and node rows [4 off, 4 (off + n - 1)) (a subtree of n primitives has < n interior nodes).
+   Leaf references are final (BVH_LEAF_BIT | (start + first)); interior references are local node numbers,
+   to which the host adds the subtree's place in the whole table. stats[s] = (interior nodes, the deepest
+   leaf's depth below the task's root); 0 interior nodes means the task's root is itself a leaf. The
+   leaves' primitives end up in leaf order in plo/phi/pid[off .. off + n). */
 
 #ifndef BVH_BINS
 #define BVH_BINS 32
@@ -22,8 +22,12 @@
 #define BUILD_STACK 64
 #define DP_MAX 4
 
+/* min / max without fmin's NaN rules (boxes hold no NaN): one instruction on every target. */
+inline float3 vmin(float3 a, float3 b) { return a < b ? a : b; }
+inline float3 vmax(float3 a, float3 b) { return a > b ? a : b; }
+
 inline float half_area3(float3 lo, float3 hi) {
-    float3 d = fmax(hi - lo, (float3)(0.0f));
+    float3 d = vmax(hi - lo, (float3)(0.0f));
     return d.x * d.y + d.y * d.z + d.z * d.x;
 }
 
@@ -35,11 +39,24 @@ inline void swap_prims(__global float4* plo, __global float4* phi, __global int*
     int c = pid[i]; pid[i] = pid[j]; pid[j] = c;
 }
 
-/* Exact SAH subtree for the n (2..DP_MAX) primitives at [b, b + n): every subset's box and best cost
-   (leaf, or the best two-way partition), then the chosen tree emitted top-down. Returns the new `next`. */
-int dp_subtree(__global float4* plo, __global float4* phi, __global int* pid, __global float4* nlo,
-               __global float4* nhi, __global int4* nmeta, int node0, int b, int n, int depth0, int next,
-               int max_leaf, float ct, float ci) {
+/* Child slot `slot` (0 = A, 2 = B) of node row `k`: its box and, for leaves, the final reference. The
+   reference of an interior child is written when the child is numbered (set_ref). */
+inline void set_slot(__global float4* out, int k, int slot, float3 lo, float3 hi) {
+    out[4 * k + slot] = (float4)(lo, 0.0f);
+    out[4 * k + slot + 1] = (float4)(hi, 0.0f);
+}
+
+inline void set_ref(__global float4* out, int patch, uint ref, uint count) {
+    if (patch < 0) return;                      /* the task's root: the host's tree refers to it */
+    out[patch].w = as_float(ref);
+    out[patch + 1].w = as_float(count);
+}
+
+/* Exact SAH subtree for the n (2..DP_MAX) primitives at [b, b + n) of a node whose parent slot is `patch`:
+   every subset's box and best cost (leaf, or the best two-way partition), then the chosen tree emitted
+   depth-first. Returns the new interior node count; *maxd = the deepest leaf seen. */
+int dp_subtree(__global float4* plo, __global float4* phi, __global int* pid, __global float4* out, int patch,
+               int b, int n, int depth0, int kount, int* maxd, uint start, int max_leaf, float ct, float ci) {
     float3 mlo[1 << DP_MAX], mhi[1 << DP_MAX];
     float mcost[1 << DP_MAX];
     int mch[1 << DP_MAX];
@@ -51,8 +68,8 @@ int dp_subtree(__global float4* plo, __global float4* phi, __global int* pid, __
             mlo[m] = plo[b + i].xyz;
             mhi[m] = phi[b + i].xyz;
         } else {
-            mlo[m] = fmin(mlo[low], mlo[m ^ low]);
-            mhi[m] = fmax(mhi[low], mhi[m ^ low]);
+            mlo[m] = vmin(mlo[low], mlo[m ^ low]);
+            mhi[m] = vmax(mhi[low], mhi[m ^ low]);
         }
         float area = half_area3(mlo[m], mhi[m]);
         int k = popcount(m);
@@ -73,60 +90,59 @@ int dp_subtree(__global float4* plo, __global float4* phi, __global int* pid, __
     float4 tlo[DP_MAX], thi[DP_MAX];
     int tid[DP_MAX];
     for (int i = 0; i < n; ++i) { tlo[i] = plo[b + i]; thi[i] = phi[b + i]; tid[i] = pid[b + i]; }
-    /* (mask, node, first, depth) of the open nodes; a subtree of 4 primitives has at most 4 open at once. */
-    int smask[2 * DP_MAX], snode[2 * DP_MAX], sfirst[2 * DP_MAX], sdepth[2 * DP_MAX];
-    int sp = 0;
-    smask[0] = full; snode[0] = node0; sfirst[0] = b; sdepth[0] = depth0; sp = 1;
+    /* (mask, parent slot, first primitive, depth) of the open nodes: at most n on the stack. */
+    int smask[DP_MAX], spatch[DP_MAX], sfirst[DP_MAX], sdepth[DP_MAX];
+    smask[0] = full; spatch[0] = patch; sfirst[0] = b; sdepth[0] = depth0;
+    int sp = 1;
     while (sp > 0) {
         --sp;
-        int m = smask[sp], node = snode[sp], first = sfirst[sp], d = sdepth[sp];
+        int m = smask[sp], pt = spatch[sp], first = sfirst[sp], d = sdepth[sp];
         int ch = mch[m];
         if (ch == 0) {
             int r = first;
             for (int i = 0; i < n; ++i)
                 if ((m >> i) & 1) { plo[r] = tlo[i]; phi[r] = thi[i]; pid[r] = tid[i]; ++r; }
-            nmeta[node] = (int4)(-1, first, popcount(m), d);
+            set_ref(out, pt, BVH_LEAF_BIT | (start + (uint)first), (uint)popcount(m));
+            *maxd = max(*maxd, d);
             continue;
         }
         int rm = m ^ ch;
-        int l = next;
-        next += 2;
-        nmeta[node] = (int4)(l, 0, 0, d);
-        nlo[l] = (float4)(mlo[ch], 0.0f);     nhi[l] = (float4)(mhi[ch], 0.0f);
-        nlo[l + 1] = (float4)(mlo[rm], 0.0f); nhi[l + 1] = (float4)(mhi[rm], 0.0f);
-        smask[sp] = rm; snode[sp] = l + 1; sfirst[sp] = first + popcount(ch); sdepth[sp] = d + 1; ++sp;
-        smask[sp] = ch; snode[sp] = l;     sfirst[sp] = first;                sdepth[sp] = d + 1; ++sp;
+        int k = kount++;
+        set_ref(out, pt, (uint)k, 0u);
+        set_slot(out, k, 0, mlo[ch], mhi[ch]);
+        set_slot(out, k, 2, mlo[rm], mhi[rm]);
+        smask[sp] = rm; spatch[sp] = 4 * k + 2; sfirst[sp] = first + popcount(ch); sdepth[sp] = d + 1; ++sp;
+        smask[sp] = ch; spatch[sp] = 4 * k;     sfirst[sp] = first;                sdepth[sp] = d + 1; ++sp;
     }
-    return next;
+    return kount;
 }
 
 __kernel void bvh_build_subtrees(__global float4* plo, __global float4* phi, __global int* pid,
                                  __global const int* task_off, __global const int* task_n,
-                                 __global const int* task_depth, __global float4* nlo_all,
-                                 __global float4* nhi_all, __global int4* nmeta_all, __global int* task_nodes,
-                                 uint n_tasks, int max_leaf, float ct, float ci, int force_depth) {
+                                 __global const int* task_depth, __global const uint* task_start,
+                                 __global float4* out_all, __global int2* stats, uint n_tasks, int max_leaf,
+                                 float ct, float ci, int force_depth) {
     uint s = get_global_id(0);
     if (s >= n_tasks) return;
     int off = task_off[s], n = task_n[s], depth0 = task_depth[s];
-    __global float4* nlo = nlo_all + 2 * off;
-    __global float4* nhi = nhi_all + 2 * off;
-    __global int4* nmeta = nmeta_all + 2 * off;
+    uint start = task_start[s];
+    __global float4* out = out_all + 4 * off;
     plo += off; phi += off; pid += off;
 
     float3 blo = (float3)(INFINITY), bhi = (float3)(-INFINITY);
     float3 cmin = (float3)(INFINITY), cmax = (float3)(-INFINITY);
     for (int i = 0; i < n; ++i) {
         float3 lo = plo[i].xyz, hi = phi[i].xyz, c = lo + hi;   /* doubled centroids, as on the host */
-        blo = fmin(blo, lo); bhi = fmax(bhi, hi);
-        cmin = fmin(cmin, c); cmax = fmax(cmax, c);
+        blo = vmin(blo, lo); bhi = vmax(bhi, hi);
+        cmin = vmin(cmin, c); cmax = vmax(cmax, c);
     }
-    nlo[0] = (float4)(blo, 0.0f);
-    nhi[0] = (float4)(bhi, 0.0f);
 
-    int st_node[BUILD_STACK], st_b[BUILD_STACK], st_n[BUILD_STACK], st_d[BUILD_STACK];
-    float3 st_cmin[BUILD_STACK], st_cmax[BUILD_STACK];
-    int sp = 0, next = 1;
-    st_node[0] = 0; st_b[0] = 0; st_n[0] = n; st_d[0] = 0; st_cmin[0] = cmin; st_cmax[0] = cmax; sp = 1;
+    /* Open nodes: parent slot row (-1: the root), range, depth, box, centroid bounds. */
+    int st_patch[BUILD_STACK], st_b[BUILD_STACK], st_n[BUILD_STACK], st_d[BUILD_STACK];
+    float3 st_lo[BUILD_STACK], st_hi[BUILD_STACK], st_cmin[BUILD_STACK], st_cmax[BUILD_STACK];
+    st_patch[0] = -1; st_b[0] = 0; st_n[0] = n; st_d[0] = 0;
+    st_lo[0] = blo; st_hi[0] = bhi; st_cmin[0] = cmin; st_cmax[0] = cmax;
+    int sp = 1, kount = 0, maxd = 0;
 
     int bcnt[3][BVH_BINS];
     float3 bbl[3][BVH_BINS], bbh[3][BVH_BINS];
@@ -135,17 +151,18 @@ __kernel void bvh_build_subtrees(__global float4* plo, __global float4* phi, __g
 
     while (sp > 0) {
         --sp;
-        int node = st_node[sp], b = st_b[sp], cnt = st_n[sp], d = st_d[sp];
+        int patch = st_patch[sp], b = st_b[sp], cnt = st_n[sp], d = st_d[sp];
         cmin = st_cmin[sp]; cmax = st_cmax[sp];
         if (cnt >= 2 && cnt <= DP_MAX) {
-            next = dp_subtree(plo, phi, pid, nlo, nhi, nmeta, node, b, cnt, d, next, max_leaf, ct, ci);
+            kount = dp_subtree(plo, phi, pid, out, patch, b, cnt, d, kount, &maxd, start, max_leaf, ct, ci);
             continue;
         }
         if (cnt <= 1) {
-            nmeta[node] = (int4)(-1, b, cnt, d);
+            set_ref(out, patch, BVH_LEAF_BIT | (start + (uint)b), (uint)cnt);
+            maxd = max(maxd, d);
             continue;
         }
-        float area = half_area3(nlo[node].xyz, nhi[node].xyz);
+        float area = half_area3(st_lo[sp], st_hi[sp]);
         float3 ext = cmax - cmin;
         bool forced = depth0 + d + 1 >= force_depth;
         float best = INFINITY;
@@ -165,22 +182,22 @@ __kernel void bvh_build_subtrees(__global float4* plo, __global float4* phi, __g
             for (int i = b; i < b + cnt; ++i) {
                 float3 lo = plo[i].xyz, hi = phi[i].xyz;
                 int3 bi = clamp(convert_int3_rtz((lo + hi - cmin) * scale), 0, BVH_BINS - 1);
-                bcnt[0][bi.x]++; bbl[0][bi.x] = fmin(bbl[0][bi.x], lo); bbh[0][bi.x] = fmax(bbh[0][bi.x], hi);
-                bcnt[1][bi.y]++; bbl[1][bi.y] = fmin(bbl[1][bi.y], lo); bbh[1][bi.y] = fmax(bbh[1][bi.y], hi);
-                bcnt[2][bi.z]++; bbl[2][bi.z] = fmin(bbl[2][bi.z], lo); bbh[2][bi.z] = fmax(bbh[2][bi.z], hi);
+                bcnt[0][bi.x]++; bbl[0][bi.x] = vmin(bbl[0][bi.x], lo); bbh[0][bi.x] = vmax(bbh[0][bi.x], hi);
+                bcnt[1][bi.y]++; bbl[1][bi.y] = vmin(bbl[1][bi.y], lo); bbh[1][bi.y] = vmax(bbh[1][bi.y], hi);
+                bcnt[2][bi.z]++; bbl[2][bi.z] = vmin(bbl[2][bi.z], lo); bbh[2][bi.z] = vmax(bbh[2][bi.z], hi);
             }
             for (int a = 0; a < 3; ++a) {
                 if (comp(scale, a) == 0.0f) continue;
                 float3 rl = (float3)(INFINITY), rh = (float3)(-INFINITY);
                 int rc = 0;
                 for (int j = BVH_BINS - 1; j > 0; --j) {
-                    rl = fmin(rl, bbl[a][j]); rh = fmax(rh, bbh[a][j]); rc += bcnt[a][j];
+                    rl = vmin(rl, bbl[a][j]); rh = vmax(rh, bbh[a][j]); rc += bcnt[a][j];
                     racc[j] = half_area3(rl, rh); rcnt[j] = rc;
                 }
                 float3 ll = (float3)(INFINITY), lh = (float3)(-INFINITY);
                 int lc = 0;
                 for (int j = 0; j < BVH_BINS - 1; ++j) {
-                    ll = fmin(ll, bbl[a][j]); lh = fmax(lh, bbh[a][j]); lc += bcnt[a][j];
+                    ll = vmin(ll, bbl[a][j]); lh = vmax(lh, bbh[a][j]); lc += bcnt[a][j];
                     if (lc == 0 || rcnt[j + 1] == 0) continue;
                     float c = half_area3(ll, lh) * (float)lc + racc[j + 1] * (float)rcnt[j + 1];
                     if (c < best) { best = c; best_axis = a; best_plane = j; }
@@ -190,44 +207,65 @@ __kernel void bvh_build_subtrees(__global float4* plo, __global float4* phi, __g
         /* SAH in units of the node's area: a leaf when small enough and no more expensive than a split. */
         float ratio = area > 0.0f ? best / area : (isfinite(best) ? (float)cnt : INFINITY);
         if (cnt <= max_leaf && ci * (float)cnt <= ct + ci * ratio) {
-            nmeta[node] = (int4)(-1, b, cnt, d);
+            set_ref(out, patch, BVH_LEAF_BIT | (start + (uint)b), (uint)cnt);
+            maxd = max(maxd, d);
             continue;
         }
-        int mid = b + cnt / 2;
+        /* Children: centroid bounds gathered while partitioning; boxes from the bins (exact), or from the
+           primitives after a split in the middle. */
+        float3 lb0, lb1, rb0, rb1;
+        float3 lc0 = (float3)(INFINITY), lc1 = (float3)(-INFINITY), rc0 = lc0, rc1 = lc1;
+        int mid = -1;
         if (best_plane >= 0) {
             /* Same expression as the binning, so the same primitives go left as were counted left. */
             float c0 = comp(cmin, best_axis), sc = comp(scale, best_axis);
             int i = b, j = b + cnt - 1;
             while (i <= j) {
-                float ci_ = comp(plo[i].xyz + phi[i].xyz, best_axis);
-                int bi = clamp(convert_int_rtz((ci_ - c0) * sc), 0, BVH_BINS - 1);
-                if (bi <= best_plane) { ++i; continue; }
-                swap_prims(plo, phi, pid, i, j);
-                --j;
+                float3 c = plo[i].xyz + phi[i].xyz;
+                int bi = clamp(convert_int_rtz((comp(c, best_axis) - c0) * sc), 0, BVH_BINS - 1);
+                if (bi <= best_plane) {
+                    lc0 = vmin(lc0, c); lc1 = vmax(lc1, c);
+                    ++i;
+                } else {
+                    rc0 = vmin(rc0, c); rc1 = vmax(rc1, c);
+                    swap_prims(plo, phi, pid, i, j);
+                    --j;
+                }
             }
-            if (i > b && i < b + cnt) mid = i;   /* else (never expected) fall back to the middle */
+            if (i > b && i < b + cnt) {
+                mid = i;
+                lb0 = bbl[best_axis][0]; lb1 = bbh[best_axis][0];
+                for (int k = 1; k <= best_plane; ++k) {
+                    lb0 = vmin(lb0, bbl[best_axis][k]); lb1 = vmax(lb1, bbh[best_axis][k]);
+                }
+                rb0 = bbl[best_axis][BVH_BINS - 1]; rb1 = bbh[best_axis][BVH_BINS - 1];
+                for (int k = BVH_BINS - 2; k > best_plane; --k) {
+                    rb0 = vmin(rb0, bbl[best_axis][k]); rb1 = vmax(rb1, bbh[best_axis][k]);
+                }
+            }
         }
-        /* Children: exact boxes and centroid bounds from their primitives (one pass over the node). */
-        float3 lb0 = (float3)(INFINITY), lb1 = (float3)(-INFINITY), lc0 = lb0, lc1 = lb1;
-        float3 rb0 = lb0, rb1 = lb1, rc0 = lb0, rc1 = lb1;
-        for (int i = b; i < mid; ++i) {
-            float3 lo = plo[i].xyz, hi = phi[i].xyz, c = lo + hi;
-            lb0 = fmin(lb0, lo); lb1 = fmax(lb1, hi); lc0 = fmin(lc0, c); lc1 = fmax(lc1, c);
+        if (mid < 0) {                      /* no usable plane (or, never expected, a one-sided partition) */
+            mid = b + cnt / 2;
+            lb0 = lc0 = rb0 = rc0 = (float3)(INFINITY);
+            lb1 = lc1 = rb1 = rc1 = (float3)(-INFINITY);
+            for (int i = b; i < mid; ++i) {
+                float3 lo = plo[i].xyz, hi = phi[i].xyz, c = lo + hi;
+                lb0 = vmin(lb0, lo); lb1 = vmax(lb1, hi); lc0 = vmin(lc0, c); lc1 = vmax(lc1, c);
+            }
+            for (int i = mid; i < b + cnt; ++i) {
+                float3 lo = plo[i].xyz, hi = phi[i].xyz, c = lo + hi;
+                rb0 = vmin(rb0, lo); rb1 = vmax(rb1, hi); rc0 = vmin(rc0, c); rc1 = vmax(rc1, c);
+            }
         }
-        for (int i = mid; i < b + cnt; ++i) {
-            float3 lo = plo[i].xyz, hi = phi[i].xyz, c = lo + hi;
-            rb0 = fmin(rb0, lo); rb1 = fmax(rb1, hi); rc0 = fmin(rc0, c); rc1 = fmax(rc1, c);
-        }
-        int l = next;
-        next += 2;
-        nmeta[node] = (int4)(l, 0, 0, d);
-        nlo[l] = (float4)(lb0, 0.0f); nhi[l] = (float4)(lb1, 0.0f);
-        nlo[l + 1] = (float4)(rb0, 0.0f); nhi[l + 1] = (float4)(rb1, 0.0f);
-        if (sp + 2 > BUILD_STACK) { task_nodes[s] = -1; return; }   /* cannot happen below depth 64 */
-        st_node[sp] = l + 1; st_b[sp] = mid; st_n[sp] = b + cnt - mid; st_d[sp] = d + 1;
-        st_cmin[sp] = rc0; st_cmax[sp] = rc1; ++sp;
-        st_node[sp] = l; st_b[sp] = b; st_n[sp] = mid - b; st_d[sp] = d + 1;
-        st_cmin[sp] = lc0; st_cmax[sp] = lc1; ++sp;
+        int k = kount++;
+        set_ref(out, patch, (uint)k, 0u);
+        set_slot(out, k, 0, lb0, lb1);
+        set_slot(out, k, 2, rb0, rb1);
+        if (sp + 2 > BUILD_STACK) { stats[s] = (int2)(-1, 0); return; }   /* not below depth 64 */
+        st_patch[sp] = 4 * k + 2; st_b[sp] = mid; st_n[sp] = b + cnt - mid; st_d[sp] = d + 1;
+        st_lo[sp] = rb0; st_hi[sp] = rb1; st_cmin[sp] = rc0; st_cmax[sp] = rc1; ++sp;
+        st_patch[sp] = 4 * k; st_b[sp] = b; st_n[sp] = mid - b; st_d[sp] = d + 1;
+        st_lo[sp] = lb0; st_hi[sp] = lb1; st_cmin[sp] = lc0; st_cmax[sp] = lc1; ++sp;
     }
-    task_nodes[s] = next;
+    stats[s] = (int2)(kount, maxd);
 }

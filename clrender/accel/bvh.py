@@ -489,8 +489,7 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
         f_start, f_n = c_start, c_n
         f_lo, f_hi, f_cmin, f_cmax = c_lo, c_hi, c_cmin, c_cmax
 
-    if tasks:
-        _device_subtrees(device, tasks, nodes, order, max_leaf_size, ct, ci, force_depth)
+    ext = _device_subtrees(device, tasks, order, max_leaf_size, ct, ci, force_depth) if tasks else None
 
     blo = np.concatenate(nodes.lo)
     bhi = np.concatenate(nodes.hi)
@@ -500,19 +499,39 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
     bleft = np.full(nodes.n, -1, np.int64)
     for (p, c) in nodes.links:
         bleft[p] = c
-    nodes_arr, node_count = _flatten(blo, bhi, bstart, bcount, bleft, bdepth)
+    nodes_arr, node_count = _flatten(blo, bhi, bstart, bcount, bleft, bdepth, ext)
+    levels = int(bdepth.max()) + 1
+    if ext is not None and len(ext[0]):
+        levels = max(levels, int(ext[2].max()) + 1)
+    sah, leaf_count, max_leaf_prims = _tree_stats(nodes_arr, ct, ci)
+    return BVH(nodes=nodes_arr, order=order, node_count=node_count, depth=levels,
+               build_seconds=time.perf_counter() - t0, sah_cost=sah, leaf_count=leaf_count,
+               max_leaf_prims=max_leaf_prims)
 
-    inner = bleft >= 0
-    area = _half_area(blo.astype(np.float64), bhi.astype(np.float64))
-    root_area = area[0] if area[0] > 0 else 1.0
-    sah = (ct * area[inner].sum() + ci * (area[~inner] * bcount[~inner]).sum()) / root_area
-    return BVH(nodes=nodes_arr, order=order, node_count=node_count, depth=int(bdepth.max()) + 1,
-               build_seconds=time.perf_counter() - t0, sah_cost=float(sah),
-               leaf_count=int((~inner).sum()), max_leaf_prims=int(bcount[~inner].max()))
+
+def _tree_stats(nodes, ct, ci):
+    """(SAH cost relative to the root box, leaves, most primitives in a leaf) of a flattened tree: every node
+    but the root is one child slot, so one pass over the slots sees each once."""
+    n = nodes.reshape(-1, 4, 4)
+    lo, hi = n[:, 0::2, :3], n[:, 1::2, :3]                    # (K, 2, 3): slots A, B
+    w = n.view(np.uint32)[:, :, 3]
+    ref, cnt = w[:, 0::2], w[:, 1::2].astype(np.int64)
+    leaf = (ref & np.uint32(LEAF_FLAG)) != 0
+    area = _half_area(lo, hi).astype(np.float64)               # float32 per box, summed in float64
+    root_lo, root_hi = lo[0].min(axis=0), hi[0].max(axis=0)
+    counts = cnt[leaf]
+    if len(n) == 1 and leaf.all() and cnt[0, 1] == 0:           # the root is a leaf (slot B empty)
+        return float(ci * cnt[0, 0]), int(cnt[0, 0] > 0), int(cnt[0, 0])
+    root_area = float(_half_area(root_lo.astype(np.float64), root_hi.astype(np.float64)))
+    total = ct * root_area + ct * area[~leaf].sum() + ci * (area[leaf] * counts).sum()
+    sah = total / (root_area if root_area > 0 else 1.0)
+    return float(sah), int((counts > 0).sum()), int(counts.max()) if len(counts) else 0
 
 
-def _device_subtrees(device, tasks, nodes, order, max_leaf, ct, ci, force_depth):
-    """Build the subtrees of the handed-over nodes with the OpenCL kernel and add them to ``nodes``."""
+def _device_subtrees(device, tasks, order, max_leaf, ct, ci, force_depth):
+    """Build the subtrees of the handed-over nodes with the OpenCL kernel. Returns (binary node ids whose
+    subtree is interior, their interior node counts, their deepest leaf's depth, their flattened nodes task
+    after task); a task whose root became a leaf stays a leaf of the host's tree (its record already says so)."""
     from .bvh_device import build_subtrees
 
     cat = lambda i: np.concatenate([t[i] for t in tasks])      # noqa: E731
@@ -520,28 +539,28 @@ def _device_subtrees(device, tasks, nodes, order, max_leaf, ct, ci, force_depth)
     H = [np.concatenate([t[1][a] for t in tasks]) for a in range(3)]
     ids, t_id, t_start, t_n, t_depth = cat(2), cat(3), cat(4), cat(5), cat(6)
     t_off = np.cumsum(t_n) - t_n
-    pid, counts, nlo, nhi, meta = build_subtrees(device, L, H, ids, t_off, t_n, t_depth, max_leaf, ct, ci,
-                                                 force_depth)
+    pid, K, deepest, block = build_subtrees(device, L, H, ids, t_off, t_n, t_depth, t_start, max_leaf, ct, ci,
+                                            force_depth)
     order[np.repeat(t_start - t_off, t_n) + np.arange(len(pid))] = pid
-    # Local node j of task s: j = 0 is the task's node itself (already in ``nodes``), j >= 1 get new ids.
-    task = np.repeat(np.arange(len(counts)), counts)
-    local = np.arange(len(task)) - np.repeat(np.cumsum(counts) - counts, counts)
-    base = nodes.n + np.cumsum(counts - 1) - (counts - 1) - 1   # id of local node j >= 1: base[s] + j
-    gid = np.where(local == 0, t_id[task], base[task] + local)
-    new = local > 0
-    meta = meta.astype(np.int64)
-    nodes.add(nlo[new], nhi[new], (t_start[task] + meta[:, 1])[new], meta[new, 2],
-              (t_depth[task] + meta[:, 3])[new])
-    inner = meta[:, 0] >= 0
-    nodes.links.append((gid[inner], base[task[inner]] + meta[inner, 0]))
+    has = K > 0
+    return t_id[has], K[has], (t_depth + deepest)[has], block
 
 
-def _flatten(blo, bhi, bstart, bcount, bleft, bdepth):
-    """Binary tree (any node order; right child = left + 1) -> depth-first 2-wide node table (module docstring)."""
+def _flatten(blo, bhi, bstart, bcount, bleft, bdepth, ext=None):
+    """Binary tree (any node order; right child = left + 1) -> depth-first 2-wide node table (module docstring).
+
+    ``ext`` = (node ids, interior counts, -, flattened nodes) of subtrees built on the device: those nodes are
+    interior, and their already flattened subtrees are placed (and their references moved) as a whole."""
     n = len(blo)
     inner = bleft >= 0
     bright = np.where(inner, bleft + 1, -1)
-    if not inner[0]:                                            # the root is a leaf: leaf in A, empty slot in B
+    size = inner.astype(np.int64)                                # interior nodes in each subtree
+    is_ext = np.zeros(n, bool)
+    if ext is not None:
+        e_id, e_k = ext[0], ext[1]
+        is_ext[e_id] = True
+        size[e_id] = e_k
+    if not inner[0] and not is_ext[0]:                          # the root is a leaf: leaf in A, empty slot in B
         nodes = _empty_nodes()
         u = nodes.view(np.uint32)
         nodes[0, :3], nodes[1, :3] = blo[0], bhi[0]
@@ -549,12 +568,11 @@ def _flatten(blo, bhi, bstart, bcount, bleft, bdepth):
         u[1, 3] = bcount[0]
         nodes[2, :3], nodes[3, :3] = blo[0], bhi[0]
         return nodes, 1
-    # Interior nodes grouped by depth.
+    # Interior nodes of the host's tree, grouped by depth.
     ids = np.nonzero(inner)[0]
     ids = ids[np.argsort(bdepth[ids].astype(np.uint8), kind="stable")]
     bounds = np.searchsorted(bdepth[ids], np.arange(bdepth.max() + 2))
     levels = [ids[bounds[d]:bounds[d + 1]] for d in range(len(bounds) - 1)]
-    size = inner.astype(np.int64)                                # interior nodes in each subtree
     for lv in reversed(levels):
         size[lv] += size[bleft[lv]] + size[bright[lv]]
     flat = np.full(n, -1, np.int64)
@@ -562,18 +580,24 @@ def _flatten(blo, bhi, bstart, bcount, bleft, bdepth):
     for lv in levels:
         flat[bleft[lv]] = flat[lv] + 1
         flat[bright[lv]] = flat[lv] + 1 + size[bleft[lv]]
-    K = len(ids)
+    K = int(size[0])
     nodes = np.zeros((K, 4, 4), np.float32)
     u = nodes.view(np.uint32)
-    at = np.empty(K, np.int64)                                   # the binary node of each flattened row
-    at[flat[ids]] = ids
-    for slot, child in ((0, bleft[at]), (2, bright[at])):
-        nodes[:, slot, :3] = blo[child]
-        nodes[:, slot + 1, :3] = bhi[child]
-        leafc = bleft[child] < 0
+    rows = flat[ids]
+    for slot, child in ((0, bleft[ids]), (2, bright[ids])):
+        nodes[rows, slot, :3] = blo[child]
+        nodes[rows, slot + 1, :3] = bhi[child]
+        leafc = ~inner[child] & ~is_ext[child]
         ref = np.where(leafc, bstart[child] | LEAF_FLAG, flat[child])
-        u[:, slot, 3] = ref.astype(np.uint32)
-        u[:, slot + 1, 3] = np.where(leafc, bcount[child], 0).astype(np.uint32)
+        u[rows, slot, 3] = ref.astype(np.uint32)
+        u[rows, slot + 1, 3] = np.where(leafc, bcount[child], 0).astype(np.uint32)
+    if ext is not None and len(e_id):
+        block = ext[3].reshape(-1, 4, 4)
+        at = np.repeat(flat[e_id], e_k)                          # where each device subtree starts
+        w = block.view(np.uint32)[:, 0::2, 3]                    # slot references
+        interior = (w & np.uint32(LEAF_FLAG)) == 0
+        w += np.where(interior, at[:, None], 0).astype(np.uint32)
+        nodes[at + np.arange(len(at)) - np.repeat(np.cumsum(e_k) - e_k, e_k)] = block
     return nodes.reshape(4 * K, 4), K
 
 

@@ -32,29 +32,28 @@ def device_context():
         raise
 
 
-def build_subtrees(ctx_queue, L, H, ids, off, n, depth, max_leaf, ct, ci, force_depth):
+def build_subtrees(ctx_queue, L, H, ids, off, n, depth, start, max_leaf, ct, ci, force_depth):
     """Build the subtrees of ``len(off)`` tasks; task s owns rows [off[s], off[s] + n[s]) of the primitive
-    rows L, H (three float32 coordinate arrays each: box lo / hi) and ids.
+    rows L, H (three float32 coordinate arrays each: box lo / hi) and ids, its root is at ``depth[s]`` and its
+    primitives go to leaf-order positions start[s] ....
 
-    Returns (ids in leaf order within each task's rows, per task node counts, lo (K, 3), hi (K, 3),
-    meta (K, 4) int32 of all tasks' nodes concatenated task by task, local node 0 first: meta = (left child
-    or -1, first primitive relative to the task, leaf count, depth below the task's root)).
+    Returns (ids in leaf order within each task's rows, per task interior node counts (0: the root is a
+    leaf), per task depth of the deepest leaf below the root, the tasks' nodes in the layout of
+    kernels/bvh.h, float32 (4 K, 4), task after task, with task-local interior references).
     """
     import pyopencl as cl
 
     from ..device.program import build_program
 
     ctx, queue = ctx_queue
-    prg = build_program(ctx, SOURCE, defines={"BVH_BINS": BINS}, with_types=False)
+    prg = build_program(ctx, SOURCE, defines={"BVH_BINS": BINS})
     M = len(ids)
     T = len(off)
-    plo = np.empty((M, 4), np.float32)
-    phi = np.empty((M, 4), np.float32)
+    plo = np.zeros((M, 4), np.float32)
+    phi = np.zeros((M, 4), np.float32)
     for a in range(3):
         plo[:, a] = L[a]
         phi[:, a] = H[a]
-    plo[:, 3] = 0
-    phi[:, 3] = 0
     pid = np.ascontiguousarray(ids, np.int32)
     # Larger tasks first: the device's scheduler then balances the tail with the small ones.
     by_size = np.argsort(-n, kind="stable")
@@ -64,32 +63,24 @@ def build_subtrees(ctx_queue, L, H, ids, off, n, depth, max_leaf, ct, ci, force_
     b_lo = cl.Buffer(ctx, rw, hostbuf=plo)
     b_hi = cl.Buffer(ctx, rw, hostbuf=phi)
     b_id = cl.Buffer(ctx, rw, hostbuf=pid)
-    b_off = cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(off[by_size], np.int32))
-    b_n = cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(n[by_size], np.int32))
-    b_d = cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(depth[by_size], np.int32))
-    slots = 2 * M
-    b_nlo = cl.Buffer(ctx, mf.READ_WRITE, 16 * slots)
-    b_nhi = cl.Buffer(ctx, mf.READ_WRITE, 16 * slots)
-    b_meta = cl.Buffer(ctx, mf.READ_WRITE, 16 * slots)
-    b_cnt = cl.Buffer(ctx, mf.READ_WRITE, 4 * T)
+    task = [cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(x[by_size], dt))
+            for x, dt in ((off, np.int32), (n, np.int32), (depth, np.int32), (start, np.uint32))]
+    rows = max(4 * M, 4)
+    b_out = cl.Buffer(ctx, mf.READ_WRITE, 16 * rows)
+    b_stats = cl.Buffer(ctx, mf.READ_WRITE, 8 * T)
     k = cl.Kernel(prg, "bvh_build_subtrees")
     # One work-item per work-group: the subtrees diverge completely, and groups are what the cores share.
-    k(queue, (T,), (1,), b_lo, b_hi, b_id, b_off, b_n, b_d, b_nlo, b_nhi, b_meta, b_cnt, np.uint32(T),
-      np.int32(max_leaf), np.float32(ct), np.float32(ci), np.int32(force_depth))
-    cnt_sorted = np.empty(T, np.int32)
-    cl.enqueue_copy(queue, cnt_sorted, b_cnt)
-    cl.enqueue_copy(queue, pid, b_id)
-    nlo = np.empty((slots, 4), np.float32)
-    nhi = np.empty((slots, 4), np.float32)
-    meta = np.empty((slots, 4), np.int32)
-    cl.enqueue_copy(queue, nlo, b_nlo)
-    cl.enqueue_copy(queue, nhi, b_nhi)
-    cl.enqueue_copy(queue, meta, b_meta)
-    queue.finish()
-    counts = np.empty(T, np.int64)
-    counts[by_size] = cnt_sorted
-    if (counts < 1).any():
+    k(queue, (T,), (1,), b_lo, b_hi, b_id, *task, b_out, b_stats, np.uint32(T), np.int32(max_leaf),
+      np.float32(ct), np.float32(ci), np.int32(force_depth))
+    stats_sorted = np.empty((T, 2), np.int32)
+    cl.enqueue_copy(queue, stats_sorted, b_stats)
+    stats = np.empty((T, 2), np.int64)
+    stats[by_size] = stats_sorted
+    if (stats[:, 0] < 0).any():
         raise DeviceError("BVH subtree build ran out of stack (depth > 64)")
-    # Node slots of task s: [2 off[s], 2 off[s] + counts[s]).
-    first = np.repeat(2 * off - (np.cumsum(counts) - counts), counts) + np.arange(counts.sum())
-    return pid.astype(np.int64), counts, nlo[first, :3], nhi[first, :3], meta[first]
+    cl.enqueue_copy(queue, pid, b_id)
+    out = np.empty((rows // 4, 4, 4), np.float32)
+    cl.enqueue_copy(queue, out, b_out)
+    K = stats[:, 0]
+    at = np.repeat(off - (np.cumsum(K) - K), K) + np.arange(K.sum())     # task s: node rows off[s] + 0..K-1
+    return pid.astype(np.int64), K, stats[:, 1], out[at].reshape(-1, 4)
