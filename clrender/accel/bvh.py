@@ -62,7 +62,7 @@ from ..device.layout import ENUMS
 LEAF_FLAG = ENUMS["BVH_LEAF_BIT"]
 SAH_SAMPLES = 1024
 DEVICE_MIN = 65536          # "auto" builds smaller scenes on the host (fast enough; no kernel compile)
-DEVICE_TASKS = 64           # the top levels stop where nodes hold <= N / DEVICE_TASKS primitives ...
+DEVICE_TASKS_PER_UNIT = 4  # the host's levels stop at nodes of <= N / (4 x compute units) primitives ...
 DEVICE_SUBTREE_MIN = 4096   # ... or <= this many
 DP_MAX = 4
 KERNEL_STACK_SIZE = ENUMS["BVH_STACK_SIZE"]
@@ -323,7 +323,7 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
     """Build a binned-SAH BVH over boxes ``lo``/``hi`` (N, 3) and flatten it (layout: module docstring).
 
     ``method``: "host" builds every level with numpy; "device" hands nodes of at most ``subtree_size``
-    primitives (default: N / 64, at least 4096) to an OpenCL kernel that builds their subtrees, one per
+    primitives (default: N / (4 x the device's compute units), at least 4096) to an OpenCL kernel that builds their subtrees, one per
     work-item (clrender/accel/bvh_device.py); "auto" does that for N >= DEVICE_MIN when an OpenCL device is
     there, else builds on the host."""
     t0 = time.perf_counter()
@@ -349,7 +349,9 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
 
             raise DeviceError("build_bvh(method='device'): no OpenCL device")
     if subtree_size is None:
-        subtree_size = max(DEVICE_SUBTREE_MIN, N // DEVICE_TASKS)
+        # A few tasks per compute unit balance the load; every level the host builds costs a pass over N.
+        units = device[0].devices[0].max_compute_units if device is not None else 1
+        subtree_size = max(DEVICE_SUBTREE_MIN, N // (DEVICE_TASKS_PER_UNIT * max(1, units)))
     tasks = []                                                  # nodes handed to the device, per level
 
     # The active set: primitives of the frontier nodes only, each node a contiguous run, in frontier order;
