@@ -643,3 +643,21 @@ def test_auto_falls_back_to_the_host_without_a_device(monkeypatch):
         build_bvh(lo, hi, method="device")
     with pytest.raises(ValueError, match="method"):
         build_bvh(lo, hi, method="gpu")
+
+
+def test_auto_falls_back_to_the_host_when_the_device_build_fails(monkeypatch, cl_env):
+    from clrender.accel import bvh as bvh_mod
+    from clrender.accel import bvh_device
+    from clrender.errors import DeviceError
+
+    def broken(*a, **k):
+        raise DeviceError("OpenCL program failed to build")
+
+    rng = np.random.default_rng(4)
+    lo, hi = primitive_bounds(*random_soup(rng, 3000), None)
+    monkeypatch.setattr(bvh_mod, "DEVICE_MIN", 1)
+    monkeypatch.setattr(bvh_device, "build_subtrees", broken)
+    a, b = build_bvh(lo, hi, method="auto"), build_bvh(lo, hi, method="host")
+    assert np.array_equal(a.nodes.view(np.uint32), b.nodes.view(np.uint32))
+    with pytest.raises(DeviceError):
+        build_bvh(lo, hi, method="device")

@@ -326,9 +326,24 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
     primitives (default: N / (4 x the device's compute units), at least 4096) to an OpenCL kernel that builds their subtrees, one per
     work-item (clrender/accel/bvh_device.py); "auto" does that for N >= DEVICE_MIN when an OpenCL device is
     there, else builds on the host."""
-    t0 = time.perf_counter()
     if method not in ("auto", "host", "device"):
         raise ValueError(f"build_bvh: method must be 'auto', 'host' or 'device', not {method!r}")
+    args = (lo, hi, max_leaf_size, n_bins, traversal_cost, intersection_cost, sah_samples)
+    if method != "auto":
+        return _build(*args, method, subtree_size)
+    from ..errors import DeviceError
+
+    try:
+        return _build(*args, "auto", subtree_size)
+    except DeviceError as exc:           # e.g. a driver that cannot build the kernel: the host build still works
+        import logging
+
+        logging.getLogger(__name__).warning("BVH build on the device failed, building on the host: %s", exc)
+        return _build(*args, "host", subtree_size)
+
+
+def _build(lo, hi, max_leaf_size, n_bins, traversal_cost, intersection_cost, sah_samples, method, subtree_size):
+    t0 = time.perf_counter()
     lo = np.ascontiguousarray(lo, np.float32).reshape(-1, 3)
     hi = np.ascontiguousarray(hi, np.float32).reshape(-1, 3)
     N = len(lo)
