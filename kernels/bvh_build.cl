@@ -33,6 +33,15 @@ inline float half_area3(float3 lo, float3 hi) {
 
 inline float comp(float3 v, int a) { return a == 0 ? v.x : (a == 1 ? v.y : v.z); }
 
+/* The bin of a doubled centroid c: clamped as a float before the conversion, which is undefined for values
+   an int cannot hold. The binning and the partition both use it, so they agree on every primitive. */
+inline int bin_of(float c, float c0, float sc) {
+    float t = (c - c0) * sc;
+    t = t > 0.0f ? t : 0.0f;
+    t = t < (float)(BVH_BINS - 1) ? t : (float)(BVH_BINS - 1);
+    return (int)t;
+}
+
 inline void swap_prims(__global float4* plo, __global float4* phi, __global int* pid, int i, int j) {
     float4 a = plo[i]; plo[i] = plo[j]; plo[j] = a;
     float4 b = phi[i]; phi[i] = phi[j]; phi[j] = b;
@@ -180,11 +189,12 @@ __kernel void bvh_build_subtrees(__global float4* plo, __global float4* phi, __g
                     bbh[a][j] = (float3)(-INFINITY);
                 }
             for (int i = b; i < b + cnt; ++i) {
-                float3 lo = plo[i].xyz, hi = phi[i].xyz;
-                int3 bi = clamp(convert_int3_rtz((lo + hi - cmin) * scale), 0, BVH_BINS - 1);
-                bcnt[0][bi.x]++; bbl[0][bi.x] = vmin(bbl[0][bi.x], lo); bbh[0][bi.x] = vmax(bbh[0][bi.x], hi);
-                bcnt[1][bi.y]++; bbl[1][bi.y] = vmin(bbl[1][bi.y], lo); bbh[1][bi.y] = vmax(bbh[1][bi.y], hi);
-                bcnt[2][bi.z]++; bbl[2][bi.z] = vmin(bbl[2][bi.z], lo); bbh[2][bi.z] = vmax(bbh[2][bi.z], hi);
+                float3 lo = plo[i].xyz, hi = phi[i].xyz, c = lo + hi;
+                int bx = bin_of(c.x, cmin.x, scale.x), by = bin_of(c.y, cmin.y, scale.y);
+                int bz = bin_of(c.z, cmin.z, scale.z);
+                bcnt[0][bx]++; bbl[0][bx] = vmin(bbl[0][bx], lo); bbh[0][bx] = vmax(bbh[0][bx], hi);
+                bcnt[1][by]++; bbl[1][by] = vmin(bbl[1][by], lo); bbh[1][by] = vmax(bbh[1][by], hi);
+                bcnt[2][bz]++; bbl[2][bz] = vmin(bbl[2][bz], lo); bbh[2][bz] = vmax(bbh[2][bz], hi);
             }
             for (int a = 0; a < 3; ++a) {
                 if (comp(scale, a) == 0.0f) continue;
@@ -222,8 +232,7 @@ __kernel void bvh_build_subtrees(__global float4* plo, __global float4* phi, __g
             int i = b, j = b + cnt - 1;
             while (i <= j) {
                 float3 c = plo[i].xyz + phi[i].xyz;
-                int bi = clamp(convert_int_rtz((comp(c, best_axis) - c0) * sc), 0, BVH_BINS - 1);
-                if (bi <= best_plane) {
+                if (bin_of(comp(c, best_axis), c0, sc) <= best_plane) {
                     lc0 = vmin(lc0, c); lc1 = vmax(lc1, c);
                     ++i;
                 } else {

@@ -1,4 +1,6 @@
 """BVH build invariants on the host, and kernels/bvh.h traversal against a float64 brute-force reference."""
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -636,7 +638,7 @@ def test_auto_falls_back_to_the_host_without_a_device(monkeypatch):
     rng = np.random.default_rng(3)
     lo, hi = primitive_bounds(*random_soup(rng, 3000), None)
     monkeypatch.setattr(bvh_mod, "DEVICE_MIN", 1)
-    monkeypatch.setattr(bvh_device, "device_context", lambda: None)
+    monkeypatch.setattr(bvh_device, "device_context", lambda spec=None: None)
     a, b = build_bvh(lo, hi, method="auto"), build_bvh(lo, hi, method="host")
     assert np.array_equal(a.nodes.view(np.uint32), b.nodes.view(np.uint32))
     with pytest.raises(Exception, match="no OpenCL device"):
@@ -661,3 +663,32 @@ def test_auto_falls_back_to_the_host_when_the_device_build_fails(monkeypatch, cl
     assert np.array_equal(a.nodes.view(np.uint32), b.nodes.view(np.uint32))
     with pytest.raises(DeviceError):
         build_bvh(lo, hi, method="device")
+
+
+_OCLGRIND_BUILD = """
+import sys
+import numpy as np
+sys.path.insert(0, sys.argv[1])
+from test_bvh import check_invariants, random_soup, random_spheres
+from clrender.accel.bvh import build_bvh
+from clrender.accel.primitives import primitive_bounds
+rng = np.random.default_rng(5)
+v = [np.concatenate([a, np.tile(a[:1], (40, 1))]) for a in random_soup(rng, 300, 1.0, 0.05)]   # + a pile
+lo, hi = primitive_bounds(*v, random_spheres(rng, 20))
+for subtree, max_leaf in ((16, 4), (10 ** 9, 1)):
+    bvh = build_bvh(lo, hi, method="device", subtree_size=subtree, max_leaf_size=max_leaf, device="Oclgrind")
+    check_invariants(bvh, lo, hi, max_leaf)
+print("built")
+"""
+
+
+def test_device_build_is_clean_under_oclgrind(tmp_path):
+    # The kernel under a second OpenCL implementation with out-of-bounds and data-race checks on.
+    from test_oclgrind import _oclgrind_present, _run_under_oclgrind
+
+    if not _oclgrind_present():
+        pytest.skip("Oclgrind is not installed (pip install -e '.[test]')")
+    proc, report = _run_under_oclgrind(tmp_path, [str(Path(__file__).parent)], _OCLGRIND_BUILD)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "built" in proc.stdout
+    assert report == "", report[:4000]

@@ -319,16 +319,17 @@ def _small_subtrees(nodes, Lg, Hg, ids_g, node_id, start, depth, order, max_leaf
 
 
 def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersection_cost=1.0,
-              sah_samples=SAH_SAMPLES, method="auto", subtree_size=None):
+              sah_samples=SAH_SAMPLES, method="auto", subtree_size=None, device=None):
     """Build a binned-SAH BVH over boxes ``lo``/``hi`` (N, 3) and flatten it (layout: module docstring).
 
     ``method``: "host" builds every level with numpy; "device" hands nodes of at most ``subtree_size``
     primitives (default: N / (4 x the device's compute units), at least 4096) to an OpenCL kernel that builds their subtrees, one per
     work-item (clrender/accel/bvh_device.py); "auto" does that for N >= DEVICE_MIN when an OpenCL device is
-    there, else builds on the host."""
+    there, else builds on the host. ``device``: an OpenCL device spec (clrender.device.context; default: the
+    default device)."""
     if method not in ("auto", "host", "device"):
         raise ValueError(f"build_bvh: method must be 'auto', 'host' or 'device', not {method!r}")
-    args = (lo, hi, max_leaf_size, n_bins, traversal_cost, intersection_cost, sah_samples)
+    args = (lo, hi, max_leaf_size, n_bins, traversal_cost, intersection_cost, sah_samples, device)
     if method != "auto":
         return _build(*args, method, subtree_size)
     from ..errors import DeviceError
@@ -342,7 +343,8 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
         return _build(*args, "host", subtree_size)
 
 
-def _build(lo, hi, max_leaf_size, n_bins, traversal_cost, intersection_cost, sah_samples, method, subtree_size):
+def _build(lo, hi, max_leaf_size, n_bins, traversal_cost, intersection_cost, sah_samples, spec, method,
+           subtree_size):
     t0 = time.perf_counter()
     lo = np.ascontiguousarray(lo, np.float32).reshape(-1, 3)
     hi = np.ascontiguousarray(hi, np.float32).reshape(-1, 3)
@@ -358,7 +360,7 @@ def _build(lo, hi, max_leaf_size, n_bins, traversal_cost, intersection_cost, sah
     if method == "device" or (method == "auto" and N >= DEVICE_MIN):
         from .bvh_device import device_context
 
-        device = device_context()
+        device = device_context(spec)
         if device is None and method == "device":
             from ..errors import DeviceError
 

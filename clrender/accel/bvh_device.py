@@ -15,12 +15,13 @@ BINS = 32
 SOURCE = '#include "bvh_build.cl"\n'
 
 
-def device_context():
-    """The default OpenCL (context, queue), or None where there is none (the numpy build is used then)."""
+def device_context(spec=None):
+    """The (context, queue) of device ``spec`` (None: the default device), or None where there is none (the
+    numpy build is used then)."""
     try:
         from ..device.context import get_context
 
-        return get_context(None)
+        return get_context(spec)
     except (DeviceError, ImportError, OSError) as exc:   # no driver, no device: not an error for a build
         import logging
 
