@@ -101,7 +101,8 @@ def trace_bench(v, trees, n_rays=1 << 18, repeat=3):
     ctx, queue = get_context(None)
     mf = cl.mem_flags
     buf = lambda a: cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(a))  # noqa
-    kernels = {w: cl.Kernel(build_program(ctx, KERNEL if w == 2 else KERNEL.replace('"bvh.h"', '"bvh4.h"')),
+    kernels = {w: cl.Kernel(build_program(ctx, KERNEL if w == 2 else KERNEL.replace('"bvh.h"', '"bvh4.h"'),
+                                          fast_math=True),
                             "trace") for w in (2, 4)}
     bufs = {}
     for name, bvh in trees.items():

@@ -612,11 +612,12 @@ def _flatten(blo, bhi, bstart, bcount, bleft, bdepth, ext=None):
         u[rows, slot + 1, 3] = np.where(leafc, bcount[child], 0).astype(np.uint32)
     if ext is not None and len(e_id):
         block = ext[3].reshape(-1, 4, 4)
-        at = np.repeat(flat[e_id], e_k)                          # where each device subtree starts
-        w = block.view(np.uint32)[:, 0::2, 3]                    # slot references
-        interior = (w & np.uint32(LEAF_FLAG)) == 0
-        w += np.where(interior, at[:, None], 0).astype(np.uint32)
-        nodes[at + np.arange(len(at)) - np.repeat(np.cumsum(e_k) - e_k, e_k)] = block
+        # Interior references are local to their subtree: move them to where the subtree now starts.
+        w = block.view(np.uint32)[:, 0::2, 3]
+        w += np.where((w & np.uint32(LEAF_FLAG)) == 0, np.repeat(flat[e_id], e_k)[:, None], 0).astype(np.uint32)
+        src = np.cumsum(e_k) - e_k
+        for f, a, k in zip(flat[e_id], src, e_k):                # a few tasks per compute unit: slices
+            nodes[f:f + k] = block[a:a + k]
     return nodes.reshape(4 * K, 4), K
 
 

@@ -80,8 +80,13 @@ def build_subtrees(ctx_queue, L, H, ids, off, n, depth, start, max_leaf, ct, ci,
     if (stats[:, 0] < 0).any():
         raise DeviceError("BVH subtree build ran out of stack (depth > 64)")
     cl.enqueue_copy(queue, pid, b_id)
-    out = np.empty((rows // 4, 4, 4), np.float32)
-    cl.enqueue_copy(queue, out, b_out)
+    # Mapped, not copied (no copy at all on a CPU device): only the used rows are read, one slice per task.
+    out, _ = cl.enqueue_map_buffer(queue, b_out, cl.map_flags.READ, 0, (rows // 4, 4, 4), np.float32,
+                                   wait_for=None, is_blocking=True)
     K = stats[:, 0]
-    at = np.repeat(off - (np.cumsum(K) - K), K) + np.arange(K.sum())     # task s: node rows off[s] + 0..K-1
-    return pid.astype(np.int64), K, stats[:, 1], out[at].reshape(-1, 4)
+    block = np.empty((int(K.sum()), 4, 4), np.float32)
+    at = np.cumsum(K) - K
+    for s in np.nonzero(K)[0]:
+        block[at[s]:at[s] + K[s]] = out[off[s]:off[s] + K[s]]
+    out.base.release(queue)
+    return pid.astype(np.int64), K, stats[:, 1], block.reshape(-1, 4)
