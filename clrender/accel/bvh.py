@@ -26,6 +26,13 @@ range so the left child's primitives come first.
   are also made in the middle of the range, which bounds the depth below 64 (the kernel's stack size).
 * Nodes are recorded with their depth; the flattening groups them by depth, so subtrees emitted early (the
   small-node programme) need no particular creation order beyond siblings being created side by side.
+* ``method="device"`` (and "auto" for N >= ``DEVICE_MIN`` when there is an OpenCL device) stops the levels at
+  nodes of <= N / (4 x compute units) primitives and hands those nodes over to kernels/bvh_build.cl
+  (clrender/accel/bvh_device.py): one work-item builds one subtree sequentially in compiled C, binning
+  *every* primitive in 32 bins (so its SAH is at least as good as the sampled 16-bin host levels) with the
+  same leaf rule and the same exact programme for <= 4 primitives, and writes it already flattened; the host
+  then places each subtree's block of nodes and moves its references. A pass over all N primitives per
+  level, which is what the host build pays at every level, is paid only for the few top levels.
 
 Flattened node layout (``BVH.nodes``, float32 (4*K, 4), read as ``float4`` on the device)
 -----------------------------------------------------------------------------------------
