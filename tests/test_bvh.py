@@ -1,4 +1,6 @@
 """BVH build invariants on the host, and kernels/bvh.h traversal against a float64 brute-force reference."""
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -535,3 +537,158 @@ def test_piles_of_identical_boxes(n):
     for max_leaf in (1, 3, 4):
         bvh = build_bvh(lo, hi, max_leaf_size=max_leaf)
         check_invariants(bvh, lo, hi, max_leaf)
+
+
+# ------------------------------------------------------------------ device build (kernels/bvh_build.cl)
+# method="device" builds the top levels on the host until nodes hold <= subtree_size primitives, then every
+# such node's subtree in one OpenCL work-item; a small subtree_size exercises both halves and the splicing.
+def device_build(lo, hi, subtree_size, **kw):
+    return build_bvh(lo, hi, method="device", subtree_size=subtree_size, **kw)
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 5, 33, 100, 2000])
+@pytest.mark.parametrize("max_leaf", [1, 4, 8])
+@pytest.mark.parametrize("subtree", [1, 16, 10 ** 9], ids=["all-host-levels", "mixed", "all-device"])
+def test_device_build_invariants(cl_env, n, max_leaf, subtree):
+    rng = np.random.default_rng(n * 10 + max_leaf)
+    lo, hi = primitive_bounds(*random_soup(rng, n), random_spheres(rng, n // 3))
+    bvh = device_build(lo, hi, subtree, max_leaf_size=max_leaf)
+    check_invariants(bvh, lo, hi, max_leaf)
+    assert bvh.max_leaf_prims <= max_leaf and bvh.leaf_count >= len(lo) / max_leaf
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4])
+@pytest.mark.parametrize("max_leaf", [1, 2, 4])
+def test_device_tiny_subtrees_are_optimal(cl_env, n, max_leaf):
+    # The kernel's subset programme must find the same optimum as the host's (itself checked by brute force).
+    rng = np.random.default_rng(7 * n + max_leaf)
+    lo, hi = primitive_bounds(*random_soup(rng, n), None)
+    host = build_bvh(lo, hi, max_leaf_size=max_leaf, method="host")
+    dev = device_build(lo, hi, 10 ** 9, max_leaf_size=max_leaf)
+    check_invariants(dev, lo, hi, max_leaf)
+    assert dev.sah_cost == pytest.approx(host.sah_cost, rel=1e-5)
+
+
+def test_device_build_sah_no_worse_than_host(cl_env):
+    # "Equal or better": all primitives binned in 32 bins below the hand-over, against sampled 16-bin SAH.
+    rng = np.random.default_rng(21)
+    parts = [random_soup(rng, 20000, 1.0, 0.01), random_soup(rng, 5000, 0.05, 0.002)]
+    v = [np.concatenate([p[i] for p in parts]) for i in range(3)]
+    lo, hi = primitive_bounds(*v, random_spheres(rng, 300))
+    host = build_bvh(lo, hi, method="host")
+    for subtree in (4096, 10 ** 9):
+        dev = device_build(lo, hi, subtree)
+        check_invariants(dev, lo, hi, 4)
+        assert dev.sah_cost <= host.sah_cost * 1.001, (subtree, dev.sah_cost, host.sah_cost)
+        assert dev.depth <= 64
+
+
+def test_device_build_is_deterministic(cl_env):
+    rng = np.random.default_rng(11)
+    lo, hi = primitive_bounds(*random_soup(rng, 20000, 1.0, 0.02), random_spheres(rng, 50))
+    a, b = device_build(lo, hi, 1000), device_build(lo, hi, 1000)
+    assert np.array_equal(a.nodes.view(np.uint32), b.nodes.view(np.uint32))
+    assert np.array_equal(a.order, b.order)
+
+
+@pytest.mark.parametrize("subtree", [8, 10 ** 9])
+def test_device_identical_pile(cl_env, subtree):
+    v0, v1, v2 = np.zeros((1000, 3)), np.tile([[1.0, 0, 0]], (1000, 1)), np.tile([[0, 1.0, 0]], (1000, 1))
+    lo, hi = primitive_bounds(v0, v1, v2, None)
+    for max_leaf in (1, 4):
+        bvh = device_build(lo, hi, subtree, max_leaf_size=max_leaf)
+        check_invariants(bvh, lo, hi, max_leaf)
+        assert bvh.depth <= 12
+
+
+@pytest.mark.parametrize("max_leaf", [1, 4])
+def test_device_flat_and_coincident(cl_env, max_leaf):
+    # Nested boxes around one centre (no plane separates their centroids) plus a flat (z = 0) sheet, and a
+    # flat scene alone: zero-area boxes, zero extent on one axis.
+    k = np.arange(1, 301, dtype=np.float64)[:, None]
+    lo = np.concatenate([-k * [1, 1, 1], np.stack([np.arange(500.0), np.zeros(500), np.zeros(500)], 1)])
+    hi = np.concatenate([k * [1, 1, 1], np.stack([np.arange(500.0) + 0.5, np.ones(500), np.zeros(500)], 1)])
+    for l_, h_ in ((lo, hi), (lo[300:], hi[300:])):
+        for subtree in (16, 10 ** 9):
+            bvh = device_build(l_, h_, subtree, max_leaf_size=max_leaf)
+            check_invariants(bvh, l_.astype(np.float32), h_.astype(np.float32), max_leaf)
+
+
+def test_device_build_one_primitive_and_empty(cl_env):
+    lo, hi = np.zeros((1, 3)), np.ones((1, 3))
+    bvh = device_build(lo, hi, 10 ** 9)
+    check_invariants(bvh, lo, hi, 4)
+    assert bvh.node_count == 1 and bvh.sah_cost == 1.0 and bvh.leaf_count == 1
+    empty = device_build(np.zeros((0, 3)), np.zeros((0, 3)), 10 ** 9)
+    assert empty.node_count == 1 and len(empty.order) == 0
+
+
+def test_device_build_traces_correctly(ctx, queue):
+    rng = np.random.default_rng(33)
+    v0, v1, v2 = random_soup(rng, 3000, 1.0, 0.1)
+    sph = random_spheres(rng, 40)
+    tracer = make_tracer(ctx, 2)
+    check_trace(ctx, queue, tracer, v0, v1, v2, sph, *random_rays(rng, 3000), method="device", subtree_size=64)
+
+
+def test_auto_falls_back_to_the_host_without_a_device(monkeypatch):
+    from clrender.accel import bvh as bvh_mod
+    from clrender.accel import bvh_device
+
+    rng = np.random.default_rng(3)
+    lo, hi = primitive_bounds(*random_soup(rng, 3000), None)
+    monkeypatch.setattr(bvh_mod, "DEVICE_MIN", 1)
+    monkeypatch.setattr(bvh_device, "device_context", lambda spec=None: None)
+    a, b = build_bvh(lo, hi, method="auto"), build_bvh(lo, hi, method="host")
+    assert np.array_equal(a.nodes.view(np.uint32), b.nodes.view(np.uint32))
+    with pytest.raises(Exception, match="no OpenCL device"):
+        build_bvh(lo, hi, method="device")
+    with pytest.raises(ValueError, match="method"):
+        build_bvh(lo, hi, method="gpu")
+
+
+def test_auto_falls_back_to_the_host_when_the_device_build_fails(monkeypatch, cl_env):
+    from clrender.accel import bvh as bvh_mod
+    from clrender.accel import bvh_device
+    from clrender.errors import DeviceError
+
+    def broken(*a, **k):
+        raise DeviceError("OpenCL program failed to build")
+
+    rng = np.random.default_rng(4)
+    lo, hi = primitive_bounds(*random_soup(rng, 3000), None)
+    monkeypatch.setattr(bvh_mod, "DEVICE_MIN", 1)
+    monkeypatch.setattr(bvh_device, "build_subtrees", broken)
+    a, b = build_bvh(lo, hi, method="auto"), build_bvh(lo, hi, method="host")
+    assert np.array_equal(a.nodes.view(np.uint32), b.nodes.view(np.uint32))
+    with pytest.raises(DeviceError):
+        build_bvh(lo, hi, method="device")
+
+
+_OCLGRIND_BUILD = """
+import sys
+import numpy as np
+sys.path.insert(0, sys.argv[1])
+from test_bvh import check_invariants, random_soup, random_spheres
+from clrender.accel.bvh import build_bvh
+from clrender.accel.primitives import primitive_bounds
+rng = np.random.default_rng(5)
+v = [np.concatenate([a, np.tile(a[:1], (40, 1))]) for a in random_soup(rng, 300, 1.0, 0.05)]   # + a pile
+lo, hi = primitive_bounds(*v, random_spheres(rng, 20))
+for subtree, max_leaf in ((16, 4), (10 ** 9, 1)):
+    bvh = build_bvh(lo, hi, method="device", subtree_size=subtree, max_leaf_size=max_leaf, device="Oclgrind")
+    check_invariants(bvh, lo, hi, max_leaf)
+print("built")
+"""
+
+
+def test_device_build_is_clean_under_oclgrind(tmp_path):
+    # The kernel under a second OpenCL implementation with out-of-bounds and data-race checks on.
+    from test_oclgrind import _oclgrind_present, _run_under_oclgrind
+
+    if not _oclgrind_present():
+        pytest.skip("Oclgrind is not installed (pip install -e '.[test]')")
+    proc, report = _run_under_oclgrind(tmp_path, [str(Path(__file__).parent)], _OCLGRIND_BUILD)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "built" in proc.stdout
+    assert report == "", report[:4000]

@@ -26,6 +26,13 @@ range so the left child's primitives come first.
   are also made in the middle of the range, which bounds the depth below 64 (the kernel's stack size).
 * Nodes are recorded with their depth; the flattening groups them by depth, so subtrees emitted early (the
   small-node programme) need no particular creation order beyond siblings being created side by side.
+* ``method="device"`` (and "auto" for N >= ``DEVICE_MIN`` when there is an OpenCL device) stops the levels at
+  nodes of <= N / (4 x compute units) primitives and hands those nodes over to kernels/bvh_build.cl
+  (clrender/accel/bvh_device.py): one work-item builds one subtree sequentially in compiled C, binning
+  *every* primitive in 32 bins (so its SAH is at least as good as the sampled 16-bin host levels) with the
+  same leaf rule and the same exact programme for <= 4 primitives, and writes it already flattened; the host
+  then places each subtree's block of nodes and moves its references. A pass over all N primitives per
+  level, which is what the host build pays at every level, is paid only for the few top levels.
 
 Flattened node layout (``BVH.nodes``, float32 (4*K, 4), read as ``float4`` on the device)
 -----------------------------------------------------------------------------------------
@@ -61,6 +68,9 @@ from ..device.layout import ENUMS
 
 LEAF_FLAG = ENUMS["BVH_LEAF_BIT"]
 SAH_SAMPLES = 1024
+DEVICE_MIN = 65536          # "auto" builds smaller scenes on the host (fast enough; no kernel compile)
+DEVICE_TASKS_PER_UNIT = 4  # the host's levels stop at nodes of <= N / (4 x compute units) primitives ...
+DEVICE_SUBTREE_MIN = 4096   # ... or <= this many
 DP_MAX = 4
 KERNEL_STACK_SIZE = ENUMS["BVH_STACK_SIZE"]
 
@@ -316,8 +326,32 @@ def _small_subtrees(nodes, Lg, Hg, ids_g, node_id, start, depth, order, max_leaf
 
 
 def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersection_cost=1.0,
-              sah_samples=SAH_SAMPLES):
-    """Build a binned-SAH BVH over boxes ``lo``/``hi`` (N, 3) and flatten it (layout: module docstring)."""
+              sah_samples=SAH_SAMPLES, method="auto", subtree_size=None, device=None):
+    """Build a binned-SAH BVH over boxes ``lo``/``hi`` (N, 3) and flatten it (layout: module docstring).
+
+    ``method``: "host" builds every level with numpy; "device" hands nodes of at most ``subtree_size``
+    primitives (default: N / (4 x the device's compute units), at least 4096) to an OpenCL kernel that builds their subtrees, one per
+    work-item (clrender/accel/bvh_device.py); "auto" does that for N >= DEVICE_MIN when an OpenCL device is
+    there, else builds on the host. ``device``: an OpenCL device spec (clrender.device.context; default: the
+    default device)."""
+    if method not in ("auto", "host", "device"):
+        raise ValueError(f"build_bvh: method must be 'auto', 'host' or 'device', not {method!r}")
+    args = (lo, hi, max_leaf_size, n_bins, traversal_cost, intersection_cost, sah_samples, device)
+    if method != "auto":
+        return _build(*args, method, subtree_size)
+    from ..errors import DeviceError
+
+    try:
+        return _build(*args, "auto", subtree_size)
+    except DeviceError as exc:           # e.g. a driver that cannot build the kernel: the host build still works
+        import logging
+
+        logging.getLogger(__name__).warning("BVH build on the device failed, building on the host: %s", exc)
+        return _build(*args, "host", subtree_size)
+
+
+def _build(lo, hi, max_leaf_size, n_bins, traversal_cost, intersection_cost, sah_samples, spec, method,
+           subtree_size):
     t0 = time.perf_counter()
     lo = np.ascontiguousarray(lo, np.float32).reshape(-1, 3)
     hi = np.ascontiguousarray(hi, np.float32).reshape(-1, 3)
@@ -329,6 +363,20 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
     ct, ci = float(traversal_cost), float(intersection_cost)
     if N == 0:
         return BVH(_empty_nodes(), np.zeros(0, np.int64), 1, 0, time.perf_counter() - t0, 0.0, 0, 0)
+    device = None
+    if method == "device" or (method == "auto" and N >= DEVICE_MIN):
+        from .bvh_device import device_context
+
+        device = device_context(spec)
+        if device is None and method == "device":
+            from ..errors import DeviceError
+
+            raise DeviceError("build_bvh(method='device'): no OpenCL device")
+    if subtree_size is None:
+        # A few tasks per compute unit balance the load; every level the host builds costs a pass over N.
+        units = device[0].devices[0].max_compute_units if device is not None else 1
+        subtree_size = max(DEVICE_SUBTREE_MIN, N // (DEVICE_TASKS_PER_UNIT * max(1, units)))
+    tasks = []                                                  # nodes handed to the device, per level
 
     # The active set: primitives of the frontier nodes only, each node a contiguous run, in frontier order;
     # one float32 row per coordinate (doubled centroids are L + H, computed when needed).
@@ -349,6 +397,19 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
     f_cmax = np.array([[x.max() for x in (L[a] + H[a] for a in range(3))]], np.float32)
     depth = 0
     while len(f_id):
+        if device is not None:
+            dev = f_n <= subtree_size
+            if dev.any():
+                # These nodes leave the active set; their subtrees are built on the device after the loop.
+                m = _spreader(f_n)(dev)
+                tasks.append(([x[m] for x in L], [x[m] for x in H], ids[m], f_id[dev], f_start[dev], f_n[dev],
+                              np.full(int(dev.sum()), depth)))
+                keep = ~m
+                L, H, ids = [x[keep] for x in L], [x[keep] for x in H], ids[keep]
+                f_id, f_start, f_n = f_id[~dev], f_start[~dev], f_n[~dev]
+                f_lo, f_hi, f_cmin, f_cmax = f_lo[~dev], f_hi[~dev], f_cmin[~dev], f_cmax[~dev]
+                if not len(f_id):
+                    break
         F = len(f_id)
         M = len(ids)
         off = np.cumsum(f_n) - f_n
@@ -454,6 +515,8 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
         f_start, f_n = c_start, c_n
         f_lo, f_hi, f_cmin, f_cmax = c_lo, c_hi, c_cmin, c_cmax
 
+    ext = _device_subtrees(device, tasks, order, max_leaf_size, ct, ci, force_depth) if tasks else None
+
     blo = np.concatenate(nodes.lo)
     bhi = np.concatenate(nodes.hi)
     bstart = np.concatenate(nodes.start)
@@ -462,23 +525,68 @@ def build_bvh(lo, hi, max_leaf_size=4, n_bins=16, traversal_cost=1.0, intersecti
     bleft = np.full(nodes.n, -1, np.int64)
     for (p, c) in nodes.links:
         bleft[p] = c
-    nodes_arr, node_count = _flatten(blo, bhi, bstart, bcount, bleft, bdepth)
+    nodes_arr, node_count = _flatten(blo, bhi, bstart, bcount, bleft, bdepth, ext)
+    levels = int(bdepth.max()) + 1
+    if ext is not None and len(ext[0]):
+        levels = max(levels, int(ext[2].max()) + 1)
+    sah, leaf_count, max_leaf_prims = _tree_stats(nodes_arr, ct, ci)
+    return BVH(nodes=nodes_arr, order=order, node_count=node_count, depth=levels,
+               build_seconds=time.perf_counter() - t0, sah_cost=sah, leaf_count=leaf_count,
+               max_leaf_prims=max_leaf_prims)
 
-    inner = bleft >= 0
-    area = _half_area(blo.astype(np.float64), bhi.astype(np.float64))
-    root_area = area[0] if area[0] > 0 else 1.0
-    sah = (ct * area[inner].sum() + ci * (area[~inner] * bcount[~inner]).sum()) / root_area
-    return BVH(nodes=nodes_arr, order=order, node_count=node_count, depth=int(bdepth.max()) + 1,
-               build_seconds=time.perf_counter() - t0, sah_cost=float(sah),
-               leaf_count=int((~inner).sum()), max_leaf_prims=int(bcount[~inner].max()))
+
+def _tree_stats(nodes, ct, ci):
+    """(SAH cost relative to the root box, leaves, most primitives in a leaf) of a flattened tree: every node
+    but the root is one child slot, so one pass over the slots sees each once."""
+    n = nodes.reshape(-1, 4, 4)
+    lo, hi = n[:, 0::2, :3], n[:, 1::2, :3]                    # (K, 2, 3): slots A, B
+    w = n.view(np.uint32)[:, :, 3]
+    ref, cnt = w[:, 0::2], w[:, 1::2].astype(np.int64)
+    leaf = (ref & np.uint32(LEAF_FLAG)) != 0
+    area = _half_area(lo, hi).astype(np.float64)               # float32 per box, summed in float64
+    root_lo, root_hi = lo[0].min(axis=0), hi[0].max(axis=0)
+    counts = cnt[leaf]
+    if len(n) == 1 and leaf.all() and cnt[0, 1] == 0:           # the root is a leaf (slot B empty)
+        return float(ci * cnt[0, 0]), int(cnt[0, 0] > 0), int(cnt[0, 0])
+    root_area = float(_half_area(root_lo.astype(np.float64), root_hi.astype(np.float64)))
+    total = ct * root_area + ct * area[~leaf].sum() + ci * (area[leaf] * counts).sum()
+    sah = total / (root_area if root_area > 0 else 1.0)
+    return float(sah), int((counts > 0).sum()), int(counts.max()) if len(counts) else 0
 
 
-def _flatten(blo, bhi, bstart, bcount, bleft, bdepth):
-    """Binary tree (any node order; right child = left + 1) -> depth-first 2-wide node table (module docstring)."""
+def _device_subtrees(device, tasks, order, max_leaf, ct, ci, force_depth):
+    """Build the subtrees of the handed-over nodes with the OpenCL kernel. Returns (binary node ids whose
+    subtree is interior, their interior node counts, their deepest leaf's depth, their flattened nodes task
+    after task); a task whose root became a leaf stays a leaf of the host's tree (its record already says so)."""
+    from .bvh_device import build_subtrees
+
+    cat = lambda i: np.concatenate([t[i] for t in tasks])      # noqa: E731
+    L = [np.concatenate([t[0][a] for t in tasks]) for a in range(3)]
+    H = [np.concatenate([t[1][a] for t in tasks]) for a in range(3)]
+    ids, t_id, t_start, t_n, t_depth = cat(2), cat(3), cat(4), cat(5), cat(6)
+    t_off = np.cumsum(t_n) - t_n
+    pid, K, deepest, block = build_subtrees(device, L, H, ids, t_off, t_n, t_depth, t_start, max_leaf, ct, ci,
+                                            force_depth)
+    order[np.repeat(t_start - t_off, t_n) + np.arange(len(pid))] = pid
+    has = K > 0
+    return t_id[has], K[has], (t_depth + deepest)[has], block
+
+
+def _flatten(blo, bhi, bstart, bcount, bleft, bdepth, ext=None):
+    """Binary tree (any node order; right child = left + 1) -> depth-first 2-wide node table (module docstring).
+
+    ``ext`` = (node ids, interior counts, -, flattened nodes) of subtrees built on the device: those nodes are
+    interior, and their already flattened subtrees are placed (and their references moved) as a whole."""
     n = len(blo)
     inner = bleft >= 0
     bright = np.where(inner, bleft + 1, -1)
-    if not inner[0]:                                            # the root is a leaf: leaf in A, empty slot in B
+    size = inner.astype(np.int64)                                # interior nodes in each subtree
+    is_ext = np.zeros(n, bool)
+    if ext is not None:
+        e_id, e_k = ext[0], ext[1]
+        is_ext[e_id] = True
+        size[e_id] = e_k
+    if not inner[0] and not is_ext[0]:                          # the root is a leaf: leaf in A, empty slot in B
         nodes = _empty_nodes()
         u = nodes.view(np.uint32)
         nodes[0, :3], nodes[1, :3] = blo[0], bhi[0]
@@ -486,12 +594,11 @@ def _flatten(blo, bhi, bstart, bcount, bleft, bdepth):
         u[1, 3] = bcount[0]
         nodes[2, :3], nodes[3, :3] = blo[0], bhi[0]
         return nodes, 1
-    # Interior nodes grouped by depth.
+    # Interior nodes of the host's tree, grouped by depth.
     ids = np.nonzero(inner)[0]
     ids = ids[np.argsort(bdepth[ids].astype(np.uint8), kind="stable")]
     bounds = np.searchsorted(bdepth[ids], np.arange(bdepth.max() + 2))
     levels = [ids[bounds[d]:bounds[d + 1]] for d in range(len(bounds) - 1)]
-    size = inner.astype(np.int64)                                # interior nodes in each subtree
     for lv in reversed(levels):
         size[lv] += size[bleft[lv]] + size[bright[lv]]
     flat = np.full(n, -1, np.int64)
@@ -499,18 +606,25 @@ def _flatten(blo, bhi, bstart, bcount, bleft, bdepth):
     for lv in levels:
         flat[bleft[lv]] = flat[lv] + 1
         flat[bright[lv]] = flat[lv] + 1 + size[bleft[lv]]
-    K = len(ids)
+    K = int(size[0])
     nodes = np.zeros((K, 4, 4), np.float32)
     u = nodes.view(np.uint32)
-    at = np.empty(K, np.int64)                                   # the binary node of each flattened row
-    at[flat[ids]] = ids
-    for slot, child in ((0, bleft[at]), (2, bright[at])):
-        nodes[:, slot, :3] = blo[child]
-        nodes[:, slot + 1, :3] = bhi[child]
-        leafc = bleft[child] < 0
+    rows = flat[ids]
+    for slot, child in ((0, bleft[ids]), (2, bright[ids])):
+        nodes[rows, slot, :3] = blo[child]
+        nodes[rows, slot + 1, :3] = bhi[child]
+        leafc = ~inner[child] & ~is_ext[child]
         ref = np.where(leafc, bstart[child] | LEAF_FLAG, flat[child])
-        u[:, slot, 3] = ref.astype(np.uint32)
-        u[:, slot + 1, 3] = np.where(leafc, bcount[child], 0).astype(np.uint32)
+        u[rows, slot, 3] = ref.astype(np.uint32)
+        u[rows, slot + 1, 3] = np.where(leafc, bcount[child], 0).astype(np.uint32)
+    if ext is not None and len(e_id):
+        block = ext[3].reshape(-1, 4, 4)
+        # Interior references are local to their subtree: move them to where the subtree now starts.
+        w = block.view(np.uint32)[:, 0::2, 3]
+        w += np.where((w & np.uint32(LEAF_FLAG)) == 0, np.repeat(flat[e_id], e_k)[:, None], 0).astype(np.uint32)
+        src = np.cumsum(e_k) - e_k
+        for f, a, k in zip(flat[e_id], src, e_k):                # a few tasks per compute unit: slices
+            nodes[f:f + k] = block[a:a + k]
     return nodes.reshape(4 * K, 4), K
 
 
