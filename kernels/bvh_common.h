@@ -113,6 +113,9 @@ BVH_INLINE bool bvh_isect_sphere(float4 c, float r, float3 o, float3 d, float tm
 /* Intersects one leaf; with any_hit it stops at the first hit. */
 BVH_INLINE bool bvh_isect_leaf(__global const float4* prims, uint first, uint count, const BvhRay* r,
                                float tmin, Hit* hit, bool any_hit) {
+#ifdef BVH_PROFILE_BOXES_ONLY
+    return false;   /* benchmarks/profile_pass.py: what traversal costs without the primitive tests */
+#endif
     bool found = false;
     for (uint i = first; i < first + count; ++i) {
         __global const float4* p = prims + 3 * i;
