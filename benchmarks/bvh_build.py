@@ -18,7 +18,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from clrender.accel.bvh import build_bvh  # noqa: E402
-from clrender.accel.primitives import pack_primitives, primitive_bounds  # noqa: E402
+from clrender.accel.primitives import bvh_leaves, pack_leaf_blocks, primitive_bounds  # noqa: E402
 
 
 def noisy_sphere(n, seed=0):
@@ -60,7 +60,7 @@ def trace_bench(v, bvh, n_rays=1 << 20, repeat=3):
 
     ctx, queue = get_context(None)
     k = cl.Kernel(build_program(ctx, KERNEL, with_types=False, fast_math=True), "trace")
-    prims = pack_primitives(*v, None, bvh.order)
+    prims = pack_leaf_blocks(*v, None, bvh.order, *bvh_leaves(bvh))
     mf = cl.mem_flags
     nodes_b = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=bvh.nodes)
     prims_b = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=prims)

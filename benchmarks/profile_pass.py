@@ -54,6 +54,8 @@ def main(argv=None):
     ap.add_argument("--scene", help="a scene XML instead of the Cornell twin")
     ap.add_argument("--label", default="")
     ap.add_argument("--json")
+    ap.add_argument("--bvh", action="append", default=[], metavar="KEY=VALUE",
+                    help="a build_bvh option (e.g. traversal_cost=2), for trying builds")
     args = ap.parse_args(argv)
 
     import pyopencl as cl
@@ -73,7 +75,10 @@ def main(argv=None):
         xml = d / "clrender.xml"
         xml.write_text(scene_xml(twin_cornell(d, 64), "nori"))
     scene = clrender.load_scene(xml)
-    r = Renderer(scene)
+    from clrender.pack import pack_scene
+
+    bvh_options = {k: float(v) if "." in v else int(v) for k, v in (o.split("=", 1) for o in args.bvh)}
+    r = Renderer(scene, buffers=pack_scene(scene, bvh_options=bvh_options) if bvh_options else None)
     r.render(spp=1)                       # warm: build + first launch of render_pass
     ctx, queue = r.ctx, r.queue
     n = r.n_pixels
@@ -148,7 +153,7 @@ def main(argv=None):
         "label": args.label, "cpu": _cpu(), "cores": os.cpu_count(), "device": r.device_name,
         "load_average": [load0, os.getloadavg()],
         "scene": str(xml) if args.scene else "vs_mitsuba cornell_spheres twin (256x256, path_mis)",
-        "pixels": n, "sample": SAMPLE, "repeat": args.repeat, "defines": r.defines,
+        "pixels": n, "sample": SAMPLE, "repeat": args.repeat, "defines": r.defines, "bvh_options": bvh_options,
         "bvh": {k: v for k, v in r.buffers.stats.items() if k.startswith("bvh") or k in ("triangles", "spheres")},
         "rays": {"camera": n_camera, "closest_other": n_closest - n_camera, "shadow": n_shadow, "total": rays,
                  "dropped": int(counts[:, 1].sum()), "per_sample": rays / n},

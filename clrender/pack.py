@@ -14,7 +14,7 @@ import numpy as np
 
 from .accel.bvh import build_bvh
 from .accel.bvh4 import Bvh4Unsupported, collapse_bvh4
-from .accel.primitives import pack_primitives, primitive_bounds
+from .accel.primitives import bvh_leaves, pack_leaf_blocks, primitive_bounds
 from .device import dispatch, layout
 from .device.layout import ENUMS, NONE
 from .filters.filter import with_guide
@@ -156,7 +156,7 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     t_bvh = time.perf_counter()
     lo, hi = primitive_bounds(tris[:, 0], tris[:, 1], tris[:, 2], sph)
     bvh = build_bvh(lo, hi, **(bvh_options or {}))
-    prims = pack_primitives(tris[:, 0], tris[:, 1], tris[:, 2], sph, bvh.order)
+    prims = pack_leaf_blocks(tris[:, 0], tris[:, 1], tris[:, 2], sph, bvh.order, *bvh_leaves(bvh))
     nodes, node_count = bvh.nodes, bvh.node_count
     if bvh_width == 4:
         try:

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from clrender.accel.bvh import LEAF_FLAG, build_bvh
-from clrender.accel.primitives import SPHERE_FLAG, pack_primitives, primitive_bounds
+from clrender.accel.primitives import SPHERE_FLAG, bvh_leaves, pack_leaf_blocks, pack_primitives, primitive_bounds
 
 LOCAL = 64
 
@@ -220,7 +220,7 @@ def device_trace(ctx, queue, kernel, bvh, prims, o, d, tmin, tmax):
 def build_scene(v0, v1, v2, spheres, **kw):
     lo, hi = primitive_bounds(v0, v1, v2, spheres)
     bvh = build_bvh(lo, hi, **kw)
-    return bvh, pack_primitives(v0, v1, v2, spheres, bvh.order)
+    return bvh, pack_leaf_blocks(v0, v1, v2, spheres, bvh.order, *bvh_leaves(bvh))
 
 
 class _Nodes:
