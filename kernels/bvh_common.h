@@ -128,6 +128,28 @@ BVH_INLINE bool bvh_isect_leaf(__global const float4* prims, uint first, uint co
     for (uint b = first; b < end; b += 4u) {
         uint c = end - b < 4u ? end - b : 4u;
         __global const float* q = words + 10u * b;
+#ifdef BVH_LEAF_SCALAR
+        /* benchmarks only (benchmarks/ab_pass.py): the same blocks, one primitive at a time */
+        for (uint l = 0u; l < c; ++l) {
+            uint sid = as_uint(q[9u * c + l]);
+            float4 p0 = (float4)(q[l], q[c + l], q[2u * c + l], 0.0f);
+            bool h;
+            if (sid & BVH_SPHERE_BIT) {
+                h = bvh_isect_sphere(p0, q[3u * c + l], r->o, r->d, tmin, &hit->t);
+                if (h) { hit->u = 0.0f; hit->v = 0.0f; }
+            } else {
+                float4 p1 = (float4)(q[3u * c + l], q[4u * c + l], q[5u * c + l], 0.0f);
+                float4 p2 = (float4)(q[6u * c + l], q[7u * c + l], q[8u * c + l], 0.0f);
+                h = bvh_isect_triangle(p0, p1, p2, r, tmin, &hit->t, &hit->u, &hit->v);
+            }
+            if (h) {
+                hit->prim = sid;
+                found = true;
+                if (any_hit) return true;
+            }
+        }
+        continue;
+#endif
         int4 live = (int4)(0, 1, 2, 3) < (int4)((int)c);
         uint4 id = as_uint4(vload4(0, q + 9u * c));
         int4 tri = live & ((id & (uint4)(BVH_SPHERE_BIT)) == (uint4)(0u));
