@@ -161,7 +161,7 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     if bvh_width == 4:
         try:
             bvh4 = collapse_bvh4(bvh)
-            nodes, node_count = bvh4.packed, bvh4.node_count
+            nodes, node_count = bvh4.nodes, bvh4.node_count
         except Bvh4Unsupported as exc:
             log.warning("using the 2-wide BVH: %s", exc)
             bvh_width = 2

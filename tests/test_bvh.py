@@ -239,7 +239,7 @@ def check_trace(ctx, queue, tracer, v0, v1, v2, spheres, o, d, tmin, tmax, max_a
 
         b4 = collapse_bvh4(bvh)
         check_invariants4(b4, *bounds, bvh.order, kw.get("max_leaf_size", 4))
-        tree = _Nodes(b4.packed)
+        tree = _Nodes(b4.nodes)
     out, prim, any_ = device_trace(ctx, queue, tracer.kernel, tree, prims, o, d, tmin, tmax)
     return compare_with_reference(out, prim, any_, v0, v1, v2, spheres, o, d, tmin, tmax, max_ambiguous)
 

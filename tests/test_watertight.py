@@ -135,7 +135,7 @@ def test_rays_at_shared_edges_and_vertices_never_miss(ctx, queue, tracer, mesh):
     if tracer.width == 4:
         from clrender.accel.bvh4 import collapse_bvh4
 
-        tree = _Nodes(collapse_bvh4(bvh).packed)
+        tree = _Nodes(collapse_bvh4(bvh).nodes)
     o, d, inside = aimed_rays(verts, tris, rng)
     n = len(o)
     tmin, tmax = np.zeros(n), np.full(n, np.inf)
@@ -162,7 +162,7 @@ def test_open_mesh_is_still_missed_beside_its_border(ctx, queue, tracer):
     if tracer.width == 4:
         from clrender.accel.bvh4 import collapse_bvh4
 
-        tree = _Nodes(collapse_bvh4(bvh).packed)
+        tree = _Nodes(collapse_bvh4(bvh).nodes)
     rng = np.random.default_rng(3)
     m = 2000
     x = np.full(m, 1.0, np.float32)

@@ -41,9 +41,7 @@ from ..device.layout import ENUMS
 
 from .bvh import LEAF_FLAG, BVH
 
-NODE_ROWS = 8                 # float4 rows per 4-wide node of the exact table (BVH4.nodes)
-PACKED_ROWS = 4               # float4 rows per node of the quantised device table (BVH4.packed)
-QUANT_STEPS = 255             # a child's box plane is origin + q * scale, q a byte
+NODE_ROWS = 8                 # float4 rows per 4-wide node
 KERNEL_STACK_SIZE = ENUMS["BVH4_STACK_SIZE"]   # one source with kernels/bvh4.h (clrender/device/layout.py)
 COUNT_SHIFT = ENUMS["BVH4_COUNT_SHIFT"]
 MAX_LEAF_COUNT = ENUMS["BVH4_MAX_LEAF_COUNT"]
@@ -64,7 +62,6 @@ class BVH4:
     stack_need: int          # most stack entries the kernel holds at once
     collapse_seconds: float
     leaf_count: int = 0
-    packed: np.ndarray | None = None   # float32 (4*node_count, 4): the quantised table kernels/bvh4.h reads
 
 
 def encode_leaf(first, count):
@@ -164,57 +161,5 @@ def collapse_bvh4(bvh: BVH, stack_size: int = KERNEL_STACK_SIZE) -> BVH4:
         nodes[:, 2 * a + 1] = hi[:, :, a]
     nodes[:, 6] = ref.view(np.float32)
     leaf_count = int(leaf.sum())
-    packed = quantize_nodes(lo, hi, valid, ref)
     return BVH4(nodes=nodes.reshape(NODE_ROWS * K, 4), node_count=K, depth=len(levels), stack_need=stack_need,
-                collapse_seconds=time.perf_counter() - t0, leaf_count=leaf_count, packed=packed)
-
-
-def dequantize(origin, scale, q):
-    """A quantised plane as the kernel computes it: float32 origin + float32(q * scale), no fused multiply-add."""
-    return (origin + (np.asarray(q, np.float32) * scale).astype(np.float32)).astype(np.float32)
-
-
-def quantize_nodes(lo, hi, valid, ref):
-    """The device node table: the children's boxes (K, 4, 3) quantised to bytes on a per-node grid, rounded
-    outward so that every dequantised box holds the exact one (see the module docstring), 64 bytes per node."""
-    K = len(lo)
-    lo = lo.astype(np.float32)
-    hi = hi.astype(np.float32)
-    vlo = np.where(valid[..., None], lo, np.float32(np.inf)).min(1)                  # (K, 3)
-    vhi = np.where(valid[..., None], hi, np.float32(-np.inf)).max(1)
-    has = valid.any(1)
-    origin = np.where(has[:, None], vlo, 0).astype(np.float32)
-    top = np.where(has[:, None], vhi, 0).astype(np.float32)
-    scale = ((top.astype(np.float64) - origin) / QUANT_STEPS).astype(np.float32)
-    for _ in range(8):                                    # the grid's top plane must reach the box's top
-        short = dequantize(origin, scale, QUANT_STEPS) < top
-        if not short.any():
-            break
-        scale = np.where(short, np.nextafter(scale, np.float32(np.inf)) * np.float32(1.0000002), scale)
-    else:
-        raise AssertionError("quantisation grid does not reach the node's box")
-    o, sc = origin[:, None, :], scale[:, None, :]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        qlo = np.where(sc > 0, np.floor((lo.astype(np.float64) - o) / sc), 0)
-        qhi = np.where(sc > 0, np.ceil((hi.astype(np.float64) - o) / sc), 0)
-    qlo = np.clip(qlo, 0, QUANT_STEPS).astype(np.int64)
-    qhi = np.clip(qhi, 0, QUANT_STEPS).astype(np.int64)
-    for _ in range(4):                                    # float32 rounding: step outward until it holds
-        bad_lo = valid[..., None] & (dequantize(o, sc, qlo) > lo) & (qlo > 0)
-        bad_hi = valid[..., None] & (dequantize(o, sc, qhi) < hi) & (qhi < QUANT_STEPS)
-        if not (bad_lo.any() or bad_hi.any()):
-            break
-        qlo -= bad_lo
-        qhi += bad_hi
-    v3 = valid[..., None]
-    assert (~v3 | (dequantize(o, sc, qlo) <= lo)).all() and (~v3 | (dequantize(o, sc, qhi) >= hi)).all()
-    qlo = np.where(v3, qlo, QUANT_STEPS).astype(np.uint8)      # empty slots: an inverted box, and ref 0
-    qhi = np.where(v3, qhi, 0).astype(np.uint8)
-    words = np.zeros((K, 16), np.uint32)
-    fw = words.view(np.float32)
-    plane = lambda q, a: q[:, :, a].copy().view(np.uint32).reshape(K)    # 4 children's bytes, child 0 lowest
-    fw[:, 0:3], fw[:, 4:7] = origin, scale
-    words[:, 3], words[:, 7] = plane(qlo, 0), plane(qhi, 0)
-    words[:, 8:12] = np.where(valid, ref, 0)
-    words[:, 12], words[:, 13], words[:, 14], words[:, 15] = plane(qlo, 1), plane(qhi, 1), plane(qlo, 2), plane(qhi, 2)
-    return words.view(np.float32).reshape(4 * K, 4)
+                collapse_seconds=time.perf_counter() - t0, leaf_count=leaf_count)
