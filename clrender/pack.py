@@ -14,7 +14,7 @@ import numpy as np
 
 from .accel.bvh import build_bvh
 from .accel.bvh4 import Bvh4Unsupported, collapse_bvh4
-from .accel.primitives import bvh_leaves, pack_leaf_blocks, primitive_bounds
+from .accel.primitives import BUILD_OPTIONS, bvh_leaves, pack_leaf_blocks, primitive_bounds
 from .device import dispatch, layout
 from .device.layout import ENUMS, NONE
 from .filters.filter import with_guide
@@ -153,9 +153,10 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     for em in scene.emitters:
         emitter_rows.append(em.pack(ctx, shape_index=NONE, shape=None, shape_row=None))
 
+    shape_flags = int(np.bitwise_or.reduce(shape_rows["flags"])) if len(shape_rows) else 0
     t_bvh = time.perf_counter()
     lo, hi = primitive_bounds(tris[:, 0], tris[:, 1], tris[:, 2], sph)
-    bvh = build_bvh(lo, hi, **(bvh_options or {}))
+    bvh = build_bvh(lo, hi, **{**BUILD_OPTIONS, **(bvh_options or {})})
     prims = pack_leaf_blocks(tris[:, 0], tris[:, 1], tris[:, 2], sph, bvh.order, *bvh_leaves(bvh))
     nodes, node_count = bvh.nodes, bvh.node_count
     if bvh_width == 4:
@@ -194,7 +195,9 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     }
     tables = dict(
         nodes=_nonempty(nodes), prims=_nonempty(prims), positions=_nonempty(positions),
-        normals=_nonempty(normals), uvs=_nonempty(uvs), tri_index=_nonempty(tri_index),
+        # a table no mesh uses is not uploaded (one dummy row): the kernels read it only under its SHAPE_HAS_* flag
+        normals=_nonempty(normals if shape_flags & ENUMS["SHAPE_HAS_NORMALS"] else normals[:0]),
+        uvs=_nonempty(uvs if shape_flags & ENUMS["SHAPE_HAS_UVS"] else uvs[:0]), tri_index=_nonempty(tri_index),
         spheres=_nonempty(sph), sphere_shape=_nonempty(np.asarray(sphere_shape, np.uint32)),
         shapes=_nonempty(shape_rows), bsdfs=np.array(bsdf_rows, layout.dtype("Bsdf")) if bsdf_rows
         else layout.zeros("Bsdf"), emitters=emitters, emitter_cdf=cdf, textures=textures.array(), infinite=_nonempty(infinite), info=info)

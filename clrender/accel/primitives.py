@@ -83,6 +83,11 @@ def pack_primitives(tri_v0, tri_v1, tri_v2, spheres, order):
 
 # ---------------------------------------------------------------------------------------- the device's table
 BLOCK_LANES = 4        # primitives tested together, one per float4 lane (kernels/bvh_common.h)
+# build_bvh options for this table: with up to four primitives tested at the price of about one, a leaf of
+# 3-4 beats another node level more often than the builder's default cost ratio (1) says. Measured in
+# benchmarks/README.md ("Trace speed and memory"): faster on the Cornell twin and the 1 M mesh, and half
+# the nodes.
+BUILD_OPTIONS = {"traversal_cost": 2.5}
 BLOCK_WORDS = 10       # words per primitive: v0.xyz, v1.xyz, v2.xyz, id
 
 
