@@ -84,8 +84,8 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     """Pack ``scene`` into device tables; ``bvh_width`` 4 collapses the binary BVH into 4-wide nodes (falls back
     to 2 when the tree does not fit the 4-wide kernel, see clrender/accel/bvh4.py); ``bvh_options`` go to
     :func:`clrender.accel.bvh.build_bvh` (e.g. ``max_leaf_size``, ``traversal_cost``)."""
-    if bvh_width not in (2, 4):
-        raise ValueError(f"bvh_width must be 2 or 4, got {bvh_width}")
+    if bvh_width not in (2, 4, 8):
+        raise ValueError(f"bvh_width must be 2, 4 or 8, got {bvh_width}")
     t0 = time.perf_counter()
     shapes = scene.shapes
     bsdf_index: dict[int, int] = {}
@@ -159,9 +159,9 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     bvh = build_bvh(lo, hi, **{**BUILD_OPTIONS, **(bvh_options or {})})
     prims = pack_leaf_blocks(tris[:, 0], tris[:, 1], tris[:, 2], sph, bvh.order, *bvh_leaves(bvh))
     nodes, node_count = bvh.nodes, bvh.node_count
-    if bvh_width == 4:
+    if bvh_width in (4, 8):
         try:
-            bvh4 = collapse_bvh4(bvh)
+            bvh4 = collapse_bvh4(bvh, ENUMS[f"BVH{bvh_width}_STACK_SIZE"], width=bvh_width)
             nodes, node_count = bvh4.nodes, bvh4.node_count
         except Bvh4Unsupported as exc:
             log.warning("using the 2-wide BVH: %s", exc)

@@ -12,10 +12,12 @@
 #endif
 #if BVH_WIDTH == 4
 #include "bvh4.h"
+#elif BVH_WIDTH == 8
+#include "bvh8.h"
 #elif BVH_WIDTH == 2
 #include "bvh.h"
 #else
-#error "BVH_WIDTH must be 2 or 4"
+#error "BVH_WIDTH must be 2, 4 or 8"
 #endif
 
 /* SceneData (the scene's tables), SCENE_ARGS (the kernel-argument list of a scene: every entry point that needs

@@ -180,13 +180,23 @@ def make_tracer(ctx, width):
 
     from clrender.device.program import build_program
 
-    src = TRACE_SRC if width == 2 else TRACE_SRC.replace('#include "bvh.h"', '#include "bvh4.h"')
+    src = TRACE_SRC if width == 2 else TRACE_SRC.replace('#include "bvh.h"', f'#include "bvh{width}.h"')
     return Tracer(cl.Kernel(build_program(ctx, src), "trace"), width)
 
 
-@pytest.fixture(scope="module", params=[2, 4], ids=["bvh2", "bvh4"])
+def wide_nodes(bvh, width):
+    """The node table the kernel of `width` reads (the binary tree itself for 2)."""
+    if width == 2:
+        return bvh
+    from clrender.accel.bvh4 import collapse_bvh4
+    from clrender.device.layout import ENUMS
+
+    return _Nodes(collapse_bvh4(bvh, ENUMS[f"BVH{width}_STACK_SIZE"], width=width).nodes)
+
+
+@pytest.fixture(scope="module", params=[2, 4, 8], ids=["bvh2", "bvh4", "bvh8"])
 def trace_kernel(ctx, request):
-    """Every traversal test below runs against both the 2-wide and the 4-wide kernel."""
+    """Every traversal test below runs against the 2-, 4- and 8-wide kernels."""
     return make_tracer(ctx, request.param)
 
 
@@ -240,6 +250,8 @@ def check_trace(ctx, queue, tracer, v0, v1, v2, spheres, o, d, tmin, tmax, max_a
         b4 = collapse_bvh4(bvh)
         check_invariants4(b4, *bounds, bvh.order, kw.get("max_leaf_size", 4))
         tree = _Nodes(b4.nodes)
+    elif tracer.width == 8:
+        tree = wide_nodes(bvh, 8)
     out, prim, any_ = device_trace(ctx, queue, tracer.kernel, tree, prims, o, d, tmin, tmax)
     return compare_with_reference(out, prim, any_, v0, v1, v2, spheres, o, d, tmin, tmax, max_ambiguous)
 
