@@ -31,8 +31,8 @@ class SceneBuffers:
     camera: np.ndarray
     filter_cdf: np.ndarray
     stats: dict = field(default_factory=dict)
-    #: node table layout: 4 (kernels/bvh4.h, the default) or 2 (kernels/bvh.h); the Renderer passes it to the
-    #: kernels as BVH_WIDTH
+    #: node table layout: 4 (kernels/bvh4.h, the default), 8 (kernels/bvh8.h) or 2 (kernels/bvh.h); the Renderer
+    #: passes it to the kernels as BVH_WIDTH
     bvh_width: int = 4
 
     def __post_init__(self):
@@ -81,9 +81,9 @@ DEFAULT_BVH_WIDTH = 4   # kernels/scene.h's default for BVH_WIDTH; measured fast
 
 
 def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | None = None) -> SceneBuffers:
-    """Pack ``scene`` into device tables; ``bvh_width`` 4 collapses the binary BVH into 4-wide nodes (falls back
-    to 2 when the tree does not fit the 4-wide kernel, see clrender/accel/bvh4.py); ``bvh_options`` go to
-    :func:`clrender.accel.bvh.build_bvh` (e.g. ``max_leaf_size``, ``traversal_cost``)."""
+    """Pack ``scene`` into device tables; ``bvh_width`` 4 (or 8) collapses the binary BVH into 4- (8-)wide nodes
+    (falls back to 2 when the tree does not fit the wide kernel, see clrender/accel/bvh4.py); ``bvh_options`` go
+    to :func:`clrender.accel.bvh.build_bvh` over BUILD_OPTIONS (e.g. ``max_leaf_size``, ``traversal_cost``)."""
     if bvh_width not in (2, 4, 8):
         raise ValueError(f"bvh_width must be 2, 4 or 8, got {bvh_width}")
     t0 = time.perf_counter()

@@ -72,8 +72,8 @@ BVH_INLINE bool bvh8_traverse(__global const float4* nodes, __global const float
                 continue;
             }
         } else {
-            if (bvh_isect_leaf(prims, cur & BVH4_FIRST_MASK, ((cur >> BVH4_COUNT_SHIFT) & (BVH4_MAX_LEAF_COUNT - 1u)) + 1u, &ray, tmin,
-                               hit, any_hit)) {
+            uint count = ((cur >> BVH4_COUNT_SHIFT) & (BVH4_MAX_LEAF_COUNT - 1u)) + 1u;
+            if (bvh_isect_leaf(prims, cur & BVH4_FIRST_MASK, count, &ray, tmin, hit, any_hit)) {
                 found = true;
                 if (any_hit) return true;
             }

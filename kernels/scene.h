@@ -6,7 +6,8 @@
 #include "frame.h"
 #include "camera.h"
 /* BVH_WIDTH picks the node table the host packed (SceneBuffers.bvh_width): 4 = kernels/bvh4.h (default),
-   2 = kernels/bvh.h. Both define bvh_closest_hit / bvh_any_hit over the same primitive table. */
+   8 = kernels/bvh8.h, 2 = kernels/bvh.h. All define bvh_closest_hit / bvh_any_hit over the same primitive
+   table. */
 #ifndef BVH_WIDTH
 #define BVH_WIDTH 4
 #endif

@@ -1,8 +1,10 @@
 """Primitive bounds and the packed primitive table the traversal kernels read.
 
 Two primitive kinds share one index space: triangles first (ids 0..T-1), then analytic spheres (ids 0..S-1,
-told apart by bit 31 of the id word). The BVH is built over the boxes from :func:`primitive_bounds` and the
-kernel reads primitives in BVH leaf order from :func:`pack_primitives`, three ``float4`` rows each:
+told apart by bit 31 of the id word). The BVH is built over the boxes from :func:`primitive_bounds`; the
+kernels read the primitives in BVH leaf order from :func:`pack_leaf_blocks` (the same words, 40 bytes each,
+blocked by leaf so that four are tested at once). :func:`pack_primitives` gives them one per row, three
+``float4`` rows each (what the tests' reference tracer reads):
 
 ======== ================================ ================== ==============
 kind     row 0                            row 1              row 2
