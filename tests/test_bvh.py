@@ -367,6 +367,30 @@ def test_primitive_packing():
     assert (lo[3] < sp[0, :3] - sp[0, 3] + 1e-6).all() and (hi[3] >= (sp[0, :3] + sp[0, 3]).astype(np.float32)).all()
 
 
+def test_leaf_blocks_layout():
+    # Word 10 s + r c + l of the device table is row r of lane l of the block of c primitives at s; rows
+    # 0..8 the vertices, row 9 the id, exactly the words of the 3-row table, for leaves of 1..9 primitives.
+    rng = np.random.default_rng(1)
+    v0, v1, v2 = random_soup(rng, 40)
+    sp = random_spheres(rng, 5)
+    order = rng.permutation(45)
+    count = np.array([1, 2, 3, 4, 5, 6, 7, 8, 9])
+    first = np.concatenate([[0], np.cumsum(count)[:-1]])
+    perm = rng.permutation(len(count))                     # leaves may come in any order
+    words = pack_leaf_blocks(v0, v1, v2, sp, order, first[perm], count[perm]).reshape(-1).view(np.uint32)
+    rows = pack_primitives(v0, v1, v2, sp, order).reshape(-1, 3, 4).view(np.uint32)
+    want = np.concatenate([rows[:, 0, :3], rows[:, 1, :3], rows[:, 2, :3], rows[:, 0, 3:]], axis=1)
+    for f, n in zip(first, count):
+        for s in range(f, f + n, 4):
+            c = min(4, f + n - s)
+            for lane in range(c):
+                got = [words[10 * s + r * c + lane] for r in range(10)]
+                assert got == list(want[s + lane]), (f, n, s, lane)
+    assert len(words) >= 10 * 45 + 3                       # a 4-word load at the last row stays inside
+    with pytest.raises(ValueError, match="exactly once"):
+        pack_leaf_blocks(v0, v1, v2, sp, order, first, count + 1)
+
+
 # ---------------------------------------------------------------------------------------------- traversal
 @pytest.mark.parametrize("n", [1, 2, 100, 5000])
 @pytest.mark.parametrize("max_leaf", [1, 4, 8])
