@@ -157,11 +157,11 @@ def add_dialect_option(p) -> None:
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
 
-    ap = argparse.ArgumentParser(prog="clrender", description="OpenCL path tracer for Nori XML scenes")
+    ap = argparse.ArgumentParser(prog="clrender", description="OpenCL path tracer for Nori and Mitsuba 3 XML scenes")
     ap.add_argument("--version", action="version", version=f"clrender {__version__}")
     sub = ap.add_subparsers(dest="command", required=True)
     r = sub.add_parser("render", help="render a scene to EXR (+ PNG)")
-    r.add_argument("scene", help="Nori XML scene file")
+    r.add_argument("scene", help="scene file: Nori XML, or Mitsuba 3 XML (root <scene version=...>)")
     r.add_argument("-o", "--output", help="output .exr file, or a folder (default: beside the scene); a PNG "
                                           "preview is written beside it")
     r.add_argument("--spp", type=int, help="samples per pixel (default: the scene's sampler)")

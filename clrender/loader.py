@@ -10,7 +10,7 @@ from .scene.xmlparser import parse_file
 
 
 def load_scene(path, nori_dialect: str | None = None, **defines):
-    """Load a Nori XML scene; `defines` replace `$name` in attribute values (like `-D name=value`).
+    """Load a Nori or Mitsuba 3 XML scene (a root ``<scene version="...">`` is Mitsuba's); `defines` replace `$name` in attribute values (like `-D name=value`).
     `nori_dialect` is "upstream" (default) or "eth" (see clrender.scene.dialect)."""
     from . import plugins  # noqa: F401  (registers every plugin)
 
@@ -19,7 +19,14 @@ def load_scene(path, nori_dialect: str | None = None, **defines):
     if spec.tag != "scene":
         raise SceneError(f"expected a <scene> file, found <{spec.tag}> (use `clrender test` for test files)",
                          SourceLocation(str(path), spec.location.line, spec.location.col))
-    check_mesh_files(spec)
-    scene = create(spec)
+    try:
+        check_mesh_files(spec)
+        scene = create(spec)
+    except SceneError as e:
+        if spec.format != "mitsuba":
+            raise
+        from .scene.mitsuba_xml import with_reader
+
+        raise SceneError(with_reader(e.message), e.location) from None
     warn_if_unlit(scene)
     return scene

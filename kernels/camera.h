@@ -5,25 +5,38 @@
 #ifndef CLRENDER_CAMERA_H
 #define CLRENDER_CAMERA_H
 #include "math.h"
+#include "warp.h"
 
 typedef struct { float3 o; float3 d; float tmin; float tmax; } Ray;
 
-/* (sx, sy): position on the film in pixels (0..width, 0..height). */
-INLINE Ray camera_ray(__global const Camera* cam, float sx, float sy) {
-    float nx = sx / (float)cam->width, ny = sy / (float)cam->height;
+/* (sx, sy): position in the image in pixels (0..width, 0..height), which is the window at (crop_x, crop_y) of a
+   film_width x film_height film; lens: a uniform 2D sample for the thin lens (unused when lens_radius is 0). */
+INLINE Ray camera_ray_lens(__global const Camera* cam, float sx, float sy, float2 lens) {
+    float nx = (sx + cam->crop_x) / cam->film_width, ny = (sy + cam->crop_y) / cam->film_height;
     float t = cam->tan_half_fov;
     float3 dc = (float3)((2.0f * nx - 1.0f) * t, (1.0f - 2.0f * ny) * t * cam->inv_aspect, 1.0f);
+    float3 oc = (float3)(0.0f);
+    if (cam->lens_radius > 0.0f) {
+        /* thin lens: the ray through the lens point aims at where the pinhole ray meets the plane in focus */
+        float2 p = square_to_uniform_disk(lens) * cam->lens_radius;
+        oc = (float3)(p.x, p.y, 0.0f);
+        dc = dc * cam->focus_distance - oc;
+    }
     float inv_len = 1.0f / len3(dc);
     dc *= inv_len;
     float3 X = cam->to_world[0].xyz, Y = cam->to_world[1].xyz, Z = cam->to_world[2].xyz;
     float3 dw = X * dc.x + Y * dc.y + Z * dc.z;
     float scale = len3(dw); /* a scaled toWorld stretches distances: keep the clip planes where Nori has them */
     Ray r;
-    r.o = cam->to_world[3].xyz;
+    r.o = cam->to_world[3].xyz + X * oc.x + Y * oc.y;
     r.d = dw * (1.0f / scale);
     r.tmin = cam->near_clip / dc.z * scale;
     r.tmax = cam->far_clip / dc.z * scale;
     return r;
+}
+
+INLINE Ray camera_ray(__global const Camera* cam, float sx, float sy) {
+    return camera_ray_lens(cam, sx, sy, (float2)(0.5f, 0.5f));
 }
 
 #endif

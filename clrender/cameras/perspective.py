@@ -74,6 +74,139 @@ class PerspectiveCamera:
         row["inv_aspect"] = self.height / self.width
         row["near_clip"], row["far_clip"] = self.near_clip, self.far_clip
         row["width"], row["height"] = self.width, self.height
+        row["film_width"], row["film_height"] = self.width, self.height
+        self.pack_film(row)
         table = self.filter.sampling_table()
         self.filter.pack(row, table)
         return np.array([row]), table
+
+    def pack_film(self, row) -> None:
+        """Crop window, border clipping and lens (Nori's camera: the whole film, no clipping, a pinhole)."""
+
+
+def mitsuba_x_fov(props, aspect: float) -> float:
+    """The horizontal field of view (degrees) of a Mitsuba sensor's ``fov``/``fov_axis`` or ``focal_length``
+    (a 35 mm film's diagonal, 43.27 mm, behind a lens of that focal length; default 50 mm)."""
+    if props.has("fov") and props.has("focal_length"):
+        raise SceneError("give either 'fov' or 'focal_length', not both", props.location("focal_length"))
+    if props.has("fov"):
+        fov = props.get_float("fov")
+        axis = props.get_string("fov_axis", "x").lower()
+        where = props.location("fov")
+        if axis == "smaller":
+            axis = "y" if aspect > 1 else "x"
+        elif axis == "larger":
+            axis = "x" if aspect > 1 else "y"
+    else:
+        text = props.get_string("focal_length", "50mm")
+        where = props.location("focal_length") if props.has("focal_length") else None
+        num = text[:-2] if text.endswith("mm") else text
+        try:
+            f = float(num)
+        except ValueError:
+            f = -1.0
+        if not (f > 0 and np.isfinite(f)):
+            raise SceneError(f"bad focal_length '{text}'; expected a positive length in millimetres such as "
+                             f"'50mm'", where)
+        fov = np.degrees(2 * np.arctan(np.hypot(36.0, 24.0) / (2 * f)))
+        axis = "diagonal"
+    if not 0 < fov < 180:
+        raise SceneError(f"fov must be in (0, 180) degrees, got {fov}", where)
+    t = np.tan(np.radians(fov) / 2)
+    if axis == "x":
+        return float(fov)
+    if axis == "y":
+        return float(np.degrees(2 * np.arctan(t * aspect)))
+    if axis == "diagonal":
+        return float(np.degrees(2 * np.arctan(t / np.sqrt(1 + 1 / aspect ** 2))))
+    raise SceneError(f"unknown fov_axis '{props.get_string('fov_axis')}'; expected x, y, diagonal, smaller or "
+                     f"larger", props.location("fov_axis"))
+
+
+@register("sensor", "perspective", fmt="mitsuba")
+class MitsubaPerspectiveCamera(PerspectiveCamera):
+    """Mitsuba 3's perspective sensor (camera +x on the image's left, as upstream Nori).
+
+    ```xml
+    <sensor type="perspective">
+        <float name="fov" value="45"/>            <!-- degrees; or focal_length (default "50mm") -->
+        <string name="fov_axis" value="x"/>       <!-- x (default), y, diagonal, smaller, larger -->
+        <float name="near_clip" value="0.01"/>    <!-- default 0.01 -->
+        <float name="far_clip" value="10000"/>    <!-- default 10000 -->
+        <transform name="to_world"> ... </transform>
+        <film type="hdrfilm"> ... </film>         <!-- default hdrfilm: 768 x 576, gaussian filter -->
+        <sampler type="independent"> ... </sampler>   <!-- default independent, 4 samples per pixel -->
+    </sensor>
+    ```
+    The film's crop window becomes the image; the projection is that of the whole film.
+    """
+    children = ("film", "sampler")
+
+    def __init__(self, props, children, spec):
+        from ..films.hdrfilm import HdrFilm
+        from ..samplers.independent import MitsubaIndependentSampler
+
+        self.film = self.sampler = None
+        for c in children:
+            slot = c.spec.tag
+            if getattr(self, slot) is not None:
+                raise SceneError(f"a sensor takes one <{slot}>; this is a second one", c.spec.location)
+            setattr(self, slot, c)
+        if self.film is None:
+            self.film = HdrFilm.default()
+        if self.sampler is None:
+            self.sampler = MitsubaIndependentSampler.default()
+        film = self.film
+        self.fov = mitsuba_x_fov(props, film.full_width / film.full_height)
+        self.near_clip = props.get_float("near_clip", 0.01)
+        self.far_clip = props.get_float("far_clip", 1e4)
+        if not 0 < self.near_clip < self.far_clip:
+            raise SceneError(f"need 0 < near_clip < far_clip, got {self.near_clip}, {self.far_clip}",
+                             props.location("near_clip") if props.has("near_clip") else spec.location)
+        self.to_world = props.get_transform("to_world")
+        m = self.to_world.matrix
+        if not np.all(np.isfinite(m)) or np.linalg.norm(m[:3, 2]) < 1e-12:
+            raise SceneError("sensor to_world is not finite or maps the viewing direction (+z) to zero",
+                             props.location("to_world"))
+        self.width, self.height = film.crop_width, film.crop_height
+        self.filter = film.filter
+        self.mirror_x = True
+        self.lens_radius, self.focus_distance = 0.0, 1.0
+        self.read_lens(props)
+
+    def read_lens(self, props) -> None:
+        """A pinhole (thinlens overrides this)."""
+
+    def pack_film(self, row) -> None:
+        f = self.film
+        row["film_width"], row["film_height"] = f.full_width, f.full_height
+        row["crop_x"], row["crop_y"] = f.crop_x, f.crop_y
+        row["inv_aspect"] = f.full_height / f.full_width
+        row["clip_window"] = 0 if f.sample_border else 1
+        row["lens_radius"], row["focus_distance"] = self.lens_radius, self.focus_distance
+
+
+@register("sensor", "thinlens", fmt="mitsuba")
+class MitsubaThinLensCamera(MitsubaPerspectiveCamera):
+    """Mitsuba 3's thin lens sensor: the perspective sensor with a circular aperture (depth of field).
+
+    ```xml
+    <sensor type="thinlens">
+        <float name="aperture_radius" value="0.1"/>   <!-- required, in scene units -->
+        <float name="focus_distance" value="5"/>      <!-- along the viewing axis; default far_clip -->
+        ... every parameter of perspective ...
+    </sensor>
+    ```
+    A ray leaves from a uniformly chosen point of the aperture disk towards the point where the pinhole ray
+    through the same film position meets the plane in focus (kernels/camera.h, camera_ray_lens).
+    """
+
+    def read_lens(self, props) -> None:
+        self.lens_radius = props.get_float("aperture_radius")
+        self.focus_distance = props.get_float("focus_distance", self.far_clip)
+        if not 0 <= self.lens_radius < 1e30:
+            raise SceneError(f"aperture_radius must be 0 or more, got {self.lens_radius}",
+                             props.location("aperture_radius"))
+        if not 0 < self.focus_distance < 1e30:
+            raise SceneError(f"focus_distance must be positive, got {self.focus_distance}",
+                             props.location("focus_distance"))

@@ -22,3 +22,16 @@ class BoxFilter(Filter):
 
     def eval(self, x):
         return (np.abs(x) <= self.radius).astype(np.float64)
+
+
+@register("rfilter", "box", fmt="mitsuba")
+class MitsubaBoxFilter(BoxFilter):
+    """Mitsuba 3's box filter: one pixel, no parameters.
+
+    ```xml
+    <rfilter type="box"/>
+    ```
+    """
+
+    def __init__(self, props, children, spec):
+        self.radius = 0.5

@@ -37,3 +37,26 @@ class GaussianFilter(Filter):
 
     def fill(self, p):
         p["stddev"], p["floor"] = self.stddev, self.floor
+
+
+@register("rfilter", "gaussian", fmt="mitsuba")
+class MitsubaGaussianFilter(GaussianFilter):
+    """Mitsuba 3's gaussian filter (its default): cut off at 4 standard deviations.
+
+    ```xml
+    <rfilter type="gaussian">
+        <float name="stddev" value="0.5"/>   <!-- default 0.5; the radius is 4 stddev -->
+    </rfilter>
+    ```
+    """
+
+    def __init__(self, props=None, children=(), spec=None):
+        self.stddev = 0.5 if props is None else float(props.get_float("stddev", 0.5))
+        if not 0 < self.stddev < 250:
+            raise SceneError(f"stddev must be positive (and below 250), got {self.stddev}", props.location("stddev"))
+        self.radius = 4.0 * self.stddev
+        self.floor = float(np.exp(-self.radius ** 2 / (2 * self.stddev ** 2)))
+
+    @classmethod
+    def default(cls):
+        return cls()

@@ -34,3 +34,34 @@ class MitchellFilter(Filter):
 
     def fill(self, p):
         p["B"], p["C"] = self.B, self.C
+
+
+@register("rfilter", "mitchell", fmt="mitsuba")
+class MitsubaMitchellFilter(MitchellFilter):
+    """Mitsuba 3's Mitchell-Netravali filter (radius 2).
+
+    ```xml
+    <rfilter type="mitchell">
+        <float name="B" value="0.3333"/>   <!-- default 1/3 -->
+        <float name="C" value="0.3333"/>   <!-- default 1/3 -->
+    </rfilter>
+    ```
+    """
+
+    def __init__(self, props, children, spec):
+        self.radius = 2.0
+        self.B = float(props.get_float("B", 1.0 / 3.0))
+        self.C = float(props.get_float("C", 1.0 / 3.0))
+
+
+@register("rfilter", "catmullrom", fmt="mitsuba")
+class MitsubaCatmullRomFilter(MitchellFilter):
+    """Mitsuba 3's Catmull-Rom filter: the Mitchell-Netravali filter with B = 0, C = 0.5 (radius 2).
+
+    ```xml
+    <rfilter type="catmullrom"/>
+    ```
+    """
+
+    def __init__(self, props, children, spec):
+        self.radius, self.B, self.C = 2.0, 0.0, 0.5

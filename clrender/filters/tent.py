@@ -22,3 +22,15 @@ class TentFilter(Filter):
 
     def eval(self, x):
         return np.maximum(0.0, 1.0 - np.abs(x) / self.radius)
+
+
+@register("rfilter", "tent", fmt="mitsuba")
+class MitsubaTentFilter(TentFilter):
+    """Mitsuba 3's tent filter (the same parameter and default as ours).
+
+    ```xml
+    <rfilter type="tent">
+        <float name="radius" value="1"/>   <!-- default 1 -->
+    </rfilter>
+    ```
+    """

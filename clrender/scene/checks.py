@@ -9,7 +9,7 @@ from .spec import PluginSpec
 
 log = logging.getLogger("clrender")
 
-_FILE_MESHES = ("obj", "ply")
+_FILE_MESHES = ("obj", "ply", "serialized")
 
 
 def check_mesh_files(root: PluginSpec) -> None:
@@ -18,7 +18,7 @@ def check_mesh_files(root: PluginSpec) -> None:
 
     problems = []
     for spec in root.walk():
-        if spec.tag != "mesh" or spec.type not in _FILE_MESHES or "filename" not in spec.props:
+        if spec.tag not in ("mesh", "shape") or spec.type not in _FILE_MESHES or "filename" not in spec.props:
             continue
         if spec.props.tag("filename") != "string":
             continue  # the plugin reports the wrong kind of property

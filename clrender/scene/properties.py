@@ -15,7 +15,12 @@ from ..errors import SceneError, SourceLocation
 from .transform import Transform
 
 PROPERTY_TAGS = ("boolean", "integer", "float", "string", "point", "vector", "color", "transform")
-_ARRAY_TAGS = ("point", "vector", "color")
+#: property tags of Mitsuba 3's format (rgb and spectrum are stored as RGB triples)
+MITSUBA_PROPERTY_TAGS = ("boolean", "integer", "float", "string", "point", "vector", "rgb", "spectrum", "transform")
+_ARRAY_TAGS = ("point", "vector", "color", "rgb", "spectrum")
+#: what a colour parameter accepts in each format (the first names it in messages): Mitsuba takes rgb, spectrum
+#: and a plain number (grey); "color" is what code (registry.instantiate) may pass
+_COLOR_TAGS = {"nori": ("color",), "mitsuba": ("rgb", "spectrum", "float", "integer", "color")}
 
 
 class _Required:
@@ -36,6 +41,8 @@ class Property:
     location: SourceLocation | None = None
     raw: str | None = None
     used: bool = False
+    #: a Mitsuba <spectrum>: (wavelengths, values), or (None, constant); its RGB depends on the use (emitter or not)
+    spectrum: tuple | None = None
 
 
 def _normalise(tag: str, value: Any) -> Any:
@@ -60,14 +67,17 @@ def _normalise(tag: str, value: Any) -> Any:
         return a
     if tag == "transform":
         return value if isinstance(value, Transform) else Transform(value)
-    raise ValueError(f"unknown property tag {tag!r}; expected one of {', '.join(PROPERTY_TAGS)}")
+    raise ValueError(f"unknown property tag {tag!r}; expected one of "
+                     f"{', '.join(dict.fromkeys(PROPERTY_TAGS + MITSUBA_PROPERTY_TAGS))}")
 
 
 class PropertyList:
     """The properties of one object, in document order, keyed by name."""
 
-    def __init__(self, owner: str = "<object>", owner_location: SourceLocation | None = None):
+    def __init__(self, owner: str = "<object>", owner_location: SourceLocation | None = None, fmt: str = "nori"):
         self.owner = owner
+        self.format = fmt
+        self._asked: list[str] = []   # every name a getter asked for, given or not: what the plugin takes
         self.owner_location = owner_location
         self._props: dict[str, Property] = {}
 
@@ -121,7 +131,11 @@ class PropertyList:
     def check_unused(self) -> None:
         for p in self._props.values():
             if not p.used:
-                raise SceneError(f"property '{p.name}' is not used by {self.owner}", p.location)
+                also = ""
+                if self.format == "mitsuba":   # Nori's messages stay as they were
+                    takes = ", ".join(n for n in self._asked if n != p.name)
+                    also = f"; it takes {takes}" if takes else "; it takes no properties"
+                raise SceneError(f"property '{p.name}' is not used by {self.owner}{also}", p.location)
 
     def __repr__(self) -> str:
         inner = ", ".join(f"{p.tag} {p.name}={p.value!r}" for p in self._props.values())
@@ -129,6 +143,8 @@ class PropertyList:
 
     # --- typed getters ----------------------------------------------------------------------------
     def _fetch(self, name: str, tags: tuple[str, ...], default: Any) -> Property | None:
+        if name not in self._asked:
+            self._asked.append(name)
         p = self._props.get(name)
         if p is None:
             if default is REQUIRED:
@@ -159,7 +175,8 @@ class PropertyList:
         return default if p is None else p.value
 
     def _get_array(self, name: str, tag: str, n: int, default: Any, grey: bool = False):
-        p = self._fetch(name, (tag,), default)
+        tags = _COLOR_TAGS[self.format] if tag == "color" else (tag,)
+        p = self._fetch(name, tags, default)
         if p is None:
             if default is None:
                 return None
@@ -170,12 +187,14 @@ class PropertyList:
                 raise ValueError(f"default of {tag} '{name}' must have {n} numbers, got {d.size}")
             return d
         v = p.value
+        if p.tag in ("float", "integer"):   # a Mitsuba colour written as a number: grey
+            return np.full(n, float(v))
         if v.size == n:
             return v.copy()
         if grey and v.size == 1:
             return np.repeat(v, n)
         also = " (or 1 for grey)" if grey else ""
-        raise SceneError(f"property '{name}' (<{tag}>) needs {n} numbers{also}, got {v.size}", p.location)
+        raise SceneError(f"property '{name}' (<{p.tag}>) needs {n} numbers{also}, got {v.size}", p.location)
 
     def get_point(self, name: str, default: Any = REQUIRED) -> np.ndarray:
         return self._get_array(name, "point", 3, default)
@@ -183,8 +202,24 @@ class PropertyList:
     def get_vector(self, name: str, default: Any = REQUIRED) -> np.ndarray:
         return self._get_array(name, "vector", 3, default)
 
-    def get_color(self, name: str, default: Any = REQUIRED) -> np.ndarray:
-        return self._get_array(name, "color", 3, default, grey=True)
+    def get_color(self, name: str, default: Any = REQUIRED, *, emitter: bool = False,
+                  unbounded: bool = False) -> np.ndarray:
+        """An RGB colour (one number: grey). A Mitsuba <spectrum> becomes the RGB Mitsuba's RGB variants give it
+        where it is used: ``emitter`` for an emitter's radiance or intensity, ``unbounded`` for values that may
+        exceed 1 such as an index of refraction (see clrender/scene/spectrum.py)."""
+        value = self._get_array(name, "color", 3, default, grey=True)
+        p = self._props.get(name)
+        if p is not None and p.spectrum is not None:
+            from .spectrum import constant_to_rgb, spectrum_to_rgb
+
+            lam, val = p.spectrum
+            if lam is None:
+                return constant_to_rgb(val, emitter)
+            try:
+                return spectrum_to_rgb(lam, val, emitter=emitter, unbounded=unbounded)
+            except ValueError as e:
+                raise SceneError(f"spectrum '{name}': {e}", p.location) from None
+        return value
 
     def get_point2(self, name: str, default: Any = REQUIRED) -> np.ndarray:
         return self._get_array(name, "point", 2, default)

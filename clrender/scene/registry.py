@@ -74,14 +74,19 @@ def instantiate(tag: str, type_name: str, props: dict | None = None, location: S
     from .properties import PropertyList
     from .spec import describe
 
-    plist = PropertyList(describe(tag, type_name), location)
+    plist = PropertyList(describe(tag, type_name), location, fmt=fmt)
     for name, (ptag, value) in (props or {}).items():
         plist.add(name, ptag, value)
     return create(PluginSpec(tag, type_name, None, plist, [], location, format=fmt))
 
 
-def create(spec: PluginSpec):
-    """Instantiate ``spec`` and, first, its nested objects; then reject unused properties."""
+def create(spec: PluginSpec, _made: dict | None = None):
+    """Instantiate ``spec`` and, first, its nested objects; then reject unused properties. A spec that occurs
+    several times in the tree (a Mitsuba ``<ref>``) becomes one object."""
+    if _made is None:
+        _made = {}
+    if id(spec) in _made:
+        return _made[id(spec)]
     cls = lookup(spec.tag, spec.type, spec.location, spec.format)
     accepted = tuple(getattr(cls, "children", ()))
     # Check every nesting before building anything, so the reported error is the structural one
@@ -91,11 +96,12 @@ def create(spec: PluginSpec):
             takes = (", ".join(f"<{t}>" for t in accepted) if accepted else "no nested objects")
             raise SceneError(f"<{child.tag}> cannot be nested in {spec.describe()} (it accepts {takes})",
                              child.location)
-    children = [create(child) for child in spec.children]
+    children = [create(child, _made) for child in spec.children]
     obj = cls(spec.props, children, spec)
     spec.props.check_unused()
     try:
         obj.spec = spec
     except AttributeError:  # a plugin with __slots__ and no 'spec' slot: nothing to attach to
         pass
+    _made[id(spec)] = obj
     return obj

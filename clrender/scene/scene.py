@@ -57,3 +57,64 @@ class Scene:
     @property
     def height(self) -> int:
         return self.camera.height
+
+
+@register("scene", "scene", fmt="mitsuba")
+class MitsubaScene(Scene):
+    """The root of a Mitsuba 3 file: shapes, scene-level emitters, one sensor (holding film and sampler), one
+    integrator; objects declared at the top level only to be referenced (bsdfs, textures) are allowed.
+
+    ```xml
+    <scene version="3.0.0">
+        <integrator type="path"/>                 <!-- default: path (unbounded depth) -->
+        <sensor type="perspective">               <!-- default: Mitsuba's (below) -->
+            <film type="hdrfilm"/>                <!-- default 768 x 576, gaussian filter -->
+            <sampler type="independent"/>         <!-- default 4 samples per pixel -->
+        </sensor>
+        <bsdf type="diffuse" id="white"/>         <!-- declared for <ref id="white"/> -->
+        <shape type="obj"> ... </shape>           <!-- any number -->
+        <emitter type="constant"/>                <!-- any number (area emitters live in a shape) -->
+    </scene>
+    ```
+    A scene without a sensor is an error, as in Mitsuba 3.9 (which loads it but cannot render it); without an
+    integrator it is rendered by path tracing with unbounded depth (Mitsuba 3.9 asks for one; earlier 3.x
+    versions made this same default).
+    """
+    children = ("shape", "emitter", "sensor", "integrator", "bsdf", "texture")
+
+    def __init__(self, props, children, spec):
+        self.location = spec.location
+        self.nori_dialect = "upstream"   # Mitsuba's camera convention is upstream Nori's
+        self.shapes, self.emitters = [], []
+        self.camera = self.integrator = None
+        for c in children:
+            tag = c.spec.tag
+            if tag == "shape":
+                self.shapes.append(c)
+            elif tag == "emitter":
+                if getattr(c, "is_area", False):
+                    raise SceneError("an area emitter must be nested in a <shape>", c.spec.location)
+                self.emitters.append(c)
+            elif tag in ("sensor", "integrator"):
+                slot = "camera" if tag == "sensor" else tag
+                if getattr(self, slot) is not None:
+                    raise SceneError(f"clrender renders one <{tag}> per scene; this is a second one",
+                                     c.spec.location)
+                setattr(self, slot, c)
+            # bsdfs and textures at the top level are only declared for references
+        if self.camera is None:
+            raise SceneError('no sensor was specified: add e.g. <sensor type="perspective"> with a <film '
+                             'type="hdrfilm"> (Mitsuba 3 cannot render a scene without one either)', spec.location)
+        if self.integrator is None:
+            self.integrator = _default_integrator(spec)
+        self.sampler = self.camera.sampler
+
+
+def _default_integrator(spec):
+    """Mitsuba's default integrator is ``path`` with unbounded depth; where no Mitsuba ``path`` plugin is
+    registered, clrender's unbounded ``path_mis`` converges to the same image (only Russian roulette differs)."""
+    from .registry import instantiate, registered
+
+    if "path" in registered("integrator", "mitsuba"):
+        return instantiate("integrator", "path", {}, spec.location, fmt="mitsuba")
+    return instantiate("integrator", "path_mis", {}, spec.location)

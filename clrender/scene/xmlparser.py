@@ -425,9 +425,8 @@ class _Builder:
 # --------------------------------------------------------------------------------------------------
 # Public entry points
 # --------------------------------------------------------------------------------------------------
-def _parse_bytes(data: bytes, filename: str, defines, base_dir: str, force_encoding: str | None,
-                 nori_dialect: str | None = None) -> PluginSpec:
-    dialect = _dialect.resolve(nori_dialect)
+def _read_bytes(data: bytes, filename: str, force_encoding: str | None) -> tuple[_Source, _Elem]:
+    """Pass one for any of the XML scene formats: the located element tree of ``data``."""
     data, declared, blanked = _prepare(data)
     encoding = force_encoding or declared
     if encoding is not None:
@@ -437,12 +436,22 @@ def _parse_bytes(data: bytes, filename: str, defines, base_dir: str, force_encod
             raise SceneError(f"unknown encoding '{encoding}' in the XML declaration; use UTF-8",
                              SourceLocation(filename, 1, 1)) from None
     src = _Source(data, filename, encoding)
-    root = _read_tree(src, encoding if (force_encoding or blanked) else None)
+    return src, _read_tree(src, encoding if (force_encoding or blanked) else None)
+
+
+def _parse_bytes(data: bytes, filename: str, defines, base_dir: str, force_encoding: str | None,
+                 nori_dialect: str | None = None) -> PluginSpec:
+    src, root = _read_bytes(data, filename, force_encoding)
+    from . import mitsuba_xml
+
+    if mitsuba_xml.is_mitsuba_root(root):  # <scene version="..."> is Mitsuba's; Nori's <scene> has no attributes
+        return mitsuba_xml.build(src, root, defines, base_dir)
+    dialect = _dialect.resolve(nori_dialect)
     return _Builder(src, defines, base_dir, dialect).build_root(root)
 
 
 def parse_file(path, defines: Mapping[str, str] | None = None, nori_dialect: str | None = None) -> PluginSpec:
-    """Parse a Nori XML file. ``defines`` fill ``$name`` in attribute values (overriding <default>);
+    """Parse a Nori or Mitsuba 3 XML file (the root tells which). ``defines`` fill ``$name`` in attribute values (overriding <default>);
     ``nori_dialect`` is ``upstream`` or ``eth`` (see :mod:`clrender.scene.dialect`; None: the default)."""
     path = os.fspath(path)
     try:

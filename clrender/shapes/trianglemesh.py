@@ -1,10 +1,16 @@
-"""Shared by the mesh plugins: load, bake into world space, drop degenerate triangles."""
+"""Shared by the mesh plugins: load, bake into world space, drop degenerate triangles, pack the triangles.
+
+Tables (kernels/shapes/mesh.h): positions/normals/uvs per vertex (normals and uvs zero where the mesh has none,
+flagged by SHAPE_HAS_NORMALS / SHAPE_HAS_UVS), tri_index (i0, i1, i2, shape) per triangle; the row's first/count
+are the mesh's range of tri_index. An emitting mesh is sampled by picking a triangle from its area CDF.
+"""
 from __future__ import annotations
 
 import logging
 
 import numpy as np
 
+from ..device import dispatch
 from ..errors import SceneError
 from ..scene.transform import Transform
 from .shape import Shape
@@ -13,31 +19,117 @@ log = logging.getLogger("clrender")
 
 
 class TriangleMesh(Shape):
-    is_sphere = False
+    kernel = "shapes/mesh.h"
 
-    def _load(self, props, children, spec, loader):
-        filename = props.get_string("filename")
-        to_world: Transform = props.get_transform("toWorld")
+    def fill(self, ctx, index, row):
+        m = self.mesh
+        nv = len(m.positions)
+        flags = 0
+        p4 = np.zeros((nv, 4), np.float32)
+        p4[:, :3] = m.positions
+        base = ctx.add_table("positions", "float4", p4)
+        n4 = np.zeros((nv, 4), np.float32)
+        if m.normals is not None:
+            flags |= dispatch.flag_defines()["SHAPE_HAS_NORMALS"]
+            n4[:, :3] = m.normals
+        ctx.add_table("normals", "float4", n4)     # one row per vertex either way: tri_index addresses both
+        if m.uvs is not None:
+            flags |= dispatch.flag_defines()["SHAPE_HAS_UVS"]
+            ctx.add_table("uvs", "float2", m.uvs)
+        else:
+            ctx.add_table("uvs", "float2", np.zeros((nv, 2), np.float32))
+        idx = np.empty((len(m.faces), 4), np.uint32)
+        idx[:, :3] = m.faces + base
+        idx[:, 3] = index
+        row["first"] = ctx.add_table("tri_index", "uint4", idx)
+        row["count"] = len(m.faces)
+        row["flags"] = flags
+
+    def area_distribution(self):
+        areas = self.mesh.triangle_areas()
+        area = float(areas.sum())
+        cdf = np.cumsum(areas) / area if area > 0 else np.ones(len(areas))
+        cdf[-1] = 1.0
+        return cdf, area
+
+    def _load(self, props, children, spec, loader, to_world_name: str = "toWorld", prepare=None, generate=None,
+              name: str | None = None):
+        """Read (``loader``, or ``generate()`` for a built-in mesh called ``name``), transform and clean the mesh;
+        ``prepare(mesh)`` (Mitsuba's options) runs on the world-space mesh before degenerate triangles are
+        dropped."""
+        filename = props.get_string("filename") if loader is not None else None
+        to_world: Transform = props.get_transform(to_world_name)
         m = to_world.matrix
         if not np.all(np.isfinite(m)) or abs(np.linalg.det(m[:3, :3])) < 1e-300:
             raise SceneError("mesh toWorld is singular or not finite (e.g. a lookat whose up is parallel to "
                              "its viewing direction): points cannot be mapped to world space",
-                             props.location("toWorld"))
-        where = props.location("filename")
+                             props.location(to_world_name))
+        where = props.location("filename") if filename is not None else None
         try:
-            mesh = loader(filename, where)
+            mesh = loader(filename, where) if filename is not None else generate()
         except SceneError as e:
             if e.location == where:
                 raise
             # The error names the mesh file (and line); add where the scene asked for that file.
             raise SceneError(f"in mesh {e}", where) from None
         mesh = mesh.transformed(to_world.matrix)
+        if prepare is not None:
+            mesh = prepare(mesh)
         mesh, dropped = mesh.drop_degenerate()
         if dropped:
-            log.warning("%s: dropped %d degenerate triangle(s) of %s", spec.location, dropped, filename)
+            log.warning("%s: dropped %d degenerate triangle(s) of %s", spec.location, dropped, filename or name)
         if len(mesh.faces) == 0:
-            raise SceneError(f"mesh '{filename}' has no non-degenerate triangles", spec.location)
+            raise SceneError(f"mesh '{filename or name}' has no non-degenerate triangles", spec.location)
         self.mesh = mesh
         self.filename = filename
         self.dropped = dropped
         self._attach(children, spec)
+
+
+def angle_weighted_normals(mesh) -> np.ndarray:
+    """Smooth vertex normals as Mitsuba computes them for a mesh file without normals: each face's unit normal,
+    weighted by the face's angle at the vertex, summed and normalised."""
+    p = mesh.positions.astype(np.float64)
+    f = mesh.faces
+    n = np.cross(p[f[:, 1]] - p[f[:, 0]], p[f[:, 2]] - p[f[:, 0]])
+    length = np.linalg.norm(n, axis=1)
+    ok = length > 0
+    n = n[ok] / length[ok, None]
+    f = f[ok]
+    out = np.zeros_like(p)
+    for j in range(3):
+        a = p[f[:, (j + 1) % 3]] - p[f[:, j]]
+        b = p[f[:, (j + 2) % 3]] - p[f[:, j]]
+        a /= np.maximum(np.linalg.norm(a, axis=1, keepdims=True), 1e-300)
+        b /= np.maximum(np.linalg.norm(b, axis=1, keepdims=True), 1e-300)
+        angle = np.arccos(np.clip((a * b).sum(axis=1), -1.0, 1.0))
+        np.add.at(out, f[:, j], n * angle[:, None])
+    length = np.linalg.norm(out, axis=1, keepdims=True)
+    return np.where(length > 0, out / np.where(length > 0, length, 1.0), 0.0)
+
+
+class MitsubaMeshOptions:
+    """What Mitsuba's mesh shapes (obj, ply, serialized, cube) share: ``to_world``; ``face_normals`` (flat
+    shading: drop the vertex normals); without it a file without normals gets Mitsuba's smooth angle-weighted
+    ones; ``flip_normals`` turns the surface around (reversed winding and negated normals: the side an area light
+    emits from and a one-sided BSDF reflects on)."""
+
+    def _load_mitsuba(self, props, children, spec, loader, generate=None, name=None):
+        face_normals = props.get_bool("face_normals", False) if loader is not None else False
+        flip = props.get_bool("flip_normals", False)
+
+        def prepare(mesh):
+            from .meshdata import MeshData
+
+            normals = None if face_normals else (
+                mesh.normals if mesh.normals is not None else angle_weighted_normals(mesh))
+            faces = mesh.faces
+            if flip:
+                faces = faces[:, [0, 2, 1]]
+                normals = None if normals is None else -normals
+            return MeshData(positions=mesh.positions, normals=normals, uvs=mesh.uvs, faces=faces)
+
+        self._load(props, children, spec, loader, "to_world", prepare, generate, name)
+
+    def _load_generated(self, props, children, spec, generate, name: str):
+        self._load_mitsuba(props, children, spec, None, generate, name)

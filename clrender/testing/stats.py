@@ -59,6 +59,41 @@ def compare_to_value(film, reference, alpha: float = 0.01, mask=None) -> ZTestRe
     return _ztest(img - ref, var, alpha, "film vs reference")
 
 
+def compare_to_reference(film, mean, stderr, alpha: float = 0.01, mask=None,
+                         ref_samples: int | None = None) -> ZTestResult:
+    """Each pixel's estimate against an independent reference image with its own per-pixel standard error
+    (e.g. a Mitsuba render): both errors combined.
+
+    With ``ref_samples`` (the reference's samples per pixel) the film's variance is taken to be at least what the
+    reference's per-sample variance gives at the film's sample count: a pixel whose rare bright paths the film
+    happened not to sample (a penumbra, a caustic) has a sample variance far below its true error, and a test
+    that trusted it would fail on noise. A biased pixel still fails, since its difference does not shrink."""
+    diff = film.image.astype(np.float64) - np.asarray(mean, np.float64)
+    ref_var = np.asarray(stderr, np.float64) ** 2
+    film_var = film.variance()
+    if ref_samples is not None:
+        n = np.maximum(film.count, 1)[..., None]
+        film_var = np.maximum(film_var, ref_var * ref_samples / n)
+    var = film_var + ref_var
+    if mask is not None:
+        diff, var = diff[mask], var[mask]
+    return _ztest(diff, var, alpha, "film vs reference image")
+
+
+def compare_image_means(film, mean, stderr, ref_samples: int | None = None, alpha: float = 0.01) -> ZTestResult:
+    """The film's mean over all pixels (per channel) against a reference image's, with the variances of
+    :func:`compare_to_reference` summed over pixels (pixels are independent in a film)."""
+    img = film.image.astype(np.float64).reshape(-1, 3)
+    ref = np.asarray(mean, np.float64).reshape(-1, 3)
+    ref_var = np.asarray(stderr, np.float64).reshape(-1, 3) ** 2
+    film_var = film.variance().reshape(-1, 3)
+    if ref_samples is not None:
+        film_var = np.maximum(film_var, ref_var * ref_samples / np.maximum(film.count, 1).reshape(-1, 1))
+    n = len(img)
+    return _ztest(img.mean(axis=0) - ref.mean(axis=0), (film_var + ref_var).sum(axis=0) / n ** 2, alpha,
+                  "image mean vs reference")
+
+
 def compare_films(a, b, alpha: float = 0.01, mask=None) -> ZTestResult:
     """Two independent renders of the same scene (e.g. two integrators): equal per pixel?"""
     da, db = a.image.astype(np.float64), b.image.astype(np.float64)

@@ -1,0 +1,384 @@
+"""Reader for Mitsuba 3's XML scene format (a root ``<scene version="2.x|3.x">``), producing PluginSpecs of format
+"mitsuba".
+
+It shares pass one (bytes -> located element tree) and the value parsing of the Nori reader
+(:mod:`clrender.scene.xmlparser`) and differs in the structure it accepts:
+
+- object tags ``shape bsdf emitter sensor film rfilter sampler integrator texture ...`` with ``type`` and optional
+  ``id`` and ``name`` (the parameter a nested object fills, e.g. ``<texture name="reflectance">``);
+- property tags ``float integer boolean string point vector rgb spectrum transform``; ``point``/``vector`` take
+  ``value`` or ``x y z``; a ``spectrum`` is a constant (grey) or a ``wavelength:value`` list, turned into the
+  RGB that Mitsuba's RGB variants compute (:mod:`clrender.scene.spectrum`);
+- ``<ref id="..."/>`` (``<ref name="..." id="..."/>`` for a named parameter) to an object declared earlier with
+  that ``id``; ``<alias id as>``;
+- ``<include filename="..."/>``: the included file's root ``<scene>`` children are spliced in where the include
+  is written. Relative paths are resolved as Mitsuba's file resolver does: against a list of folders searched in
+  order (first existing file wins) that starts with the main file's folder, gains each included file's folder
+  while that file is read, and ends with the current directory;
+- ``<transform>`` ops ``translate scale rotate lookat matrix``; ``rotate`` axes are used as written (not
+  normalised), as Mitsuba does.
+"""
+from __future__ import annotations
+
+import logging
+import os
+import re
+import stat
+from dataclasses import replace
+
+import numpy as np
+
+from ..errors import SceneError, SourceLocation
+from .properties import MITSUBA_PROPERTY_TAGS, PropertyList
+from .spec import MITSUBA_OBJECT_TAGS, PluginSpec, describe
+from .transform import Transform
+from . import xmlparser as _x
+
+log = logging.getLogger("clrender")
+
+OP_TAGS = ("translate", "scale", "rotate", "lookat", "matrix")
+_VERSION = re.compile(r"([0-9]+)\.([0-9]+)(\.([0-9]+))?")
+_ID = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*")
+#: include nesting deeper than this is taken for a cycle
+MAX_INCLUDE_DEPTH = 32
+READER = "Mitsuba 3 reader"
+
+
+def is_mitsuba_root(el) -> bool:
+    """A root ``<scene>`` with a ``version`` attribute is a Mitsuba scene (Nori's <scene> takes no attributes)."""
+    return el.tag == "scene" and "version" in el.attrs
+
+
+class _State:
+    """What every file of one scene shares: defines, declared ids, the resolver's folders, the include chain."""
+
+    def __init__(self, defines, main_dir: str):
+        self.user_defines = {str(k): str(v) for k, v in (defines or {}).items()}
+        self.defines = dict(self.user_defines)
+        self.file_defaults: dict[str, SourceLocation] = {}
+        self.ids: dict[str, PluginSpec] = {}
+        self.search = [main_dir]
+        self.chain: list[str] = []
+
+    def resolve(self, name: str) -> str:
+        """Mitsuba's FileResolver: an absolute path as is; else the first folder of the list holding it; else
+        the name relative to the current directory (which the caller then reports as missing)."""
+        name = os.path.expanduser(name)
+        if os.path.isabs(name):
+            return os.path.normpath(name)
+        for d in self.search + [os.getcwd()]:
+            p = os.path.join(d, name)
+            if os.path.exists(p):
+                return os.path.normpath(p)
+        return os.path.normpath(os.path.join(self.search[0], name))
+
+
+class MitsubaBuilder(_x._Builder):
+    """Pass two for one Mitsuba file; includes get a builder of their own sharing ``state``."""
+
+    def __init__(self, src, state: _State):
+        super().__init__(src, None, state.search[0], "upstream")
+        self.state = state
+        self.defines = state.defines
+
+    @staticmethod
+    def err(message: str, loc) -> SceneError:
+        return SceneError(message, loc)
+
+    # --- root -----------------------------------------------------------------------------------
+    def build_root(self, el) -> PluginSpec:
+        self.check_version(el)
+        spec = PluginSpec("scene", "scene", None, PropertyList("<scene>", el.loc, fmt="mitsuba"), [], el.loc,
+                          format="mitsuba")
+        self.read_defaults(el)
+        self.fill(el, spec, is_root=True)
+        return spec
+
+    def check_version(self, el) -> None:
+        self.attrs(el, ("version",))
+        v = el.attrs["version"]
+        m = _VERSION.fullmatch(v.strip())
+        if not m:
+            raise self.err(f'bad scene version="{v}"; expected major.minor[.patch], e.g. "3.0.0"',
+                           self.attr_loc(el, "version"))
+        if m.group(1) not in ("2", "3"):
+            raise self.err(f"unsupported 'version' \"{v}\" of <scene>: clrender reads Nori scenes (whose <scene> "
+                           f"has no attributes) and Mitsuba 2.x and 3.x scenes (snake_case parameter names); "
+                           f"convert older Mitsuba scenes with Mitsuba first", self.attr_loc(el, "version", at_value=False))
+
+    def read_defaults(self, el) -> None:
+        for c in el.children:
+            if c.tag != "default":
+                continue
+            a = self.attrs(c, ("name", "value"), substitute=False)
+            if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", a["name"]):
+                raise self.err(f"<default> name '{a['name']}' is not a valid variable name",
+                               self.attr_loc(c, "name"))
+            first = self.state.file_defaults.get(a["name"])
+            if first is not None:
+                raise self.err(f"<default> '{a['name']}' given twice (first at {first})", c.loc)
+            self.no_children(c)
+            self.state.file_defaults[a["name"]] = c.loc
+            if a["name"] not in self.state.user_defines:  # -D wins over the file's default
+                self.defines[a["name"]] = a["value"]
+
+    # --- objects --------------------------------------------------------------------------------
+    def object_attrs(self, el) -> tuple[str, str | None, str | None]:
+        for name in el.attrs:
+            if name not in ("type", "id", "name"):
+                raise self.err(f"unexpected attribute '{name}' in <{el.tag}>; it takes 'type', 'id', 'name'",
+                               self.attr_loc(el, name, at_value=False))
+        if "type" not in el.attrs:
+            raise self.err(f"<{el.tag}> is missing the required attribute 'type'", el.loc)
+        type_name = self.substitute(el, "type")
+        oid = self.substitute(el, "id") if "id" in el.attrs else None
+        name = self.substitute(el, "name") if "name" in el.attrs else None
+        return type_name, oid, name
+
+    def build_object(self, el, is_root: bool = False) -> PluginSpec:
+        type_name, oid, name = self.object_attrs(el)
+        props = PropertyList(describe(el.tag, type_name), el.loc, fmt="mitsuba")
+        spec = PluginSpec(el.tag, type_name, name, props, [], el.loc, format="mitsuba")
+        self.fill(el, spec)
+        if oid is not None:
+            self.declare(oid, spec, el)
+        return spec
+
+    def declare(self, oid: str, spec: PluginSpec, el, attr: str = "id") -> None:
+        first = self.state.ids.get(oid)
+        if first is not None:
+            raise self.err(f"id '{oid}' is declared twice (first at {first.location})", self.attr_loc(el, attr))
+        self.state.ids[oid] = spec
+
+    def fill(self, el, spec: PluginSpec, is_root: bool = False) -> None:
+        for c in el.children:
+            if c.tag == "spectrum" and "type" not in c.attrs:   # <spectrum name value>: a property
+                self.build_property(c, spec.props)
+            elif c.tag in MITSUBA_OBJECT_TAGS and c.tag != "scene":
+                spec.children.append(self.build_object(c))
+            elif c.tag in MITSUBA_PROPERTY_TAGS:
+                self.build_property(c, spec.props)
+            elif c.tag == "ref":
+                spec.children.append(self.build_ref(c))
+            elif c.tag == "include":
+                self.build_include(c, spec)
+            elif c.tag == "alias":
+                a = self.attrs(c, ("id", "as"))
+                self.no_children(c)
+                if a["id"] not in self.state.ids:
+                    raise self.unknown_id(c, a["id"])
+                self.declare(a["as"], self.state.ids[a["id"]], c, "as")
+            elif c.tag == "default":
+                if not is_root:
+                    raise self.err("<default> is only allowed directly inside the root <scene>", c.loc)
+            elif c.tag in OP_TAGS:
+                raise self.err(f"<{c.tag}> is a transform op and is only allowed inside <transform>", c.loc)
+            else:
+                extra = ", <default>" if is_root else ""
+                raise self.err(f"unknown tag <{c.tag}> in <{el.tag}>; expected an object "
+                               f"({_x._tags(t for t in MITSUBA_OBJECT_TAGS if t != 'scene')}), a property "
+                               f"({_x._tags(MITSUBA_PROPERTY_TAGS)}), <ref>, <include>, <alias>{extra}", c.loc)
+
+    def unknown_id(self, el, oid: str) -> SceneError:
+        known = ", ".join(sorted(self.state.ids)) or "none"
+        return self.err(f"reference to unknown id '{oid}' (an object must be declared with that id before it is "
+                        f"referenced; declared so far: {known})", self.attr_loc(el, "id"))
+
+    def build_ref(self, el) -> PluginSpec:
+        for name in el.attrs:
+            if name not in ("id", "name"):
+                raise self.err(f"unexpected attribute '{name}' in <ref>; it takes 'id' and optionally 'name'",
+                               self.attr_loc(el, name, at_value=False))
+        if "id" not in el.attrs:
+            raise self.err("<ref> is missing the required attribute 'id'", el.loc)
+        self.no_children(el)
+        oid = self.substitute(el, "id")
+        target = self.state.ids.get(oid)
+        if target is None:
+            raise self.unknown_id(el, oid)
+        name = self.substitute(el, "name") if "name" in el.attrs else None
+        if name is None or name == target.name:
+            return target
+        # The same object under another parameter name: one spec sharing the object's properties and children;
+        # the registry builds it once per distinct spec.
+        return replace(target, name=name)
+
+    def build_include(self, el, spec: PluginSpec) -> None:
+        a = self.attrs(el, ("filename",))
+        self.no_children(el)
+        path = self.state.resolve(a["filename"])
+        if path in self.state.chain or len(self.state.chain) >= MAX_INCLUDE_DEPTH:
+            raise self.err(f"<include> of '{a['filename']}' includes itself (include chain: "
+                           f"{' -> '.join(self.state.chain + [path])})", self.attr_loc(el, "filename"))
+        try:
+            if not stat.S_ISREG(os.stat(path).st_mode):
+                raise self.err(f"cannot include '{a['filename']}' ({path}): not a regular file",
+                               self.attr_loc(el, "filename"))
+            with open(path, "rb") as f:
+                data = f.read()
+        except OSError as e:
+            raise self.err(f"cannot include '{a['filename']}': {e.strerror or e} (looked in "
+                           f"{', '.join(self.state.search + [os.getcwd()])})", self.attr_loc(el, "filename")) from None
+        src, root = _x._read_bytes(data, path, None)
+        sub = MitsubaBuilder(src, self.state)
+        if root.tag != "scene":
+            raise sub.err(f"an included file must have a <scene> root, not <{root.tag}>", root.loc)
+        sub.check_version(root)
+        self.state.chain.append(path)
+        self.state.search.append(os.path.dirname(path))
+        try:
+            sub.read_defaults(root)
+            sub.fill(root, spec, is_root=True)
+        finally:
+            self.state.search.pop()
+            self.state.chain.pop()
+
+    # --- properties -----------------------------------------------------------------------------
+    def xyz(self, el, default: float) -> np.ndarray:
+        """A point/vector/translate/scale written as value="..." or as x, y, z attributes."""
+        names = [n for n in el.attrs if n in ("x", "y", "z")]
+        if "value" in el.attrs and names:
+            raise self.err(f"<{el.tag}> takes either 'value' or 'x', 'y', 'z', not both",
+                           self.attr_loc(el, names[0], at_value=False))
+        if "value" in el.attrs:
+            return self.numbers(el, "value", self.substitute(el, "value"), (3, 1) if el.tag == "scale" else (3,))
+        return np.array([self.one_float(el, n, self.substitute(el, n)) if n in el.attrs else default
+                         for n in ("x", "y", "z")])
+
+    def build_property(self, el, props: PropertyList) -> None:
+        if el.tag == "transform":
+            name = self.attrs(el, ("name",))["name"]
+            props.add(name, "transform", self.build_transform(el), el.loc)
+            return
+        if el.tag in ("point", "vector"):
+            allowed = ("name", "value", "x", "y", "z")
+            for n in el.attrs:
+                if n not in allowed:
+                    raise self.err(f"unexpected attribute '{n}' in <{el.tag}>; it takes 'name' and 'value' "
+                                   f"(or 'x', 'y', 'z')", self.attr_loc(el, n, at_value=False))
+            if "name" not in el.attrs:
+                raise self.err(f"<{el.tag}> is missing the required attribute 'name'", el.loc)
+            self.no_children(el)
+            props.add(self.substitute(el, "name"), el.tag, self.xyz(el, 0.0), el.loc)
+            return
+        if el.tag == "spectrum" and "filename" in el.attrs:
+            self.attrs(el, ("name", "filename"))
+            raise self.err("<spectrum filename=...> (a spectrum file) is not supported; write the spectrum as "
+                           'value="wavelength:value, ..." or as an <rgb>', el.loc)
+        a = self.attrs(el, ("name", "value"))
+        self.no_children(el)
+        name, text = a["name"], a["value"]
+        if el.tag == "rgb":
+            value = self.numbers(el, "value", text, (3, 1))
+            value = np.repeat(value, 3) if value.size == 1 else value
+        elif el.tag == "spectrum":
+            pairs = self.spectrum(el, text)
+            value = self.spectrum_rgb(pairs)
+        else:
+            value = self.value_of(el, el.tag, text)
+        if el.tag == "string" and name == "filename":
+            value = self.state.resolve(value)
+        props.add(name, el.tag, value, el.loc, raw=text)
+        if el.tag == "spectrum":
+            props._entry(name).spectrum = pairs
+
+    @staticmethod
+    def spectrum_rgb(pairs) -> np.ndarray:
+        """The reflectance-context RGB (the getter recomputes it where the spectrum is used)."""
+        from .spectrum import constant_to_rgb, spectrum_to_rgb
+
+        lam, val = pairs
+        return constant_to_rgb(val) if lam is None else spectrum_to_rgb(lam, val, warn=False)
+
+    def spectrum(self, el, text: str) -> tuple:
+        """(wavelengths, values) of a ``wavelength:value`` list, or (None, constant)."""
+        from .spectrum import check_spectrum
+
+        if ":" not in text:
+            v = self.numbers(el, "value", text)
+            if v.size != 1:
+                raise self.err(f'<spectrum value="{text}"> is neither one constant (a grey value) nor a list of '
+                               f'wavelength:value pairs such as "400:0.1, 700:0.5"', self.attr_loc(el, "value"))
+            return None, float(v[0])
+        pairs = [p for p in re.split(r"[\s,]+", text.strip()) if p]
+        lam, val = [], []
+        for p in pairs:
+            parts = p.split(":")
+            try:
+                if len(parts) != 2:
+                    raise ValueError
+                lam.append(float(parts[0]))
+                val.append(float(parts[1]))
+            except ValueError:
+                raise self.err(f"bad wavelength:value pair '{p}' in <spectrum value=\"{text}\">; expected "
+                               f'pairs like "400:0.1, 500:0.3" (nanometres, increasing)',
+                               self.attr_loc(el, "value")) from None
+        try:
+            check_spectrum(np.array(lam), np.array(val))
+            return np.array(lam), np.array(val)
+        except ValueError as e:
+            raise self.err(f"<spectrum value=\"{text}\">: {e}", self.attr_loc(el, "value")) from None
+
+    def build_transform(self, el) -> Transform:
+        result = Transform()
+        for op in el.children:
+            if op.tag not in OP_TAGS:
+                raise self.err(f"<{op.tag}> is not allowed in <transform>; expected one of {_x._tags(OP_TAGS)}",
+                               op.loc)
+            self.no_children(op)
+            if op.tag == "translate":
+                self.op_attrs(op, ("value", "x", "y", "z"))
+                step = Transform.translate(self.xyz(op, 0.0))
+            elif op.tag == "scale":
+                self.op_attrs(op, ("value", "x", "y", "z"))
+                step = self.checked(op, Transform.scale, self.xyz(op, 1.0))
+            elif op.tag == "matrix":
+                a = self.attrs(op, ("value",))
+                v = self.numbers(op, "value", a["value"], (16, 9))
+                if v.size == 9:
+                    m = np.eye(4)
+                    m[:3, :3] = v.reshape(3, 3)
+                    v = m.reshape(-1)
+                step = self.checked(op, Transform.from_rows, v)
+            elif op.tag == "rotate":
+                self.op_attrs(op, ("value", "x", "y", "z", "angle"))
+                if "angle" not in op.attrs:
+                    raise self.err("<rotate> is missing the required attribute 'angle'", op.loc)
+                axis = self.xyz(op, 0.0)
+                angle = self.one_float(op, "angle", self.substitute(op, "angle"))
+                step = self.checked(op, Transform.rotate, axis, angle, False)
+            else:
+                self.op_attrs(op, ("origin", "target", "up"))
+                for k in ("origin", "target", "up"):
+                    if k not in op.attrs:
+                        raise self.err(f"<lookat> is missing the attribute '{k}' (clrender needs it written)",
+                                       op.loc)
+                vs = [self.numbers(op, k, self.substitute(op, k), (3,)) for k in ("origin", "target", "up")]
+                warnings: list[str] = []
+                step = self.checked(op, Transform.lookat, *vs, warnings)
+                for w in warnings:
+                    log.warning("%s: %s", op.loc, w)
+            result = step @ result  # each op is applied after the ones before it
+        return result
+
+    def op_attrs(self, op, allowed) -> None:
+        for n in op.attrs:
+            if n not in allowed:
+                raise self.err(f"unexpected attribute '{n}' in <{op.tag}>; it takes {_x._quoted(allowed)}",
+                               self.attr_loc(op, n, at_value=False))
+
+
+def build(src, root, defines, main_dir: str) -> PluginSpec:
+    """Pass two for a Mitsuba scene whose pass-one tree is ``root``."""
+    state = _State(defines, main_dir)
+    state.chain.append(os.path.normpath(os.path.abspath(src.filename)) if not src.filename.startswith("<")
+                       else src.filename)
+    try:
+        return MitsubaBuilder(src, state).build_root(root)
+    except SceneError as e:
+        raise SceneError(with_reader(e.message), e.location) from None
+
+
+def with_reader(message: str) -> str:
+    """``message`` saying that the Mitsuba 3 reader read the file (once)."""
+    return message if READER in message else f"{message} [{READER}]"

@@ -1,0 +1,135 @@
+"""Mitsuba sensors and films: the field of view conversions against numbers Mitsuba 3.9 gives, crop windows, and
+the thin lens (every ray of a film position through one point of the plane in focus; origins uniform on the
+aperture disk, by a chi-square test)."""
+import numpy as np
+import pyopencl as cl
+import pytest
+
+from clrender.device.program import build_program
+from clrender.scene.registry import create
+from clrender.scene.xmlparser import parse_string
+from clrender.testing.chi2 import bin_points_2d, chi2_test, integration_points_2d
+
+SRC = r"""
+#include "camera.h"
+__kernel void lens_rays(__global const Camera* cam, __global const float4* pos_lens, __global float4* o,
+                        __global float4* d, uint n) {
+    uint i = get_global_id(0);
+    if (i >= n) return;
+    float4 a = pos_lens[i];
+    Ray r = camera_ray_lens(cam, a.x, a.y, (float2)(a.z, a.w));
+    o[i] = (float4)(r.o, r.tmin); d[i] = (float4)(r.d, r.tmax);
+}
+"""
+
+
+def sensor(inner: str, film: str = '<integer name="width" value="64"/><integer name="height" value="48"/>',
+           kind: str = "perspective"):
+    import clrender.plugins  # noqa: F401
+
+    xml = f"""<scene version="3.0.0"><sensor type="{kind}">{inner}<film type="hdrfilm">{film}</film></sensor>
+              <shape type="cube"/></scene>"""
+    return create(parse_string(xml, "s.xml")).camera
+
+
+# x_fov of Mitsuba 3.9's perspective sensor (mi.load_dict(...) printed) for these parameters and film sizes
+@pytest.mark.parametrize("inner, w, h, x_fov", [
+    ("", 768, 576, 38.1848),                                                       # 50 mm on the diagonal
+    ('<string name="focal_length" value="35mm"/>', 768, 576, 52.62254),
+    ('<float name="fov" value="30"/><string name="fov_axis" value="y"/>', 64, 48, 39.32012),
+    ('<float name="fov" value="30"/><string name="fov_axis" value="diagonal"/>', 64, 48, 24.19758),
+    ('<float name="fov" value="30"/><string name="fov_axis" value="smaller"/>', 64, 48, 39.32012),
+    ('<float name="fov" value="30"/><string name="fov_axis" value="larger"/>', 48, 64, 22.72583),
+    ('<float name="fov" value="30"/><string name="fov_axis" value="larger"/>', 64, 48, 30.0),
+])
+def test_field_of_view_as_mitsuba(inner, w, h, x_fov):
+    cam = sensor(inner, f'<integer name="width" value="{w}"/><integer name="height" value="{h}"/>')
+    assert cam.fov == pytest.approx(x_fov, abs=2e-4)
+
+
+def test_sensor_defaults_are_mitsubas():
+    cam = sensor("", "")
+    assert (cam.width, cam.height, cam.sampler.sample_count) == (768, 576, 4)
+    assert (cam.near_clip, cam.far_clip) == (0.01, 1e4)
+    assert type(cam.filter).__name__ == "MitsubaGaussianFilter" and cam.filter.radius == 2.0
+    assert not cam.film.sample_border
+
+
+def test_crop_window_is_the_image():
+    cam = sensor("", '<integer name="width" value="64"/><integer name="height" value="48"/>'
+                     '<integer name="crop_offset_x" value="10"/><integer name="crop_offset_y" value="4"/>'
+                     '<integer name="crop_width" value="20"/><integer name="crop_height" value="30"/>')
+    row, _ = cam.pack()
+    assert (cam.width, cam.height) == (20, 30)
+    assert (row["width"][0], row["height"][0], row["film_width"][0], row["film_height"][0]) == (20, 30, 64, 48)
+    assert (row["crop_x"][0], row["crop_y"][0], row["clip_window"][0]) == (10, 4, 1)
+    assert row["inv_aspect"][0] == pytest.approx(48 / 64)
+
+
+@pytest.fixture(scope="module")
+def lens_program(ctx):
+    return cl.Kernel(build_program(ctx, SRC), "lens_rays")
+
+
+def lens_rays(ctx, queue, program, cam, pos_lens):
+    row, _ = cam.pack()
+    n = len(pos_lens)
+    mf = cl.mem_flags
+    b_cam = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=row)
+    b_in = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(pos_lens, np.float32))
+    o = np.zeros((n, 4), np.float32)
+    d = np.zeros((n, 4), np.float32)
+    bo, bd = cl.Buffer(ctx, mf.WRITE_ONLY, o.nbytes), cl.Buffer(ctx, mf.WRITE_ONLY, d.nbytes)
+    program(queue, (((n + 63) // 64) * 64,), (64,), b_cam, b_in, bo, bd, np.uint32(n))
+    cl.enqueue_copy(queue, o, bo)
+    cl.enqueue_copy(queue, d, bd)
+    queue.finish()
+    return o, d
+
+
+LOOK = '<transform name="to_world"><lookat origin="1, 2, 3" target="0, 0.5, -1" up="0, 1, 0"/></transform>'
+
+
+def test_thin_lens_rays_meet_in_the_focus_plane(ctx, queue, lens_program):
+    cam = sensor('<float name="aperture_radius" value="0.25"/><float name="focus_distance" value="4"/>' + LOOK,
+                 kind="thinlens")
+    pinhole = sensor(LOOK)
+    rng = np.random.default_rng(3)
+    n = 4096
+    pos = np.column_stack([rng.uniform(0, 64, n), rng.uniform(0, 48, n), rng.random(n), rng.random(n)])
+    o, d = lens_rays(ctx, queue, lens_program, cam, pos)
+    po, pd = lens_rays(ctx, queue, lens_program, pinhole, pos)
+    m = cam.to_world.matrix
+    axis = m[:3, 2] / np.linalg.norm(m[:3, 2])
+    # where each ray meets the plane at distance 4 along the viewing axis, for the lens and the pinhole
+    def hit(o, d):
+        t = (4.0 - (o[:, :3] - m[:3, 3]) @ axis) / (d[:, :3] @ axis)
+        return o[:, :3] + t[:, None] * d[:, :3]
+    assert np.abs(hit(o, d) - hit(po, pd)).max() < 2e-4
+    lens_offsets = o[:, :3] - m[:3, 3]
+    assert np.abs(lens_offsets @ axis).max() < 1e-5                      # origins on the lens plane
+    assert np.linalg.norm(lens_offsets, axis=1).max() <= 0.25 * (1 + 1e-5)
+    assert np.linalg.norm(lens_offsets, axis=1).max() > 0.24             # and not all at the centre
+
+
+def test_thin_lens_origins_are_uniform_on_the_aperture(ctx, queue, lens_program):
+    r = 0.5
+    cam = sensor(f'<float name="aperture_radius" value="{r}"/>', kind="thinlens")   # camera = world frame
+    n, res = 200_000, 16
+    rng = np.random.default_rng(11)
+    pos = np.column_stack([np.full(n, 20.0), np.full(n, 30.0), rng.random(n), rng.random(n)])
+    o, _ = lens_rays(ctx, queue, lens_program, cam, pos)
+    observed = bin_points_2d(o[:, :2], (-r, -r), (r, r), res)
+    pts, w, cell = integration_points_2d((-r, -r), (r, r), res)
+    inside = (np.hypot(pts[:, 0], pts[:, 1]) <= r).astype(np.float64)
+    expected = np.bincount(cell, weights=inside * w / (np.pi * r * r), minlength=res * res) * n
+    expected = np.append(expected, 0.0)
+    result = chi2_test(observed, expected)
+    assert result.passed, result.message
+
+
+def test_thin_lens_needs_its_aperture():
+    from clrender.errors import SceneError
+
+    with pytest.raises(SceneError, match="aperture_radius"):
+        sensor("", kind="thinlens")
