@@ -251,7 +251,13 @@ def check_trace(ctx, queue, tracer, v0, v1, v2, spheres, o, d, tmin, tmax, max_a
         check_invariants4(b4, *bounds, bvh.order, kw.get("max_leaf_size", 4))
         tree = _Nodes(b4.nodes)
     elif tracer.width == 8:
-        tree = wide_nodes(bvh, 8)
+        from clrender.accel.bvh4 import collapse_bvh4
+        from clrender.device.layout import ENUMS
+        from test_bvh4 import check_invariants4
+
+        b8 = collapse_bvh4(bvh, ENUMS["BVH8_STACK_SIZE"], width=8)
+        check_invariants4(b8, *bounds, bvh.order, kw.get("max_leaf_size", 4), width=8)
+        tree = _Nodes(b8.nodes)
     out, prim, any_ = device_trace(ctx, queue, tracer.kernel, tree, prims, o, d, tmin, tmax)
     return compare_with_reference(out, prim, any_, v0, v1, v2, spheres, o, d, tmin, tmax, max_ambiguous)
 
