@@ -27,7 +27,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from clrender.accel.bvh import build_bvh  # noqa: E402
-from clrender.accel.primitives import pack_primitives, primitive_bounds  # noqa: E402
+from clrender.accel.primitives import bvh_leaves, pack_leaf_blocks, primitive_bounds  # noqa: E402
 
 
 def noisy_sphere(n, seed=0):
@@ -106,7 +106,7 @@ def trace_bench(v, trees, n_rays=1 << 18, repeat=3):
                             "trace") for w in (2, 4)}
     bufs = {}
     for name, bvh in trees.items():
-        prims = buf(pack_primitives(*v, None, bvh.order))
+        prims = buf(pack_leaf_blocks(*v, None, bvh.order, *bvh_leaves(bvh)))
         bufs[name, 2] = (buf(bvh.nodes), prims)
         bufs[name, 4] = (buf(collapse_bvh4(bvh).nodes), prims)
     rng = np.random.default_rng(1)

@@ -15,9 +15,9 @@ import numpy as np
 
 from .accel.bvh import build_bvh
 from .accel.bvh4 import Bvh4Unsupported, collapse_bvh4
-from .accel.primitives import pack_primitives, primitive_bounds
+from .accel.primitives import BUILD_OPTIONS, bvh_leaves, pack_leaf_blocks, primitive_bounds
 from .device import dispatch, layout
-from .device.layout import NONE
+from .device.layout import ENUMS, NONE
 from .filters.filter import with_guide
 from .textures.texture import TextureTable
 
@@ -32,8 +32,8 @@ class SceneBuffers:
     camera: np.ndarray
     filter_cdf: np.ndarray
     stats: dict = field(default_factory=dict)
-    #: node table layout: 4 (kernels/bvh4.h, the default) or 2 (kernels/bvh.h); the Renderer passes it to the
-    #: kernels as BVH_WIDTH
+    #: node table layout: 4 (kernels/bvh4.h, the default), 8 (kernels/bvh8.h) or 2 (kernels/bvh.h); the Renderer
+    #: passes it to the kernels as BVH_WIDTH
     bvh_width: int = 4
 
     def __post_init__(self):
@@ -120,13 +120,14 @@ def selection_cdf(powers) -> np.ndarray:
 
 def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | None = None,
                emitter_selection: str | None = None) -> SceneBuffers:
-    """Pack ``scene`` into device tables; ``bvh_width`` 4 collapses the binary BVH into 4-wide nodes (falls back
-    to 2 when the tree does not fit the 4-wide kernel, see clrender/accel/bvh4.py); ``bvh_options`` go to
-    :func:`clrender.accel.bvh.build_bvh` (e.g. ``max_leaf_size``, ``traversal_cost``); ``emitter_selection``
+    """Pack ``scene`` into device tables; ``bvh_width`` 4 (or 8) collapses the binary BVH into 4- (8-)wide nodes
+    (falls back to 2 when the tree does not fit the wide kernel, see clrender/accel/bvh4.py); ``bvh_options`` go
+    to :func:`clrender.accel.bvh.build_bvh` over BUILD_OPTIONS (e.g. ``max_leaf_size``, ``traversal_cost``);
+    ``emitter_selection``
     ("uniform" or "power"; default: the scene's ``emitter_selection`` attribute, else uniform) is how light
     sampling chooses an emitter (kernels/emitter.h scene_pick_emitter)."""
-    if bvh_width not in (2, 4):
-        raise ValueError(f"bvh_width must be 2 or 4, got {bvh_width}")
+    if bvh_width not in (2, 4, 8):
+        raise ValueError(f"bvh_width must be 2, 4 or 8, got {bvh_width}")
     if emitter_selection is None:
         emitter_selection = getattr(scene, "emitter_selection", "uniform")
     if emitter_selection not in EMITTER_SELECTIONS:
@@ -169,12 +170,12 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
 
     t_bvh = time.perf_counter()
     lo, hi = primitive_bounds(tris[:, 0], tris[:, 1], tris[:, 2], sph)
-    bvh = build_bvh(lo, hi, **(bvh_options or {}))
-    prims = pack_primitives(tris[:, 0], tris[:, 1], tris[:, 2], sph, bvh.order)
+    bvh = build_bvh(lo, hi, **{**BUILD_OPTIONS, **(bvh_options or {})})
+    prims = pack_leaf_blocks(tris[:, 0], tris[:, 1], tris[:, 2], sph, bvh.order, *bvh_leaves(bvh))
     nodes, node_count = bvh.nodes, bvh.node_count
-    if bvh_width == 4:
+    if bvh_width in (4, 8):
         try:
-            bvh4 = collapse_bvh4(bvh)
+            bvh4 = collapse_bvh4(bvh, ENUMS[f"BVH{bvh_width}_STACK_SIZE"], width=bvh_width)
             nodes, node_count = bvh4.nodes, bvh4.node_count
         except Bvh4Unsupported as exc:
             log.warning("using the 2-wide BVH: %s", exc)

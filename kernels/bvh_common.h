@@ -1,9 +1,10 @@
 /* What the 2-wide (bvh.h) and 4-wide (bvh4.h) traversals share: the Hit record, the primitive table and its
    intersection routines (OpenCL C 1.2).
 
-   Primitive table, 3 float4 per primitive in leaf order (clrender/accel/primitives.py):
-       triangle i: [v0.xyz, as_float(i)], [v1.xyz, 0], [v2.xyz, 0]
-       sphere j:   [centre.xyz, as_float(j | 0x80000000)], [radius, 0, 0, 0], [0, 0, 0, 0]
+   Primitive table: 10 words per primitive in leaf order, each leaf cut into blocks of up to 4 primitives
+   stored structure of arrays (clrender/accel/primitives.py pack_leaf_blocks; bvh_isect_leaf reads it):
+       triangle i: v0.xyz, v1.xyz, v2.xyz, id = i
+       sphere j:   centre.xyz, radius, 0 x 5, id = j | 0x80000000
 
    Hits count for tmin < t < tmax, both sides of triangles. Ray directions need not be normalised.
    Plain arithmetic instead of fmin/fmax/dot/cross: on PoCL 3.0 the builtins were 1.2-2.4x slower here. */
@@ -110,25 +111,91 @@ BVH_INLINE bool bvh_isect_sphere(float4 c, float r, float3 o, float3 d, float tm
     return false;
 }
 
-/* Intersects one leaf; with any_hit it stops at the first hit. */
+/* Intersects one leaf, up to BVH_BLOCK_LANES primitives at a time, one per float4 lane (the block layout of
+   clrender/accel/primitives.py pack_leaf_blocks: row r of lane l of the block at leaf-order position b, of
+   c primitives, is word 10 b + r c + l); with any_hit it stops at the first hit. Each lane runs the same
+   watertight test as bvh_isect_triangle, in the same order of operations, so the guarantee holds per lane;
+   sphere lanes (rare) are tested one by one afterwards. */
 BVH_INLINE bool bvh_isect_leaf(__global const float4* prims, uint first, uint count, const BvhRay* r,
                                float tmin, Hit* hit, bool any_hit) {
+#pragma OPENCL FP_CONTRACT OFF
+#ifdef BVH_PROFILE_BOXES_ONLY
+    return false;   /* benchmarks/profile_pass.py: what traversal costs without the primitive tests */
+#endif
+    __global const float* words = (__global const float*)prims;
     bool found = false;
-    for (uint i = first; i < first + count; ++i) {
-        __global const float4* p = prims + 3 * i;
-        float4 r0 = p[0];
-        uint id = as_uint(r0.w);
-        bool h;
-        if (id & BVH_SPHERE_BIT) {
-            h = bvh_isect_sphere(r0, p[1].x, r->o, r->d, tmin, &hit->t);
-            if (h) { hit->u = 0.0f; hit->v = 0.0f; }
-        } else {
-            h = bvh_isect_triangle(r0, p[1], p[2], r, tmin, &hit->t, &hit->u, &hit->v);
+    uint end = first + count;
+    for (uint b = first; b < end; b += 4u) {
+        uint c = end - b < 4u ? end - b : 4u;
+        __global const float* q = words + 10u * b;
+#ifdef BVH_LEAF_SCALAR
+        /* benchmarks only (benchmarks/ab_pass.py): the same blocks, one primitive at a time */
+        for (uint l = 0u; l < c; ++l) {
+            uint sid = as_uint(q[9u * c + l]);
+            float4 p0 = (float4)(q[l], q[c + l], q[2u * c + l], 0.0f);
+            bool h;
+            if (sid & BVH_SPHERE_BIT) {
+                h = bvh_isect_sphere(p0, q[3u * c + l], r->o, r->d, tmin, &hit->t);
+                if (h) { hit->u = 0.0f; hit->v = 0.0f; }
+            } else {
+                float4 p1 = (float4)(q[3u * c + l], q[4u * c + l], q[5u * c + l], 0.0f);
+                float4 p2 = (float4)(q[6u * c + l], q[7u * c + l], q[8u * c + l], 0.0f);
+                h = bvh_isect_triangle(p0, p1, p2, r, tmin, &hit->t, &hit->u, &hit->v);
+            }
+            if (h) {
+                hit->prim = sid;
+                found = true;
+                if (any_hit) return true;
+            }
         }
-        if (h) {
-            hit->prim = id;
+        continue;
+#endif
+        int4 live = (int4)(0, 1, 2, 3) < (int4)((int)c);
+        uint4 id = as_uint4(vload4(0, q + 9u * c));
+        int4 tri = live & ((id & (uint4)(BVH_SPHERE_BIT)) == (uint4)(0u));
+        uint kx = (uint)r->kx * c, ky = (uint)r->ky * c, kz = (uint)r->kz * c, c3 = 3u * c;
+        float4 okx = (float4)(r->okx), oky = (float4)(r->oky), okz = (float4)(r->okz);
+        float4 sx = (float4)(r->sx), sy = (float4)(r->sy);
+        float4 az = vload4(0, q + kz) - okz, bz = vload4(0, q + c3 + kz) - okz, cz = vload4(0, q + 2u * c3 + kz) - okz;
+        float4 ax = vload4(0, q + kx) - okx - sx * az, ay = vload4(0, q + ky) - oky - sy * az;
+        float4 bx = vload4(0, q + c3 + kx) - okx - sx * bz, by = vload4(0, q + c3 + ky) - oky - sy * bz;
+        float4 cx = vload4(0, q + 2u * c3 + kx) - okx - sx * cz, cy = vload4(0, q + 2u * c3 + ky) - oky - sy * cz;
+        float4 e0 = cx * by - cy * bx;     /* edge p1 p2: weight of p0 */
+        float4 e1 = ax * cy - ay * cx;     /* edge p2 p0: weight of p1 */
+        float4 e2 = bx * ay - by * ax;     /* edge p0 p1: weight of p2 */
+        float4 zero = (float4)(0.0f);
+        int4 out = ((e0 < zero) | (e1 < zero) | (e2 < zero)) & ((e0 > zero) | (e1 > zero) | (e2 > zero));
+        float4 det = e0 + e1 + e2;
+        float4 tt = (e0 * az + e1 * bz + e2 * cz) * (float4)(r->sz);
+        int4 neg = det < zero;
+        float4 adet = neg ? -det : det, att = neg ? -tt : tt;
+        /* det = 0 (ray in the triangle's plane) or NaN fails here too */
+        int4 ok = tri & ~out & (att > (float4)(tmin) * adet) & (att < (float4)(hit->t) * adet);
+        if (any(ok)) {
+            float4 inv = (float4)(1.0f) / det;
+            float4 t4 = ok ? tt * inv : (float4)(INFINITY);
+            float m = bvh_min(bvh_min(t4.x, t4.y), bvh_min(t4.z, t4.w));
+            int l = t4.x == m ? 0 : (t4.y == m ? 1 : (t4.z == m ? 2 : 3));
+            float4 u4 = e1 * inv, v4 = e2 * inv;
+            float lane_u = l == 0 ? u4.x : (l == 1 ? u4.y : (l == 2 ? u4.z : u4.w));
+            float lane_v = l == 0 ? v4.x : (l == 1 ? v4.y : (l == 2 ? v4.z : v4.w));
+            uint lane_id = l == 0 ? id.x : (l == 1 ? id.y : (l == 2 ? id.z : id.w));
+            hit->t = m; hit->u = lane_u; hit->v = lane_v; hit->prim = lane_id;
             found = true;
             if (any_hit) return true;
+        }
+        int4 sph = live & ~tri;
+        if (any(sph)) {
+            for (uint l = 0u; l < c; ++l) {
+                uint sid = l == 0u ? id.x : (l == 1u ? id.y : (l == 2u ? id.z : id.w));
+                if (!(sid & BVH_SPHERE_BIT)) continue;
+                float4 centre = (float4)(q[l], q[c + l], q[2u * c + l], 0.0f);
+                if (bvh_isect_sphere(centre, q[c3 + l], r->o, r->d, tmin, &hit->t)) {
+                    hit->u = 0.0f; hit->v = 0.0f; hit->prim = sid;
+                    found = true;
+                    if (any_hit) return true;
+                }
+            }
         }
     }
     return found;

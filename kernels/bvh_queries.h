@@ -19,4 +19,14 @@ bool bvh_any_hit(__global const float4* nodes, __global const float4* prims, flo
     return BVH_TRAVERSE(nodes, prims, o, d, tmin, tmax, &h, true);
 }
 
+/* Profiling builds only (benchmarks/profile_pass.py): BVH_RECORD(kind, o, d, tmin, tmax) sees every query
+   before it runs (kind 0 = closest hit, 1 = any hit). A macro of the functions' own names, so the callers
+   in scene.h stay as they are; it does not expand inside itself, so the inner calls are the functions. */
+#ifdef BVH_RECORD
+#define bvh_closest_hit(nodes, prims, o, d, tmin, tmax, hit) \
+    (BVH_RECORD(0u, (o), (d), (tmin), (tmax)), bvh_closest_hit((nodes), (prims), (o), (d), (tmin), (tmax), (hit)))
+#define bvh_any_hit(nodes, prims, o, d, tmin, tmax) \
+    (BVH_RECORD(1u, (o), (d), (tmin), (tmax)), bvh_any_hit((nodes), (prims), (o), (d), (tmin), (tmax)))
+#endif
+
 #endif

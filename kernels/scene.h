@@ -6,16 +6,19 @@
 #include "frame.h"
 #include "camera.h"
 /* BVH_WIDTH picks the node table the host packed (SceneBuffers.bvh_width): 4 = kernels/bvh4.h (default),
-   2 = kernels/bvh.h. Both define bvh_closest_hit / bvh_any_hit over the same primitive table. */
+   8 = kernels/bvh8.h, 2 = kernels/bvh.h. All define bvh_closest_hit / bvh_any_hit over the same primitive
+   table. */
 #ifndef BVH_WIDTH
 #define BVH_WIDTH 4
 #endif
 #if BVH_WIDTH == 4
 #include "bvh4.h"
+#elif BVH_WIDTH == 8
+#include "bvh8.h"
 #elif BVH_WIDTH == 2
 #include "bvh.h"
 #else
-#error "BVH_WIDTH must be 2 or 4"
+#error "BVH_WIDTH must be 2, 4 or 8"
 #endif
 
 /* SceneData (the scene's tables), SCENE_ARGS (the kernel-argument list of a scene: every entry point that needs

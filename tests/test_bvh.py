@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from clrender.accel.bvh import LEAF_FLAG, build_bvh
-from clrender.accel.primitives import SPHERE_FLAG, pack_primitives, primitive_bounds
+from clrender.accel.primitives import SPHERE_FLAG, bvh_leaves, pack_leaf_blocks, pack_primitives, primitive_bounds
 
 LOCAL = 64
 
@@ -182,13 +182,23 @@ def make_tracer(ctx, width):
 
     from clrender.device.program import build_program
 
-    src = TRACE_SRC if width == 2 else TRACE_SRC.replace('#include "bvh.h"', '#include "bvh4.h"')
+    src = TRACE_SRC if width == 2 else TRACE_SRC.replace('#include "bvh.h"', f'#include "bvh{width}.h"')
     return Tracer(cl.Kernel(build_program(ctx, src), "trace"), width)
 
 
-@pytest.fixture(scope="module", params=[2, 4], ids=["bvh2", "bvh4"])
+def wide_nodes(bvh, width):
+    """The node table the kernel of `width` reads (the binary tree itself for 2)."""
+    if width == 2:
+        return bvh
+    from clrender.accel.bvh4 import collapse_bvh4
+    from clrender.device.layout import ENUMS
+
+    return _Nodes(collapse_bvh4(bvh, ENUMS[f"BVH{width}_STACK_SIZE"], width=width).nodes)
+
+
+@pytest.fixture(scope="module", params=[2, 4, 8], ids=["bvh2", "bvh4", "bvh8"])
 def trace_kernel(ctx, request):
-    """Every traversal test below runs against both the 2-wide and the 4-wide kernel."""
+    """Every traversal test below runs against the 2-, 4- and 8-wide kernels."""
     return make_tracer(ctx, request.param)
 
 
@@ -222,7 +232,7 @@ def device_trace(ctx, queue, kernel, bvh, prims, o, d, tmin, tmax):
 def build_scene(v0, v1, v2, spheres, **kw):
     lo, hi = primitive_bounds(v0, v1, v2, spheres)
     bvh = build_bvh(lo, hi, **kw)
-    return bvh, pack_primitives(v0, v1, v2, spheres, bvh.order)
+    return bvh, pack_leaf_blocks(v0, v1, v2, spheres, bvh.order, *bvh_leaves(bvh))
 
 
 class _Nodes:
@@ -242,6 +252,14 @@ def check_trace(ctx, queue, tracer, v0, v1, v2, spheres, o, d, tmin, tmax, max_a
         b4 = collapse_bvh4(bvh)
         check_invariants4(b4, *bounds, bvh.order, kw.get("max_leaf_size", 4))
         tree = _Nodes(b4.nodes)
+    elif tracer.width == 8:
+        from clrender.accel.bvh4 import collapse_bvh4
+        from clrender.device.layout import ENUMS
+        from test_bvh4 import check_invariants4
+
+        b8 = collapse_bvh4(bvh, ENUMS["BVH8_STACK_SIZE"], width=8)
+        check_invariants4(b8, *bounds, bvh.order, kw.get("max_leaf_size", 4), width=8)
+        tree = _Nodes(b8.nodes)
     out, prim, any_ = device_trace(ctx, queue, tracer.kernel, tree, prims, o, d, tmin, tmax)
     return compare_with_reference(out, prim, any_, v0, v1, v2, spheres, o, d, tmin, tmax, max_ambiguous)
 
@@ -355,6 +373,30 @@ def test_primitive_packing():
     assert np.allclose(p[0, 0, :3], sp[1, :3]) and np.isclose(p[0, 1, 0], sp[1, 3])
     lo, hi = primitive_bounds(v0, v1, v2, sp)
     assert (lo[3] < sp[0, :3] - sp[0, 3] + 1e-6).all() and (hi[3] >= (sp[0, :3] + sp[0, 3]).astype(np.float32)).all()
+
+
+def test_leaf_blocks_layout():
+    # Word 10 s + r c + l of the device table is row r of lane l of the block of c primitives at s; rows
+    # 0..8 the vertices, row 9 the id, exactly the words of the 3-row table, for leaves of 1..9 primitives.
+    rng = np.random.default_rng(1)
+    v0, v1, v2 = random_soup(rng, 40)
+    sp = random_spheres(rng, 5)
+    order = rng.permutation(45)
+    count = np.array([1, 2, 3, 4, 5, 6, 7, 8, 9])
+    first = np.concatenate([[0], np.cumsum(count)[:-1]])
+    perm = rng.permutation(len(count))                     # leaves may come in any order
+    words = pack_leaf_blocks(v0, v1, v2, sp, order, first[perm], count[perm]).reshape(-1).view(np.uint32)
+    rows = pack_primitives(v0, v1, v2, sp, order).reshape(-1, 3, 4).view(np.uint32)
+    want = np.concatenate([rows[:, 0, :3], rows[:, 1, :3], rows[:, 2, :3], rows[:, 0, 3:]], axis=1)
+    for f, n in zip(first, count):
+        for s in range(f, f + n, 4):
+            c = min(4, f + n - s)
+            for lane in range(c):
+                got = [words[10 * s + r * c + lane] for r in range(10)]
+                assert got == list(want[s + lane]), (f, n, s, lane)
+    assert len(words) >= 10 * 45 + 3                       # a 4-word load at the last row stays inside
+    with pytest.raises(ValueError, match="exactly once"):
+        pack_leaf_blocks(v0, v1, v2, sp, order, first, count + 1)
 
 
 # ---------------------------------------------------------------------------------------------- traversal

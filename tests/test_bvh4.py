@@ -10,9 +10,9 @@ from test_bvh import check_trace, icosphere, make_tracer, random_rays, random_so
 
 
 # -------------------------------------------------------------------------------------- host invariants
-def check_invariants4(b4, lo, hi, order, max_leaf):
+def check_invariants4(b4, lo, hi, order, max_leaf, width=4):
     N = len(lo)
-    nodes = b4.nodes.reshape(-1, NODE_ROWS, 4)
+    nodes = b4.nodes.reshape(-1, NODE_ROWS if width == 4 else 7, width)
     K = b4.node_count
     assert len(nodes) == K and K >= 1
     blo = np.stack([nodes[:, 0], nodes[:, 2], nodes[:, 4]], -1)          # (K, 4 children, 3)

@@ -24,12 +24,12 @@ from clrender.loader import load_scene
 from clrender.pack import pack_scene
 from clrender.renderer import Renderer
 from clrender.testing.stats import compare_mean_to_value
-from test_bvh import _Nodes, build_scene, device_trace, make_tracer
+from test_bvh import build_scene, device_trace, make_tracer, wide_nodes
 
 LOCAL = 64
 
 
-@pytest.fixture(scope="module", params=[2, 4], ids=["bvh2", "bvh4"])
+@pytest.fixture(scope="module", params=[2, 4, 8], ids=["bvh2", "bvh4", "bvh8"])
 def tracer(ctx, request):
     return make_tracer(ctx, request.param)
 
@@ -131,11 +131,7 @@ def test_rays_at_shared_edges_and_vertices_never_miss(ctx, queue, tracer, mesh):
     rng = np.random.default_rng(sorted(MESHES).index(mesh))
     v0, v1, v2 = (verts[tris[:, i]] for i in range(3))
     bvh, prims = build_scene(v0, v1, v2, None)
-    tree = bvh
-    if tracer.width == 4:
-        from clrender.accel.bvh4 import collapse_bvh4
-
-        tree = _Nodes(collapse_bvh4(bvh).nodes)
+    tree = wide_nodes(bvh, tracer.width)
     o, d, inside = aimed_rays(verts, tris, rng)
     n = len(o)
     tmin, tmax = np.zeros(n), np.full(n, np.inf)
@@ -158,11 +154,7 @@ def test_open_mesh_is_still_missed_beside_its_border(ctx, queue, tracer):
     top = tris[verts[tris].mean(axis=1)[:, 2] > 0.999]       # only the face z = 1: an open square, x in [-1, 1]
     v0, v1, v2 = (verts[top[:, i]] for i in range(3))
     bvh, prims = build_scene(v0, v1, v2, None)
-    tree = bvh
-    if tracer.width == 4:
-        from clrender.accel.bvh4 import collapse_bvh4
-
-        tree = _Nodes(collapse_bvh4(bvh).nodes)
+    tree = wide_nodes(bvh, tracer.width)
     rng = np.random.default_rng(3)
     m = 2000
     x = np.full(m, 1.0, np.float32)
@@ -207,7 +199,7 @@ __kernel void spawn(SCENE_ARGS, uint n, __global const float4* org, __global con
 """
 
 
-@pytest.fixture(scope="module", params=[2, 4], ids=["bvh2", "bvh4"])
+@pytest.fixture(scope="module", params=[2, 4, 8], ids=["bvh2", "bvh4", "bvh8"])
 def spawn_kernel(ctx, request):
     """The spawn kernel built for one BVH width (scene.h picks the traversal by BVH_WIDTH), and that width."""
     prg = build_program(ctx, SPAWN_SRC, defines={"BVH_WIDTH": request.param})

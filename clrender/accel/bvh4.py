@@ -81,7 +81,12 @@ def _half_area(lo, hi):
     return d[..., 0] * d[..., 1] + d[..., 1] * d[..., 2] + d[..., 2] * d[..., 0]
 
 
-def collapse_bvh4(bvh: BVH, stack_size: int = KERNEL_STACK_SIZE) -> BVH4:
+def collapse_bvh4(bvh: BVH, stack_size: int = KERNEL_STACK_SIZE, width: int = 4) -> BVH4:
+    """The 4-wide table described above; ``width=8`` gives the 8-wide table of kernels/bvh8.h instead (the
+    same collapse opening six children instead of two; node k is rows 14k .. 14k+13: lo.x, hi.x, lo.y, hi.y,
+    lo.z, hi.z and the references of children 0..7, eight floats each, 224 bytes)."""
+    if width not in (4, 8):
+        raise ValueError(f"width must be 4 or 8, got {width}")
     t0 = time.perf_counter()
     n2 = bvh.nodes.reshape(-1, 4, 4)
     u2 = n2.view(np.uint32)
@@ -110,10 +115,10 @@ def collapse_bvh4(bvh: BVH, stack_size: int = KERNEL_STACK_SIZE) -> BVH4:
     while len(batch):
         B = len(batch)
         rows = np.arange(B)
-        slot = np.full((B, 4), -1, np.int64)
+        slot = np.full((B, width), -1, np.int64)
         slot[:, 0], slot[:, 1] = 2 * batch, 2 * batch + 1
         used = np.full(B, 2)
-        for _ in range(2):
+        for _ in range(width - 2):
             area = np.where(slot >= 0, s_area[slot], np.float32(-1.0))
             j = np.argmax(area, axis=1)
             ok = area[rows, j] >= 0                             # an interior child to open
@@ -145,21 +150,21 @@ def collapse_bvh4(bvh: BVH, stack_size: int = KERNEL_STACK_SIZE) -> BVH4:
     K = len(slot)
     valid = slot >= 0
     sv = slot[valid]
-    ref = np.zeros((K, 4), np.uint32)
+    ref = np.zeros((K, width), np.uint32)
     leaf = np.zeros_like(valid)
     leaf[valid] = ~s_inner[sv]
     first = (s_ref[slot[leaf]] & np.uint32(~np.uint32(LEAF_FLAG))).astype(np.int64)
     ref[leaf] = encode_leaf(first, s_cnt[slot[leaf]])
     # Interior children, row-major over the levels in order, are nodes 1, 2, ... (what n_total counted).
     ref[inner] = np.arange(1, 1 + int(inner.sum()), dtype=np.uint32)
-    lo = np.full((K, 4, 3), EMPTY_LO, np.float32)
-    hi = np.full((K, 4, 3), EMPTY_HI, np.float32)
+    lo = np.full((K, width, 3), EMPTY_LO, np.float32)
+    hi = np.full((K, width, 3), EMPTY_HI, np.float32)
     lo[valid], hi[valid] = s_lo[sv], s_hi[sv]
-    nodes = np.zeros((K, NODE_ROWS, 4), np.float32)
+    nodes = np.zeros((K, NODE_ROWS if width == 4 else 7, width), np.float32)
     for a in range(3):
         nodes[:, 2 * a] = lo[:, :, a]
         nodes[:, 2 * a + 1] = hi[:, :, a]
     nodes[:, 6] = ref.view(np.float32)
     leaf_count = int(leaf.sum())
-    return BVH4(nodes=nodes.reshape(NODE_ROWS * K, 4), node_count=K, depth=len(levels), stack_need=stack_need,
+    return BVH4(nodes=nodes.reshape(-1, 4), node_count=K, depth=len(levels), stack_need=stack_need,
                 collapse_seconds=time.perf_counter() - t0, leaf_count=leaf_count)

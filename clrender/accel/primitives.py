@@ -1,8 +1,10 @@
 """Primitive bounds and the packed primitive table the traversal kernels read.
 
 Two primitive kinds share one index space: triangles first (ids 0..T-1), then analytic spheres (ids 0..S-1,
-told apart by bit 31 of the id word). The BVH is built over the boxes from :func:`primitive_bounds` and the
-kernel reads primitives in BVH leaf order from :func:`pack_primitives`, three ``float4`` rows each:
+told apart by bit 31 of the id word). The BVH is built over the boxes from :func:`primitive_bounds`; the
+kernels read the primitives in BVH leaf order from :func:`pack_leaf_blocks` (the same words, 40 bytes each,
+blocked by leaf so that four are tested at once). :func:`pack_primitives` gives them one per row, three
+``float4`` rows each (what the tests' reference tracer reads):
 
 ======== ================================ ================== ==============
 kind     row 0                            row 1              row 2
@@ -79,3 +81,62 @@ def pack_primitives(tri_v0, tri_v1, tri_v2, spheres, order):
     out[~tri, 1, 0] = np.abs(s[sj, 3])
     bits[~tri, 0, 3] = sj.astype(np.uint32) | SPHERE_FLAG
     return out.reshape(3 * (T + S), 4)
+
+
+# ---------------------------------------------------------------------------------------- the device's table
+BLOCK_LANES = 4        # primitives tested together, one per float4 lane (kernels/bvh_common.h)
+# build_bvh options for this table: with up to four primitives tested at the price of about one, a leaf of
+# 3-4 beats another node level more often than the builder's default cost ratio (1) says. Measured in
+# benchmarks/README.md ("Trace speed and memory"): faster on the Cornell twin and the 1 M mesh, and half
+# the nodes.
+BUILD_OPTIONS = {"traversal_cost": 2.5}
+BLOCK_WORDS = 10       # words per primitive: v0.xyz, v1.xyz, v2.xyz, id
+
+
+def bvh_leaves(bvh):
+    """``(first, count)`` int64 arrays of the leaves of a binary BVH (``BVH.nodes`` of clrender.accel.bvh)."""
+    from .bvh import LEAF_FLAG
+
+    u = np.asarray(bvh.nodes).reshape(-1, 4, 4).view(np.uint32)
+    ref = u[:, [0, 2], 3].reshape(-1)
+    cnt = u[:, [1, 3], 3].reshape(-1).astype(np.int64)
+    leaf = ((ref & np.uint32(LEAF_FLAG)) != 0) & (cnt > 0)
+    return (ref[leaf] & np.uint32(~np.uint32(LEAF_FLAG))).astype(np.int64), cnt[leaf]
+
+
+def pack_leaf_blocks(tri_v0, tri_v1, tri_v2, spheres, order, leaf_first, leaf_count):
+    """The primitive table the traversal kernels read: ``BLOCK_WORDS`` (40 bytes) per primitive, in leaf
+    ``order``, as float32 rows of 4 (padded so that a 4-float load at any row start stays inside).
+
+    Each leaf (``leaf_first``, ``leaf_count``: ranges of the leaf order, e.g. from :func:`bvh_leaves`) is cut
+    into blocks of up to ``BLOCK_LANES`` primitives; a block of c primitives starting at leaf-order position s
+    takes words 10 s .. 10 (s + c) - 1 as ten rows of c words, structure of arrays::
+
+        row 0..2: v0.x, v0.y, v0.z of its primitives    row 3..5: v1.xyz    row 6..8: v2.xyz    row 9: id
+
+    so word 10 s + r c + l is row r of lane l, and one 4-float load per row feeds all lanes (lanes >= c are
+    read but ignored). A sphere lane holds its centre in rows 0..2 and its radius in row 3; the id word is
+    as in :func:`pack_primitives` (sphere ids have bit 31 set). 40 bytes per primitive, no padding, and a
+    block's 10 c words are contiguous: the same cache lines as the 3-row table of :func:`pack_primitives`,
+    one ``float4`` per primitive fewer."""
+    aos = pack_primitives(tri_v0, tri_v1, tri_v2, spheres, order).reshape(-1, 3, 4)
+    n = len(aos)
+    first = np.asarray(leaf_first, np.int64)
+    count = np.asarray(leaf_count, np.int64)
+    if count.sum() != n or (n and not np.array_equal(np.sort(first), np.concatenate([[0], np.cumsum(
+            count[np.argsort(first)])[:-1]]))):
+        raise ValueError(f"the leaves must cover the {n} primitives of the leaf order exactly once")
+    # Per leaf-order position: its leaf's first and count, then its block's start s, size c and lane l.
+    lf = np.repeat(first, count)
+    lc = np.repeat(count, count)
+    pos = np.repeat(first - np.cumsum(np.concatenate([[0], count[:-1]])), count) + np.arange(n)
+    rel = pos - lf
+    s = lf + rel // BLOCK_LANES * BLOCK_LANES
+    c = np.minimum(BLOCK_LANES, lf + lc - s)
+    lane = pos - s
+    bits = aos.view(np.uint32)[pos]                 # moved as bits: ids are not floats
+    words = np.concatenate([bits[:, 0, :3], bits[:, 1, :3], bits[:, 2, :3], bits[:, 0, 3:]], axis=1)
+    out = np.zeros(((BLOCK_WORDS * n + BLOCK_LANES) // 4 + 1) * 4, np.uint32)
+    at = BLOCK_WORDS * s[:, None] + np.arange(BLOCK_WORDS)[None, :] * c[:, None] + lane[:, None]
+    out[at] = words
+    return out.view(np.float32).reshape(-1, 4)

@@ -54,6 +54,7 @@ ENUMS: dict[str, int] = {
     "BVH_SPHERE_BIT": 0x80000000,     # a primitive id of an analytic sphere
     "BVH_STACK_SIZE": 64,             # 2-wide traversal stack (the builder keeps the depth below it)
     "BVH4_STACK_SIZE": 64,            # 4-wide traversal stack (the collapse checks the tree needs no more)
+    "BVH8_STACK_SIZE": 96,            # 8-wide traversal stack (likewise)
     "BVH4_COUNT_SHIFT": 27,           # 4-wide leaf reference: LEAF_BIT | (count - 1) << 27 | first
     "BVH4_MAX_LEAF_COUNT": 16,
 }

@@ -1,0 +1,180 @@
+"""Where the time of a path tracing pass goes: the rays one pass traces, recorded once and cast again alone.
+
+    python benchmarks/profile_pass.py [--repeat 9] [--label NAME] [--json OUT] [--scene XML]
+
+On the Cornell twin of benchmarks/vs_mitsuba.py (mirror and glass spheres, 256x256, path_mis; or --scene),
+one pass (one sample per pixel, a fixed sample number, so every repeat does the same work) is recorded with
+every BVH query it makes (camera, bounce and shadow rays; kernels/bvh_queries.h BVH_RECORD), in order, per
+pixel. Then, interleaved, --repeat times each, one work-item per pixel as in the pass:
+- pass:      the render kernel itself (render_pass, 1 spp);
+- cast:      the recorded rays only, closest hit or any hit as recorded (traversal + primitive tests);
+- boxes:     the same rays with the primitive tests compiled out (BVH_PROFILE_BOXES_ONLY) and tmax = the hit
+             found by `cast`, so roughly the same nodes are visited: traversal alone;
+- setup:     the pass without its integrator: sampler, filter, camera ray, accumulation.
+Shares of the pass (medians): traversal = boxes, primitive tests = cast - boxes, camera/filter/accumulation =
+setup, shading + sampling + the integrator's own work = pass - cast - setup. Written to
+benchmarks/results/profile_pass-<date>[-label].json and printed.
+"""
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import json
+import os
+import platform
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+CAP = 64          # recorded rays per pixel (more are counted as dropped; a path that long is very rare)
+SAMPLE = 3        # the sample number every timed pass renders
+
+
+def _cpu() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--repeat", type=int, default=9)
+    ap.add_argument("--scene", help="a scene XML instead of the Cornell twin")
+    ap.add_argument("--label", default="")
+    ap.add_argument("--json")
+    ap.add_argument("--bvh", action="append", default=[], metavar="KEY=VALUE",
+                    help="a build_bvh option (e.g. traversal_cost=2), for trying builds")
+    args = ap.parse_args(argv)
+
+    import pyopencl as cl
+
+    import clrender
+    from clrender.device.kernelargs import KernelArgs
+    from clrender.device.program import build_program
+    from clrender.renderer import LOCAL_SIZE, Renderer
+
+    tmp = tempfile.TemporaryDirectory()
+    if args.scene:
+        xml = Path(args.scene)
+    else:
+        from vs_mitsuba import scene_xml, twin_cornell
+
+        d = Path(tmp.name)
+        xml = d / "clrender.xml"
+        xml.write_text(scene_xml(twin_cornell(d, 64), "nori"))
+    scene = clrender.load_scene(xml)
+    from clrender.pack import pack_scene
+
+    bvh_options = {k: float(v) if "." in v else int(v) for k, v in (o.split("=", 1) for o in args.bvh)}
+    r = Renderer(scene, buffers=pack_scene(scene, bvh_options=bvh_options) if bvh_options else None)
+    r.render(spp=1)                       # warm: build + first launch of render_pass
+    ctx, queue = r.ctx, r.queue
+    n = r.n_pixels
+    if n > r.launch_pixels:
+        raise SystemExit(f"{xml}: {n} pixels; this tool times one launch per kernel (at most {r.launch_pixels})")
+    gsize = (-(-n // LOCAL_SIZE) * LOCAL_SIZE,)
+    src = (ROOT / "benchmarks" / "profile_pass.cl").read_text()
+    prg = build_program(ctx, src, defines=r.defines)
+    prg_boxes = build_program(ctx, src, defines={**r.defines, "BVH_PROFILE_BOXES_ONLY": 1})
+    mf = cl.mem_flags
+    rw = mf.READ_WRITE
+    rec = cl.Buffer(ctx, rw, size=n * CAP * 32)
+    kind = cl.Buffer(ctx, rw, size=n * CAP * 4)
+    count = cl.Buffer(ctx, rw, size=n * 8)
+    hit_t = cl.Buffer(ctx, rw, size=n * CAP * 4)
+    out = cl.Buffer(ctx, rw, size=n * 4)
+    acc = [cl.Buffer(ctx, rw | mf.COPY_HOST_PTR, hostbuf=np.zeros((n, 4), np.float32)) for _ in range(2)]
+    bad = cl.Buffer(ctx, rw | mf.COPY_HOST_PTR, hostbuf=np.zeros(n, np.uint32))
+    dummy = cl.Buffer(ctx, rw | mf.COPY_HOST_PTR, hostbuf=np.zeros((1, 4), np.uint32))
+    u32 = np.uint32
+
+    k_rec = cl.Kernel(prg, "record_pass")
+    KernelArgs(k_rec).set_scene(r._scene_bufs).set(cam=r._camera, filter_cdf=r._filter, rec=rec, kind=kind,
+                                                    count=count, cap=u32(CAP), sample=u32(SAMPLE), seed=u32(0))
+    cl.enqueue_nd_range_kernel(queue, k_rec, gsize, (LOCAL_SIZE,))
+    counts = np.zeros((n, 2), np.uint32)
+    cl.enqueue_copy(queue, counts, count)
+    kinds = np.zeros(n * CAP, np.uint32)
+    cl.enqueue_copy(queue, kinds, kind)
+    valid = (np.arange(CAP)[None, :] < counts[:, :1]).reshape(-1)
+    n_closest = int(((kinds == 0) & valid).sum())
+    n_shadow = int(((kinds == 1) & valid).sum())
+    n_camera = int((counts[:, 0] > 0).sum())
+
+    def cast_kernel(p):
+        k = cl.Kernel(p, "cast_rays")
+        KernelArgs(k).set_scene(r._scene_bufs).set(rec=rec, kind=kind, count=count, cap=u32(CAP),
+                                                   n_pixels=u32(n), hit_t=hit_t, out=out)
+        return k
+
+    k_cast, k_boxes = cast_kernel(prg), cast_kernel(prg_boxes)
+    k_pass = r.kernel
+    r.args.set_scene(r._scene_bufs).set(cam=r._camera, filter_cdf=r._filter, acc0=acc[0], acc1=acc[1], bad=bad,
+                                        rays=dummy, pixel_offset=u32(0), pixel_count=u32(n),
+                                        sample_offset=u32(SAMPLE), spp=u32(1), seed=u32(0))
+    k_setup = cl.Kernel(prg, "setup_pass")
+    KernelArgs(k_setup).set(cam=r._camera, filter_cdf=r._filter, acc0=acc[0], acc1=acc[1], sample=u32(SAMPLE),
+                            seed=u32(0))
+    kernels = {"pass": k_pass, "cast": k_cast, "boxes": k_boxes, "setup": k_setup}
+    # cast first fills hit_t (the boxes-only build reads it); then one untimed launch of each to warm up.
+    for k in kernels.values():
+        cl.enqueue_nd_range_kernel(queue, k, gsize, (LOCAL_SIZE,))
+        queue.finish()
+    times = {name: [] for name in kernels}
+    load0 = os.getloadavg()
+    for _ in range(args.repeat):
+        for name, k in kernels.items():
+            t0 = time.perf_counter()
+            cl.enqueue_nd_range_kernel(queue, k, gsize, (LOCAL_SIZE,))
+            queue.finish()
+            times[name].append(time.perf_counter() - t0)
+    med = {k: statistics.median(v) for k, v in times.items()}
+    rays = n_closest + n_shadow
+    shares = {
+        "traversal (boxes)": med["boxes"],
+        "primitive tests (cast - boxes)": med["cast"] - med["boxes"],
+        "camera, filter, sampler, accumulation (setup)": med["setup"],
+        "shading, sampling, integrator (pass - cast - setup)": med["pass"] - med["cast"] - med["setup"],
+    }
+    res = {
+        "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
+        "label": args.label, "cpu": _cpu(), "cores": os.cpu_count(), "device": r.device_name,
+        "load_average": [load0, os.getloadavg()],
+        "scene": str(xml) if args.scene else "vs_mitsuba cornell_spheres twin (256x256, path_mis)",
+        "pixels": n, "sample": SAMPLE, "repeat": args.repeat, "defines": r.defines, "bvh_options": bvh_options,
+        "bvh": {k: v for k, v in r.buffers.stats.items() if k.startswith("bvh") or k in ("triangles", "spheres")},
+        "rays": {"camera": n_camera, "closest_other": n_closest - n_camera, "shadow": n_shadow, "total": rays,
+                 "dropped": int(counts[:, 1].sum()), "per_sample": rays / n},
+        "seconds_median": med, "seconds_all": times,
+        "cast_rays_per_second": rays / med["cast"], "pass_samples_per_second": n / med["pass"],
+        "shares_of_pass": {k: v / med["pass"] for k, v in shares.items()},
+    }
+    date = dt.date.today().isoformat()
+    path = Path(args.json) if args.json else (
+        ROOT / "benchmarks" / "results" / f"profile_pass-{date}{'-' + args.label if args.label else ''}.json")
+    path.write_text(json.dumps(res, indent=1) + "\n")
+    print(f"{res['scene']}: {rays} rays in one pass ({rays / n:.2f} per sample: {n_camera} camera, "
+          f"{n_closest - n_camera} bounce, {n_shadow} shadow; {res['rays']['dropped']} not recorded)")
+    print(f"{'kernel':8s} {'median ms':>10s}")
+    for k, v in med.items():
+        print(f"{k:8s} {v * 1e3:10.2f}")
+    print(f"pass {n / med['pass'] / 1e6:.3f} M samples/s; cast alone {rays / med['cast'] / 1e6:.2f} M rays/s")
+    for k, v in shares.items():
+        print(f"  {v / med['pass'] * 100:5.1f} %  {k}")
+    print(f"-> {path}")
+
+
+if __name__ == "__main__":
+    main()
