@@ -1,8 +1,9 @@
 """Scene objects -> SceneBuffers: the flat numpy tables the kernels read (see kernels/scene.h).
 
-This is the only place where Python objects become device data. Shapes are numbered in document order;
-BSDFs are shared by identity; area emitters point at their shape and own a slice of the triangle-area CDF
-table; the BVH is built over all triangles and spheres together.
+This is where Python objects become device data. Shapes are numbered in document order and pack their own
+geometry (clrender/shapes/); BSDFs are shared by identity; area emitters point at their shape, which samples its
+own surface; plugins append rows to the scene's tables through PackContext.add_table; the BVH is built over all
+triangles and spheres together.
 """
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from .accel.bvh import build_bvh
 from .accel.bvh4 import Bvh4Unsupported, collapse_bvh4
 from .accel.primitives import pack_primitives, primitive_bounds
 from .device import dispatch, layout
-from .device.layout import ENUMS, NONE
+from .device.layout import NONE
 from .filters.filter import with_guide
 from .textures.texture import TextureTable
 
@@ -56,18 +57,39 @@ class SceneBuffers:
 
 
 class PackContext:
-    """Handed to emitter plugins while packing so they can add rows to shared tables."""
+    """The scene's tables being packed (layout.SCENE_TABLES): shapes, emitters and textures append their rows with
+    add_table and keep the offset they get; pack_scene then reads each table as one array."""
 
     def __init__(self):
-        self.cdf_chunks: list[np.ndarray] = []
-        self.cdf_size = 0
+        self._chunks: dict[str, list[np.ndarray]] = {n: [] for n, _, _ in layout.SCENE_TABLES}
+        self._sizes = dict.fromkeys(self._chunks, 0)
+        self.textures = TextureTable()
 
-    def add_cdf(self, values: np.ndarray) -> int:
-        off = self.cdf_size
-        values = np.asarray(values, np.float32)
-        self.cdf_chunks.append(values)
-        self.cdf_size += len(values)
+    def add_table(self, name: str, dtype: str, rows) -> int:
+        """Append `rows` to table `name`, whose element type must be `dtype` as SCENE_TABLES declares it (a
+        check that the caller and the kernel agree); returns the offset of the first row."""
+        declared = next(t for n, t, _ in layout.SCENE_TABLES if n == name) if name in self._chunks else None
+        if declared is None:
+            raise KeyError(f"no scene table {name!r}; the tables are {list(self._chunks)}")
+        if dtype != declared:
+            raise TypeError(f"scene table {name!r} holds {declared}, not {dtype}")
+        np_type, shape = layout.table_element(name)
+        rows = np.asarray(rows, np_type).reshape((-1,) + shape)
+        off = self._sizes[name]
+        self._chunks[name].append(rows)
+        self._sizes[name] += len(rows)
         return off
+
+    def size(self, name: str) -> int:
+        return self._sizes[name]
+
+    def array(self, name: str) -> np.ndarray:
+        """Table `name` as one contiguous array (OpenCL has no zero-sized buffers: an empty table is one zero row)."""
+        np_type, shape = layout.table_element(name)
+        chunks = self._chunks[name]
+        if not chunks:
+            return np.zeros((1,) + shape, np_type)
+        return np.ascontiguousarray(np.concatenate(chunks))
 
 
 def _nonempty(a: np.ndarray, dtype=None, shape=None) -> np.ndarray:
@@ -88,63 +110,24 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
         raise ValueError(f"bvh_width must be 2 or 4, got {bvh_width}")
     t0 = time.perf_counter()
     shapes = scene.shapes
+    ctx = PackContext()
+    flags = dispatch.flag_defines()
     bsdf_index: dict[int, int] = {}
     bsdf_rows = []
     shape_rows = layout.zeros("Shape", len(shapes))
-    pos_chunks, nrm_chunks, uv_chunks, idx_chunks, tri_chunks = [], [], [], [], []
-    spheres, sphere_shape = [], []
-    n_vert = 0
-    n_tri = 0
-    textures = TextureTable()
     for i, sh in enumerate(shapes):
         key = id(sh.bsdf)
         if key not in bsdf_index:
             bsdf_index[key] = len(bsdf_rows)
-            bsdf_rows.append(sh.bsdf.pack(textures))
+            bsdf_rows.append(sh.bsdf.pack(ctx.textures))
         row = shape_rows[i]
         row["bsdf"] = bsdf_index[key]
         row["emitter"] = NONE
-        if sh.is_sphere:
-            row["flags"] = ENUMS["SHAPE_SPHERE"]
-            row["first"], row["count"] = len(spheres), 1
-            spheres.append([*sh.center, sh.radius])
-            sphere_shape.append(i)
-            continue
-        m = sh.mesh
-        nv, nf = len(m.positions), len(m.faces)
-        flags = 0
-        p4 = np.zeros((nv, 4), np.float32)
-        p4[:, :3] = m.positions
-        pos_chunks.append(p4)
-        n4 = np.zeros((nv, 4), np.float32)
-        if m.normals is not None:
-            flags |= ENUMS["SHAPE_HAS_NORMALS"]
-            n4[:, :3] = m.normals
-        nrm_chunks.append(n4)
-        if m.uvs is not None:
-            flags |= ENUMS["SHAPE_HAS_UVS"]
-            uv_chunks.append(np.asarray(m.uvs, np.float32))
-        else:
-            uv_chunks.append(np.zeros((nv, 2), np.float32))
-        idx = np.empty((nf, 4), np.uint32)
-        idx[:, :3] = m.faces + n_vert
-        idx[:, 3] = i
-        idx_chunks.append(idx)
-        tri_chunks.append(m.positions[m.faces])  # (nf, 3, 3)
-        row["flags"] = flags
-        row["first"], row["count"] = n_tri, nf
-        n_vert += nv
-        n_tri += nf
-
-    positions = np.concatenate(pos_chunks) if pos_chunks else np.zeros((0, 4), np.float32)
-    normals = np.concatenate(nrm_chunks) if nrm_chunks else np.zeros((0, 4), np.float32)
-    uvs = np.concatenate(uv_chunks) if uv_chunks else np.zeros((0, 2), np.float32)
-    tri_index = np.concatenate(idx_chunks) if idx_chunks else np.zeros((0, 4), np.uint32)
-    tris = np.concatenate(tri_chunks).astype(np.float32) if tri_chunks else np.zeros((0, 3, 3), np.float32)
-    sph = np.asarray(spheres, np.float32).reshape(-1, 4)
+        sh.pack(ctx, i, row)
+        if bsdf_rows[row["bsdf"]]["flags"] & flags["BSDF_UV"]:
+            row["flags"] |= flags["SHAPE_NEEDS_UV"]
 
     # Emitters: area emitters in shape order, then the scene-level ones in document order.
-    ctx = PackContext()
     emitter_rows = []
     for i, sh in enumerate(shapes):
         if sh.emitter is not None:
@@ -152,6 +135,12 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
             emitter_rows.append(sh.emitter.pack(ctx, shape_index=i, shape=sh, shape_row=shape_rows[i]))
     for em in scene.emitters:
         emitter_rows.append(em.pack(ctx, shape_index=NONE, shape=None, shape_row=None))
+
+    # The BVH's primitives: every triangle (its tri_index row is its id) and every sphere.
+    tri_index = ctx.array("tri_index")[:ctx.size("tri_index")]
+    positions = ctx.array("positions")
+    tris = positions[:, :3][tri_index[:, :3]] if len(tri_index) else np.zeros((0, 3, 3), np.float32)
+    sph = ctx.array("spheres")[:ctx.size("spheres")]
 
     t_bvh = time.perf_counter()
     lo, hi = primitive_bounds(tris[:, 0], tris[:, 1], tris[:, 2], sph)
@@ -185,17 +174,14 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     camera, filter_cdf = scene.camera.pack()
     filter_cdf = with_guide(filter_cdf)     # + the guide that render.cl's filter_sample_guided reads
     emitters = np.array(emitter_rows, layout.dtype("Emitter")) if emitter_rows else layout.zeros("Emitter")
-    cdf = np.concatenate(ctx.cdf_chunks) if ctx.cdf_chunks else np.zeros(1, np.float32)
     stats = {
         "triangles": int(len(tris)), "spheres": int(len(sph)), "shapes": len(shapes),
         "emitters": len(emitter_rows), "bvh_nodes": int(node_count), "bvh_depth": int(bvh.depth),
         "bvh_width": bvh_width,
         "bvh_build_seconds": float(t_bvh), "pack_seconds": float(time.perf_counter() - t0),
     }
-    tables = dict(
-        nodes=_nonempty(nodes), prims=_nonempty(prims), positions=_nonempty(positions),
-        normals=_nonempty(normals), uvs=_nonempty(uvs), tri_index=_nonempty(tri_index),
-        spheres=_nonempty(sph), sphere_shape=_nonempty(np.asarray(sphere_shape, np.uint32)),
-        shapes=_nonempty(shape_rows), bsdfs=np.array(bsdf_rows, layout.dtype("Bsdf")) if bsdf_rows
-        else layout.zeros("Bsdf"), emitters=emitters, emitter_cdf=cdf, textures=textures.array(), infinite=_nonempty(infinite), info=info)
+    own = dict(nodes=_nonempty(nodes), prims=_nonempty(prims), shapes=_nonempty(shape_rows),
+               bsdfs=np.array(bsdf_rows, layout.dtype("Bsdf")) if bsdf_rows else layout.zeros("Bsdf"),
+               emitters=emitters, textures=ctx.textures.array(), infinite=_nonempty(infinite), info=info)
+    tables = {name: own[name] if name in own else ctx.array(name) for name, _, _ in layout.SCENE_TABLES}
     return SceneBuffers(tables=tables, camera=camera, filter_cdf=filter_cdf, stats=stats, bvh_width=bvh_width)

@@ -59,65 +59,17 @@ typedef struct {
 #define SPAWN_OFFSET 3.814697265625e-06f   /* 64 * 2^-24 */
 
 
+/* The shapes' surface/sample/pdf functions (kernels/shapes/<name>.h) behind generated switches on Shape.type. */
+#include "gen/mesh_dispatch.h"
+
 INLINE bool scene_intersect(const SceneData* sd, const Ray* r, Intersection* its) {
     Hit h;
     COUNT_RAY(sd, n_closest);
     if (!bvh_closest_hit(sd->nodes, sd->prims, r->o, r->d, r->tmin, r->tmax, &h)) return false;
     its->t = h.t;
-    if (h.prim & BVH_SPHERE_BIT) {
-        uint j = h.prim & ~BVH_SPHERE_BIT;
-        float4 s = sd->spheres[j];
-        float3 p = r->o + r->d * h.t;
-        float3 n = normalize3(p - s.xyz);
-        its->p = s.xyz + n * s.w; /* re-project: the hit point lies on the sphere to float precision */
-        its->off = SPAWN_OFFSET * (max3(fabs(s.xyz)) + s.w);
-        its->po = its->p;
-        its->ng = n;
-        its->sh = frame_from_normal(n);
-        uint shape = sd->sphere_shape[j];
-        /* Only textures read uv; atan2 and acos cost more than the rest of a sphere hit. */
-        if (sd->bsdfs[sd->shapes[shape].bsdf].flags & BSDF_UV) {
-            float u = atan2(n.y, n.x) * INV_TWOPI;
-            its->uv = (float2)(u < 0.0f ? u + 1.0f : u, acos(clampf(n.z, -1.0f, 1.0f)) * INV_PI);
-        } else {
-            its->uv = (float2)(0.0f);
-        }
-        its->shape = shape;
-        its->tri = NONE;
-        return true;
-    }
-    uint4 idx = sd->tri_index[h.prim];
-    float b0 = 1.0f - h.u - h.v;
-    float3 p0 = sd->positions[idx.x].xyz, p1 = sd->positions[idx.y].xyz, p2 = sd->positions[idx.z].xyz;
-    its->p = p0 * b0 + p1 * h.u + p2 * h.v;
-    float3 c = cross3(p1 - p0, p2 - p0);
-    float a2 = len3(c);                          /* twice the area */
-    float3 ng = c * (1.0f / a2);
-    its->ng = ng;
-    float off = SPAWN_OFFSET * maxf(max3(fabs(p0)), maxf(max3(fabs(p1)), max3(fabs(p2))));
-    its->off = off;
-    /* The spawn base: p moved into the triangle until it is `off` or more from every edge (barycentric
-       off * |edge| / a2 for the vertex across that edge), so that near a concave edge the origin is not on
-       or behind the neighbouring wall's plane, where p's rounding error alone can put it. */
-    float k = off / a2;
-    float w0 = maxf(b0, k * len3(p2 - p1)), w1 = maxf(h.u, k * len3(p0 - p2)), w2 = maxf(h.v, k * len3(p1 - p0));
-    float ws = w0 + w1 + w2;
-    its->po = ws > 0.0f && ws < INFINITY ? (p0 * w0 + p1 * w1 + p2 * w2) * (1.0f / ws) : its->p;
-    uint flags = sd->shapes[idx.w].flags;
-    float3 ns = ng;
-    if (flags & SHAPE_HAS_NORMALS) {
-        float3 n = sd->normals[idx.x].xyz * b0 + sd->normals[idx.y].xyz * h.u + sd->normals[idx.z].xyz * h.v;
-        float l2 = dot3(n, n);
-        if (l2 > 0.0f) ns = n * (1.0f / sqrt(l2));
-    }
-    its->sh = frame_from_normal(ns);
-    if (flags & SHAPE_HAS_UVS)
-        its->uv = sd->uvs[idx.x] * b0 + sd->uvs[idx.y] * h.u + sd->uvs[idx.z] * h.v;
-    else
-        its->uv = (float2)(h.u, h.v);
-    its->shape = idx.w;
-    its->tri = h.prim;
-    return true;
+    uint shape = (h.prim & BVH_SPHERE_BIT) ? sd->sphere_shape[h.prim & ~BVH_SPHERE_BIT] : sd->tri_index[h.prim].w;
+    its->shape = shape;
+    return shape_surface(sd, &sd->shapes[shape], r, &h, its);
 }
 
 INLINE bool scene_occluded(const SceneData* sd, float3 o, float3 d, float tmin, float tmax) {

@@ -502,8 +502,8 @@ def test_area_light_is_one_sided_by_shading_normal(scenes):
     np.testing.assert_allclose(above[:, :3], 0)
     s = d.sample(0, [0.3, 3.0, 0.1], np.random.default_rng(1).random((256, 2), dtype=np.float32))
     assert np.all(s["w"] == 0) and np.all(s["pdf"] > 0)
-    # total area
-    assert row["area"]["area"] == pytest.approx(0.8, rel=1e-6)
+    # total area, packed with the emitting shape
+    assert d.b.shapes[row["shape"]]["area"] == pytest.approx(0.8, rel=1e-6)
 
 
 # ---------------------------------------------------------------------------------------------- delta lights

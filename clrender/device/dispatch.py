@@ -53,6 +53,11 @@ class Kind:
     after: tuple = ()          # headers the generated file includes before the plugins'
     dispatched: bool = True    # False: no switch (integrators: one per program, chosen by -DINTEGRATOR)
     type_field: str = "type"   # the row's tag field the switch reads
+    registry_tags: tuple = ()  # the object tags its plugins register under, per format (default: (tag,))
+
+    @property
+    def tags(self) -> tuple:
+        return self.registry_tags or (self.tag,)
 
 
 BSDF = Kind(
@@ -82,10 +87,8 @@ TEXTURE = Kind(
 EMITTER = Kind(
     tag="emitter", struct="Emitter",
     header=(("type", "uint"), ("flags", "uint"),
-            ("shape", "uint"),        # surface emitters: the emitting shape
-            ("cdf_offset", "uint"),   # surface emitters: offset of the shape's triangle-area CDF in emitter_cdf
-            ("count", "uint"),        # surface emitters: triangle count
-            ("pad", "uint", 3)),
+            ("shape", "uint"),        # surface emitters: the emitting shape (which samples its own surface)
+            ("pad", "uint", 5)),
     param_bytes=80, flags=("DELTA", "INFINITE", "SURFACE"), dispatch_name="emitter_row", row="em",
     methods=(
         Method("sample", "float3", "const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u",
@@ -96,6 +99,33 @@ EMITTER = Kind(
                "sd, em, q", "return (float3)(0.0f);"),
     ),
     after=("emitters/common.h",))
+
+# Shapes: each packs its own geometry into the scene's tables (clrender/shapes/<name>.py) and gives, in
+# kernels/shapes/<prefix>.h, the surface at a BVH hit (used by scene_intersect) and the sampling of a point on it
+# with its solid-angle density (used by the area emitter). Nori files call them <mesh>, Mitsuba files <shape>.
+SHAPE = Kind(
+    tag="mesh", struct="Shape", registry_tags=("mesh", "shape"),
+    header=(("type", "uint"), ("flags", "uint"),
+            ("bsdf", "uint"),
+            ("emitter", "uint"),     # NONE if the shape does not emit
+            ("first", "uint"),       # meshes: first triangle (tri_index row); spheres: row of the spheres table
+            ("count", "uint"),       # meshes: triangle count; spheres: 1
+            ("cdf", "uint"),         # emitting meshes: offset of their triangle-area CDF in the `cdf` table
+            ("area", "float")),      # emitting shapes: total surface area
+    # per shape, set at packing (not capabilities of the plugin): HAS_NORMALS / HAS_UVS: per-vertex data present;
+    # NEEDS_UV: its BSDF reads a texture over the surface (analytic shapes compute uv only then); FLIP_NORMALS:
+    # analytic shapes turned inside out (meshes flip their winding and normals at loading instead)
+    param_bytes=16, flags=("HAS_NORMALS", "HAS_UVS", "NEEDS_UV", "FLIP_NORMALS"), dispatch_name="shape", row="s",
+    methods=(
+        Method("surface", "bool",
+               "const SceneData* sd, __global const Shape* s, const Ray* r, const Hit* h, Intersection* its",
+               "sd, s, r, h, its", "return false;", required=True),
+        Method("sample", "float", "const SceneData* sd, __global const Shape* s, float3 ref, float2 u, "
+               "ShapeSample* ss", "sd, s, ref, u, ss", "return 0.0f;", required=True),
+        Method("pdf", "float", "const SceneData* sd, __global const Shape* s, float3 ref, float3 p, float3 ng, "
+               "float3 wi", "sd, s, ref, p, ng, wi", "return 0.0f;", required=True),
+    ),
+    after=("shapes/common.h",))
 
 # Integrators: their parameters share SceneInfo's union `p` (sd->info->p.av.length); the program includes the one
 # integrator it runs (kernels/integrators/<kernel>.h), so there is nothing to dispatch.
@@ -131,7 +161,7 @@ RFILTER = Kind(
                     required=True),),
     after=("math.h",))
 
-KINDS = {k.tag: k for k in (TEXTURE, BSDF, EMITTER, INTEGRATOR, RFILTER)}
+KINDS = {k.tag: k for k in (TEXTURE, SHAPE, BSDF, EMITTER, INTEGRATOR, RFILTER)}
 
 
 def _registry():
@@ -149,9 +179,8 @@ def plugins(kind: str) -> list[type]:
     """The registered device plugins of `kind` in every scene format, in tag order (sorted by prefix). Classes
     that share a prefix (a Mitsuba-format subclass of a Nori plugin, say) share its kernel, tag and row: the first
     in (format, type name) order stands for them, and they must agree on PARAMS and FLAGS."""
-    reg = _registry()
     found = {}
-    for cls in reg.registered_classes(kind):
+    for cls in _classes(KINDS[kind]):
         if not getattr(cls, "kernel", None):
             continue
         first = found.setdefault(prefix_of(cls), cls)
@@ -217,9 +246,17 @@ def flags_of(cls) -> int:
     return bits
 
 
+def _classes(kind: Kind) -> list[type]:
+    reg = _registry()
+    out = []
+    for t in kind.tags:
+        out += [c for c in reg.registered_classes(t) if c not in out]
+    return out
+
+
 def _kind_tag(cls) -> str:
-    for tag in KINDS:
-        if getattr(cls, "kernel", None) and cls in _registry().registered_classes(tag):
+    for tag, kind in KINDS.items():
+        if getattr(cls, "kernel", None) and cls in _classes(kind):
             plugins(tag)    # checks that classes sharing its prefix agree
             return tag
     raise RuntimeError(f"{cls.__qualname__} is not a registered device plugin (it needs @register and `kernel`)")

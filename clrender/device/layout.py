@@ -17,17 +17,9 @@ _VECTORS = {"float4": ("<f4", 16, 16), "uint4": ("<u4", 16, 16)}
 
 NONE = 0xFFFFFFFF  # "no index" in uint fields (no emitter, no texture, ...)
 
-STRUCTS: dict[str, list[tuple]] = {
-    # One row per shape (a mesh or an analytic sphere).
-    "Shape": [
-        ("bsdf", "uint"),
-        ("emitter", "uint"),          # NONE if the shape does not emit
-        ("flags", "uint"),            # SHAPE_* bits
-        ("first", "uint"),            # meshes: first triangle; spheres: sphere index
-        ("count", "uint"),            # meshes: triangle count; spheres: 1
-        ("pad", "uint", 3),
-    ],
-}
+# Structs with no plugins behind them (none at present: the shape, BSDF, emitter, texture, integrator and camera rows
+# are the UNION_STRUCTS below).
+STRUCTS: dict[str, list[tuple]] = {}
 # The scene's tables, in kernel-argument order: (name, element type, what it holds). The kernels' SceneData
 # struct, its SCENE_ARGS argument list (each table is the argument s_<name>) and SCENE_INIT are generated from
 # this list; clrender.pack.SceneBuffers holds one numpy array per entry, and the host sets them by name.
@@ -43,7 +35,7 @@ SCENE_TABLES: list[tuple[str, str, str]] = [
     ("shapes", "Shape", "one row per shape"),
     ("bsdfs", "Bsdf", "one row per BSDF"),
     ("emitters", "Emitter", "one row per emitter"),
-    ("emitter_cdf", "float", "surface emitters' triangle-area CDFs, back to back"),
+    ("cdf", "float", "emitting meshes' triangle-area CDFs, back to back (Shape.cdf)"),
     ("textures", "Texture", "one row per texture that a BSDF parameter refers to"),
     ("infinite", "uint", "indices of the infinite emitters (info->n_infinite of them)"),
     ("info", "SceneInfo", "scene-wide numbers and the integrator's parameters"),
@@ -52,12 +44,11 @@ SCENE_TABLES: list[tuple[str, str, str]] = [
 # Bsdf and Emitter rows are generated from the registered plugins (clrender/device/dispatch.py): the kind's
 # header fields, then a union `p` of every plugin's declared parameter struct.
 # SceneInfo: scene-wide numbers + the integrator's parameters; Camera: the camera + its filter's parameters.
-UNION_STRUCTS = ("Camera", "Texture", "Bsdf", "Emitter", "SceneInfo")
+UNION_STRUCTS = ("Camera", "Texture", "Shape", "Bsdf", "Emitter", "SceneInfo")
 
 
 # Type tags and flag bits, shared the same way (emitted as #defines).
 ENUMS: dict[str, int] = {
-    "SHAPE_HAS_NORMALS": 1, "SHAPE_HAS_UVS": 2, "SHAPE_SPHERE": 4,
     # BVH encodings shared by the builders (clrender/accel) and the traversals (kernels/bvh*.h)
     "BVH_LEAF_BIT": 0x80000000,       # a node reference to a leaf
     "BVH_SPHERE_BIT": 0x80000000,     # a primitive id of an analytic sphere
@@ -169,6 +160,19 @@ def dtype(struct: str) -> np.dtype:
 @functools.lru_cache(maxsize=None)
 def _plain_dtype_cached(struct: str) -> np.dtype:
     return _plain_dtype(STRUCTS[struct])
+
+
+_ELEMENTS = {"float": (np.float32, ()), "uint": (np.uint32, ()), "float2": (np.float32, (2,)),
+             "float4": (np.float32, (4,)), "uint4": (np.uint32, (4,))}
+
+
+def table_element(name: str) -> tuple:
+    """(numpy dtype, shape of one element) of SCENE_TABLES entry `name`."""
+    types = {n: t for n, t, _ in SCENE_TABLES}
+    if name not in types:
+        raise KeyError(f"no scene table {name!r}; the tables are {list(types)}")
+    t = types[name]
+    return _ELEMENTS[t] if t in _ELEMENTS else (dtype(t), ())
 
 
 def zeros(struct: str, n: int = 1) -> np.ndarray:

@@ -10,8 +10,8 @@ on it; the area density is converted to solid angle with dist² / |cos at the li
     </emitter>
 </mesh>
 ```
-Emitter row (kernels/emitters/area.h): p.area.radiance.xyz = radiance, p.area.area = total area;
-cdf_offset/count = its triangles' area CDF.
+Emitter row (kernels/emitters/area.h): p.area.radiance.xyz = radiance, shape = the emitting shape, which
+samples its own surface (its area distribution is packed with it: clrender/shapes/shape.py).
 """
 import numpy as np
 
@@ -23,7 +23,7 @@ from .emitter import Emitter, nonnegative_color
 @register("emitter", "area")
 class AreaEmitter(Emitter):
     kernel = "emitters/area.h"
-    PARAMS = [("radiance", "float4"), ("area", "float")]
+    PARAMS = [("radiance", "float4")]
     FLAGS = ("SURFACE",)
 
     def __init__(self, props, children, spec):
@@ -31,22 +31,6 @@ class AreaEmitter(Emitter):
 
     def fill(self, p, row, ctx, shape):
         p["radiance"][:3] = self.radiance
-        if shape.is_sphere:
-            area = shape.area()
-            row["count"] = 1
-            row["cdf_offset"] = ctx.add_cdf([1.0])
-        else:
-            areas = shape.mesh.triangle_areas()
-            area = float(areas.sum())
-            if not area > 0:
-                raise SceneError("an area emitter's mesh has zero area", self.spec.location)
-            cdf = np.cumsum(areas) / area
-            cdf[-1] = 1.0
-            row["count"] = len(areas)
-            row["cdf_offset"] = ctx.add_cdf(cdf)
-        p["area"] = area
-
-
 @register("emitter", "area", fmt="mitsuba")
 class MitsubaAreaEmitter(AreaEmitter):
     """Mitsuba 3's area light, nested in (or referenced by) a shape: one-sided, on the side its normals face.

@@ -1,14 +1,54 @@
-"""What every shape plugin shares: its nested BSDF (default: diffuse, albedo 0.5; in a Mitsuba scene black for a
-shape that emits, as Mitsuba's default) and optional emitter."""
+"""What every shape plugin shares: its nested BSDF (default: diffuse, albedo 0.5), optional area emitter, and
+its row of the shapes table.
+
+A shape owns its geometry on both sides: `fill(ctx, index, row)` adds it to the scene's tables (PackContext.
+add_table) and `area_distribution()` says how its area is spread for sampling; its kernel half
+(`kernel = "shapes/<name>.h"`) gives `<name>_surface` (the surface record at a BVH hit), `<name>_sample` (a point
+seen from a reference point, with its solid-angle density) and `<name>_pdf`, reached through the switch generated
+into gen/mesh_dispatch.h (see clrender/device/dispatch.py, kind SHAPE).
+"""
 from __future__ import annotations
+
+import abc
 
 import numpy as np
 
+from ..device import dispatch
+from ..device.layout import NONE
 from ..errors import SceneError
 
 
-class Shape:
+class Shape(abc.ABC):
+    kernel: str = ""
+    PARAMS: list = []
+    FLAGS: tuple = ()
+    METHODS: tuple = ("surface", "sample", "pdf")
     children = ("bsdf", "emitter")
+
+    def pack(self, ctx, index: int, row) -> None:
+        """Fill the Shape row `row` of shape number `index` (its bsdf/emitter fields are the caller's) and add the
+        shape's geometry, and for an emitting shape its area distribution, to `ctx`'s tables."""
+        cls = type(self)
+        row["type"] = dispatch.tag_of(cls)
+        row["cdf"] = NONE
+        self.fill(ctx, index, row)
+        if self.emitter is not None:
+            cdf, area = self.area_distribution()
+            if not (area > 0 and np.isfinite(area)):
+                raise SceneError(f"an area emitter's shape has no area to emit from (area {area})",
+                                 getattr(getattr(self, "spec", None), "location", None))
+            row["area"] = area
+            if cdf is not None:
+                row["cdf"] = ctx.add_table("cdf", "float", cdf)
+
+    @abc.abstractmethod
+    def fill(self, ctx, index: int, row) -> None:
+        """Add the geometry to ctx's tables; set row's first/count/flags (and this plugin's member of its union)."""
+
+    @abc.abstractmethod
+    def area_distribution(self):
+        """(cdf, total area): the normalised cumulative area of the shape's pieces that its kernel's `_sample`
+        searches (None when it samples analytically) and the surface area."""
 
     def _attach(self, children, spec):
         self.bsdf = None
@@ -30,6 +70,7 @@ class Shape:
         if self.bsdf is None:
             from ..bsdfs.diffuse import Diffuse
 
-            self.bsdf = Diffuse.default()
-            if self.emitter is not None and getattr(spec, "format", "nori") == "mitsuba":
-                self.bsdf.albedo = np.zeros(3)   # Mitsuba: an emitting shape without a BSDF reflects nothing
+            # Nori gives every shape without a BSDF a diffuse one of albedo 0.5; Mitsuba 3 does too, except that
+            # an emitting shape's is black (reflectance 0: checked against Mitsuba 3.9's loaded scenes).
+            black = getattr(spec, "format", "nori") == "mitsuba" and self.emitter is not None
+            self.bsdf = Diffuse.default(0.0 if black else 0.5)

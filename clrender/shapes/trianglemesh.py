@@ -1,10 +1,16 @@
-"""Shared by the mesh plugins: load, bake into world space, drop degenerate triangles."""
+"""Shared by the mesh plugins: load, bake into world space, drop degenerate triangles, pack the triangles.
+
+Tables (kernels/shapes/mesh.h): positions/normals/uvs per vertex (normals and uvs zero where the mesh has none,
+flagged by SHAPE_HAS_NORMALS / SHAPE_HAS_UVS), tri_index (i0, i1, i2, shape) per triangle; the row's first/count
+are the mesh's range of tri_index. An emitting mesh is sampled by picking a triangle from its area CDF.
+"""
 from __future__ import annotations
 
 import logging
 
 import numpy as np
 
+from ..device import dispatch
 from ..errors import SceneError
 from ..scene.transform import Transform
 from .shape import Shape
@@ -13,7 +19,38 @@ log = logging.getLogger("clrender")
 
 
 class TriangleMesh(Shape):
-    is_sphere = False
+    kernel = "shapes/mesh.h"
+
+    def fill(self, ctx, index, row):
+        m = self.mesh
+        nv = len(m.positions)
+        flags = 0
+        p4 = np.zeros((nv, 4), np.float32)
+        p4[:, :3] = m.positions
+        base = ctx.add_table("positions", "float4", p4)
+        n4 = np.zeros((nv, 4), np.float32)
+        if m.normals is not None:
+            flags |= dispatch.flag_defines()["SHAPE_HAS_NORMALS"]
+            n4[:, :3] = m.normals
+        ctx.add_table("normals", "float4", n4)     # one row per vertex either way: tri_index addresses both
+        if m.uvs is not None:
+            flags |= dispatch.flag_defines()["SHAPE_HAS_UVS"]
+            ctx.add_table("uvs", "float2", m.uvs)
+        else:
+            ctx.add_table("uvs", "float2", np.zeros((nv, 2), np.float32))
+        idx = np.empty((len(m.faces), 4), np.uint32)
+        idx[:, :3] = m.faces + base
+        idx[:, 3] = index
+        row["first"] = ctx.add_table("tri_index", "uint4", idx)
+        row["count"] = len(m.faces)
+        row["flags"] = flags
+
+    def area_distribution(self):
+        areas = self.mesh.triangle_areas()
+        area = float(areas.sum())
+        cdf = np.cumsum(areas) / area if area > 0 else np.ones(len(areas))
+        cdf[-1] = 1.0
+        return cdf, area
 
     def _load(self, props, children, spec, loader, to_world_name: str = "toWorld", prepare=None, generate=None,
               name: str | None = None):

@@ -1,0 +1,49 @@
+/* What the shape plugins share (kernels/shapes/<name>.h): the record of a point sampled on a shape, and the
+   conversion of an area density to a solid-angle density. */
+#ifndef CLRENDER_SHAPES_COMMON_H
+#define CLRENDER_SHAPES_COMMON_H
+#include "../math.h"
+#include "../frame.h"
+#include "../warp.h"
+
+/* A point sampled on a shape as seen from a reference point: where it is, its shading normal n and geometric
+   normal ng (the measure's), and the direction/distance from the reference point. The `_sample` functions return
+   the solid-angle density of wi at the reference point (0: no usable sample). */
+typedef struct {
+    float3 p, n, ng, wi;
+    float dist;
+} ShapeSample;
+
+/* Solid-angle density at ref of a point p with area density `inv_area` (dist^2 / (area |cos at p|)); 0 when
+   degenerate (grazing, coincident). cos is taken against the geometric normal: the true change of measure. */
+INLINE float shape_solid_angle_pdf(float inv_area, float3 ref, float3 p, float3 ng, float3 wi) {
+    float3 d = p - ref;
+    float d2 = dot3(d, d);
+    float c = fabs(dot3(ng, wi));
+    if (c <= 0.0f || d2 <= 0.0f) return 0.0f;
+    return inv_area * d2 / c;
+}
+
+/* Complete a sample at p (normals n, ng) drawn with area density inv_area; returns its solid-angle density. */
+INLINE float shape_point_sample(ShapeSample* ss, float3 ref, float3 p, float3 n, float3 ng, float inv_area) {
+    float3 d = p - ref;
+    float l = len3(d);
+    ss->wi = l > 0.0f ? d * (1.0f / l) : ng;
+    ss->p = p;
+    ss->n = n;
+    ss->ng = ng;
+    ss->dist = l;
+    return shape_solid_angle_pdf(inv_area, ref, p, ng, ss->wi);
+}
+
+/* First index i in cdf[0..count) with cdf[i] > u (the CDF ends with 1, u < 1). */
+INLINE uint shape_cdf_search(__global const float* cdf, uint count, float u) {
+    uint lo = 0u, hi = count - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi) >> 1;
+        if (cdf[mid] > u) hi = mid; else lo = mid + 1u;
+    }
+    return lo;
+}
+
+#endif

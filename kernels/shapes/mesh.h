@@ -1,0 +1,72 @@
+/* Triangle meshes (clrender/shapes/trianglemesh.py): the surface at a hit and uniform-by-area sampling.
+
+   Row: first/count = the mesh's range of tri_index (i0, i1, i2, shape); flags SHAPE_HAS_NORMALS (interpolated
+   per-vertex normals shade) and SHAPE_HAS_UVS (per-vertex uvs; otherwise uv = the barycentrics (b1, b2));
+   emitting meshes: cdf = offset of the triangle-area CDF in the `cdf` table, area = total area.
+   Sampling picks a triangle by binary search in the CDF (probability area_i / A), rescales the sample and reuses
+   it for uniform barycentrics, so the point has area density 1/A. */
+#ifndef CLRENDER_SHAPES_MESH_H
+#define CLRENDER_SHAPES_MESH_H
+#include "common.h"
+
+/* The shading normal at barycentrics (b0, b1, b2) of triangle idx: interpolated vertex normals, or ng. */
+INLINE float3 mesh_shading_normal(const SceneData* sd, __global const Shape* s, uint4 idx, float b0, float b1,
+                                  float b2, float3 ng) {
+    if (!(s->flags & SHAPE_HAS_NORMALS)) return ng;
+    float3 n = sd->normals[idx.x].xyz * b0 + sd->normals[idx.y].xyz * b1 + sd->normals[idx.z].xyz * b2;
+    float l2 = dot3(n, n);
+    return l2 > 0.0f ? n * (1.0f / sqrt(l2)) : ng;
+}
+
+INLINE bool mesh_surface(const SceneData* sd, __global const Shape* s, const Ray* r, const Hit* h,
+                         Intersection* its) {
+    uint4 idx = sd->tri_index[h->prim];
+    float b0 = 1.0f - h->u - h->v;
+    float3 p0 = sd->positions[idx.x].xyz, p1 = sd->positions[idx.y].xyz, p2 = sd->positions[idx.z].xyz;
+    its->p = p0 * b0 + p1 * h->u + p2 * h->v;
+    float3 c = cross3(p1 - p0, p2 - p0);
+    float a2 = len3(c);                          /* twice the area */
+    float3 ng = c * (1.0f / a2);
+    its->ng = ng;
+    float off = SPAWN_OFFSET * maxf(max3(fabs(p0)), maxf(max3(fabs(p1)), max3(fabs(p2))));
+    its->off = off;
+    /* The spawn base: p moved into the triangle until it is `off` or more from every edge (barycentric
+       off * |edge| / a2 for the vertex across that edge), so that near a concave edge the origin is not on
+       or behind the neighbouring wall's plane, where p's rounding error alone can put it. */
+    float k = off / a2;
+    float w0 = maxf(b0, k * len3(p2 - p1)), w1 = maxf(h->u, k * len3(p0 - p2)), w2 = maxf(h->v, k * len3(p1 - p0));
+    float ws = w0 + w1 + w2;
+    its->po = ws > 0.0f && ws < INFINITY ? (p0 * w0 + p1 * w1 + p2 * w2) * (1.0f / ws) : its->p;
+    its->sh = frame_from_normal(mesh_shading_normal(sd, s, idx, b0, h->u, h->v, ng));
+    if (s->flags & SHAPE_HAS_UVS)
+        its->uv = sd->uvs[idx.x] * b0 + sd->uvs[idx.y] * h->u + sd->uvs[idx.z] * h->v;
+    else
+        its->uv = (float2)(h->u, h->v);
+    its->shape = idx.w;
+    its->tri = h->prim;
+    return true;
+}
+
+INLINE float mesh_sample(const SceneData* sd, __global const Shape* s, float3 ref, float2 u, ShapeSample* ss) {
+    __global const float* cdf = sd->cdf + s->cdf;
+    uint i = shape_cdf_search(cdf, s->count, u.x);
+    float lo = i > 0u ? cdf[i - 1u] : 0.0f, hi = cdf[i];
+    float ux = hi > lo ? (u.x - lo) / (hi - lo) : 0.5f;
+    ux = clampf(ux, 0.0f, 0x1.fffffep-1f);
+    uint4 idx = sd->tri_index[s->first + i];
+    float3 p0 = sd->positions[idx.x].xyz, p1 = sd->positions[idx.y].xyz, p2 = sd->positions[idx.z].xyz;
+    float2 b = square_to_uniform_triangle((float2)(ux, u.y));
+    float b0 = 1.0f - b.x - b.y;
+    float3 p = p0 * b0 + p1 * b.x + p2 * b.y;
+    float3 ng = normalize3(cross3(p1 - p0, p2 - p0));
+    float3 n = mesh_shading_normal(sd, s, idx, b0, b.x, b.y, ng);
+    return shape_point_sample(ss, ref, p, n, ng, 1.0f / s->area);
+}
+
+/* The density of the point p (hit along wi) that mesh_sample would give: per point, so a direction that meets
+   the mesh several times has the sum of these as its density (the shadow ray settles which point is seen). */
+INLINE float mesh_pdf(const SceneData* sd, __global const Shape* s, float3 ref, float3 p, float3 ng, float3 wi) {
+    return shape_solid_angle_pdf(1.0f / s->area, ref, p, ng, wi);
+}
+
+#endif

@@ -1,0 +1,91 @@
+/* Analytic spheres (clrender/shapes/sphere.py): the surface at a hit, and sampling of the visible cap.
+
+   Row: first = the sphere's row of the `spheres` table (centre xyz, radius w); SHAPE_FLIP_NORMALS: normals point
+   inward (Mitsuba's flip_normals; uv is unchanged); SHAPE_NEEDS_UV when its BSDF reads textures (uv = (atan2(n.y, n.x) / 2pi in [0,1), acos(n.z) / pi); otherwise uv is (0, 0): atan2 and acos
+   cost more than the rest of a hit); area = 4 pi r^2.
+   Seen from outside (|ref - c| > r): uniform directions in the cone of half-angle asin(r / |ref - c|) about
+   c - ref, density 1 / (2 pi (1 - cos theta_max)); the point is the near intersection of that direction with the
+   sphere. From inside: uniform by area. */
+#ifndef CLRENDER_SHAPES_SPHERE_H
+#define CLRENDER_SHAPES_SPHERE_H
+#include "common.h"
+
+/* 1 - cos(theta_max) of the cone a sphere subtends, stable for small spheres: sin^2 / (1 + cos). */
+INLINE float sphere_one_minus_cos(float r2, float d2) {
+    float sin2 = r2 / d2;
+    float cosm = safe_sqrt(1.0f - sin2);
+    return sin2 / (1.0f + cosm);
+}
+
+INLINE bool sphere_surface(const SceneData* sd, __global const Shape* s, const Ray* r, const Hit* h,
+                           Intersection* its) {
+    float4 sp = sd->spheres[s->first];
+    float3 p = r->o + r->d * h->t;
+    float3 n = normalize3(p - sp.xyz);
+    its->p = sp.xyz + n * sp.w; /* re-project: the hit point lies on the sphere to float precision */
+    its->off = SPAWN_OFFSET * (max3(fabs(sp.xyz)) + sp.w);
+    its->po = its->p;
+    float3 nf = (s->flags & SHAPE_FLIP_NORMALS) ? -n : n;
+    its->ng = nf;
+    its->sh = frame_from_normal(nf);
+    if (s->flags & SHAPE_NEEDS_UV) {
+        float u = atan2(n.y, n.x) * INV_TWOPI;
+        its->uv = (float2)(u < 0.0f ? u + 1.0f : u, acos(clampf(n.z, -1.0f, 1.0f)) * INV_PI);
+    } else {
+        its->uv = (float2)(0.0f);
+    }
+    its->tri = NONE;
+    return true;
+}
+
+INLINE float sphere_sample(const SceneData* sd, __global const Shape* s, float3 ref, float2 u, ShapeSample* ss) {
+    float4 sp = sd->spheres[s->first];
+    float3 oc = sp.xyz - ref;
+    float d2 = dot3(oc, oc), r2 = sp.w * sp.w;
+    if (d2 > r2) {
+        /* Cone sampling about the axis toward the centre; 1 - cos theta is formed directly (no cancellation for
+           distant spheres). */
+        float d = sqrt(d2);
+        float3 axis = oc * (1.0f / d);
+        float omc_max = sphere_one_minus_cos(r2, d2);
+        float omc = u.x * omc_max;
+        float cos_t = 1.0f - omc;
+        float sin2 = omc * (2.0f - omc);
+        float sin_t = safe_sqrt(sin2);
+        float phi = 2.0f * M_PI_F_ * u.y;
+        Frame f = frame_from_normal(axis);
+        float2 sc = sin_cos(phi);
+        float3 wi = normalize3(to_world(&f, (float3)(sin_t * sc.y, sin_t * sc.x, cos_t)));
+        /* near intersection: t = d cos - sqrt(r^2 - d^2 sin^2) */
+        float t = d * cos_t - safe_sqrt(r2 - d2 * sin2);
+        float3 n = normalize3(ref + wi * t - sp.xyz);
+        float3 p = sp.xyz + n * sp.w;
+        if (s->flags & SHAPE_FLIP_NORMALS) n = -n;
+        ss->wi = wi;
+        ss->p = p;
+        ss->n = n;
+        ss->ng = n;
+        ss->dist = len3(p - ref);
+        return 1.0f / (2.0f * M_PI_F_ * omc_max);
+    }
+    /* inside: uniform on the sphere */
+    float3 n = square_to_uniform_sphere(u);
+    float3 nf = (s->flags & SHAPE_FLIP_NORMALS) ? -n : n;
+    return shape_point_sample(ss, ref, sp.xyz + n * sp.w, nf, nf, 1.0f / s->area);
+}
+
+INLINE float sphere_pdf(const SceneData* sd, __global const Shape* s, float3 ref, float3 p, float3 ng, float3 wi) {
+    float4 sp = sd->spheres[s->first];
+    float3 oc = sp.xyz - ref;
+    float d2 = dot3(oc, oc), r2 = sp.w * sp.w;
+    if (d2 > r2) {
+        /* the direction must meet the sphere: in front, closest approach within r (relative slack for rays that
+           hit exactly at the silhouette) */
+        float3 c = cross3(wi, oc);
+        if (dot3(wi, oc) <= 0.0f || dot3(c, c) > r2 * 1.0001f) return 0.0f;
+        return 1.0f / (2.0f * M_PI_F_ * sphere_one_minus_cos(r2, d2));
+    }
+    return shape_solid_angle_pdf(1.0f / s->area, ref, p, ng, wi);
+}
+
+#endif
