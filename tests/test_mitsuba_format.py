@@ -2,7 +2,6 @@
 nested includes (resolved as Mitsuba 3.9 resolves them), transforms, rgb/spectrum properties (numbers checked
 against Mitsuba 3.9), Mitsuba's mesh options and meshes, and every error path with its location."""
 import logging
-import os
 import re
 import struct
 import zlib
@@ -28,10 +27,7 @@ def load(body: str, **kw):
 
 def err(text: str, **kw) -> SceneError:
     with pytest.raises(SceneError) as e:
-        spec = parse_string(text, "m.xml", **kw)
-        from clrender.loader import load_scene  # noqa: F401  (instantiation errors name the reader too)
-
-        create(spec)
+        create(parse_string(text, "m.xml", **kw))
     return e.value
 
 
