@@ -1,13 +1,15 @@
 """Importing this module registers every plugin with the scene registry."""
 # One import per plugin file: the registry is keyed by the XML (tag, type) each one declares.
 from .scene import scene  # noqa: F401
-from .shapes import cube, obj, ply, serialized, sphere  # noqa: F401
+from .shapes import cube, cylinder, disk, obj, ply, rectangle, serialized, sphere  # noqa: F401
 from .cameras import perspective  # noqa: F401
 from .filters import box, gaussian, lanczos, mitchell, tent  # noqa: F401
 from .films import hdrfilm  # noqa: F401
 from .samplers import independent  # noqa: F401
 from .textures import checkerboard_color, uvtexture  # noqa: F401
-from .bsdfs import dielectric, diffuse, microfacet, mirror, plastic, roughplastic, twosided, blendbsdf, mask  # noqa: F401
+from .bsdfs import conductor, dielectric, diffuse, microfacet, mirror  # noqa: F401
+from .bsdfs import roughconductor, roughdielectric, thindielectric  # noqa: F401
+from .bsdfs import blendbsdf, mask, plastic, roughplastic, twosided  # noqa: F401
 from .emitters import area, constant, distant, distantdisk, point  # noqa: F401
-from .integrators import (ao, av, direct, direct_ems, direct_mats, direct_mis, material, normals,  # noqa: F401
-                          path_ems, path_mats, path_mis, simple, whitted)
+from .integrators import (ao, aov, av, direct, direct_ems, direct_mats, direct_mis, material,  # noqa: F401
+                          normals, path, path_ems, path_mats, path_mis, simple, whitted)

@@ -31,12 +31,17 @@ class SceneSource:
         return load_scene(self.path, nori_dialect=self.dialect, **self.defines)
 
     def referenced_files(self) -> list[str]:
-        """Every file the scene names (``<string name="filename">``), resolved, in document order."""
+        """Every file the scene names (``<string name="filename">``, and files a Mitsuba scene includes),
+        resolved, in document order."""
         from .scene.xmlparser import parse_file
 
         spec = parse_file(self.path, {k: str(v) for k, v in self.defines.items()})
         out = []
         for s in spec.walk():
+            # a Mitsuba <include>d file: its objects are located in it
+            where = s.location.file if s.location is not None else None
+            if where and where != self.path and not where.startswith("<") and where not in out:
+                out.append(where)
             if "filename" in s.props and s.props.tag("filename") == "string":
                 out.append(s.props._entry("filename").value)
         return out

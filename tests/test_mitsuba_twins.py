@@ -3,7 +3,8 @@ tests/mitsuba/refs/<name>.npz with tests/mitsuba/make_refs.py) and by clrender, 
 reference pixel by pixel: a z-test of the difference against both standard errors combined, Šidák-corrected
 over every pixel and channel (clrender/testing/stats.py; clrender's variance is floored by what Mitsuba's
 per-sample variance implies at clrender's sample count, so a pixel whose rare paths clrender missed does not fail on
-noise). Mitsuba is not needed to run this."""
+noise, and for wide filters by the spread of Mitsuba's image over the filter's footprint). Mitsuba is not needed
+to run this."""
 from pathlib import Path
 
 import numpy as np
@@ -39,23 +40,48 @@ def test_twin_matches_mitsuba(name):
     mean, stderr, ref_spp = reference(name)
     scene, film = render_twin(name)
     assert film.image.shape == mean.shape, f"clrender renders {film.image.shape}, Mitsuba {mean.shape}"
-    result = compare_to_reference(film, mean, stderr, ref_samples=ref_spp)
+    result = compare_to_reference(film, mean, stderr, ref_samples=ref_spp, rfilter=scene.camera.filter)
     means = f"means: clrender {film.image.mean(axis=(0, 1)).round(4)}, Mitsuba {mean.mean(axis=(0, 1)).round(4)}"
     assert result.passed, f"{name}: {result.message}; {means}"
     # A small bias spread over the whole image hides in the per-pixel noise; the image mean shows it.
-    overall = compare_image_means(film, mean, stderr, ref_spp)
+    overall = compare_image_means(film, mean, stderr, ref_spp, rfilter=scene.camera.filter)
     assert overall.passed, f"{name}: {overall.message}"
 
 
-@pytest.mark.slow
-def test_twin_test_fails_on_a_mirrored_camera():
-    """The harness can fail: the Cornell twin seen through a camera with +x on the image's right (Nori's eth
-    convention, not Mitsuba's) must not pass."""
-    import clrender
-    from clrender.testing.stats import compare_to_reference
+def _mirror(scene):
+    scene.camera.mirror_x = False          # Nori's eth convention (+x on the image's right), not Mitsuba's
 
-    mean, stderr, ref_spp = reference("cornell_meshes")
-    scene = clrender.load_scene(HERE / "scenes" / "cornell_meshes.xml", spp=64)
-    scene.camera.mirror_x = False
+
+def _crop_off_by_one(scene):
+    scene.camera.film.crop_x += 1
+
+
+def _pinhole(scene):
+    scene.camera.lens_radius = 0.0
+
+
+def _border_ignored(scene):
+    scene.camera.film.sample_border = False
+
+
+def _fov_one_percent_wider(scene):
+    scene.camera.fov *= 1.01
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name, mutate", [
+    ("cornell_meshes", _mirror), ("filter_lanczos_crop", _crop_off_by_one), ("thinlens", _pinhole),
+    ("gaussian_sample_border", _border_ignored), ("filter_gaussian_fov_y", _fov_one_percent_wider),
+], ids=["mirrored camera", "crop window 1 px off", "pinhole for thin lens", "sample_border ignored", "fov 1% wider"])
+def test_twin_test_fails_when_clrender_is_wrong(name, mutate):
+    """The harness can fail: each twin, rendered with one thing it verifies done wrong, must not pass."""
+    import clrender
+    from clrender.testing.stats import compare_image_means, compare_to_reference
+
+    mean, stderr, ref_spp = reference(name)
+    scene = clrender.load_scene(HERE / "scenes" / f"{name}.xml")
+    mutate(scene)
     film = clrender.render(scene, seed=7)
-    assert not compare_to_reference(film, mean, stderr, ref_samples=ref_spp).passed
+    result = compare_to_reference(film, mean, stderr, ref_samples=ref_spp, rfilter=scene.camera.filter)
+    overall = compare_image_means(film, mean, stderr, ref_spp, rfilter=scene.camera.filter)
+    assert not (result.passed and overall.passed), f"{result.message}; {overall.message}"

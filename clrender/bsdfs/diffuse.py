@@ -34,9 +34,10 @@ class Diffuse(Bsdf):
             raise SceneError(f"albedo must be non-negative, got {self.albedo.tolist()}", props.location("albedo"))
 
     @classmethod
-    def default(cls):
+    def default(cls, albedo: float = 0.5):
+        """The BSDF of a shape that names none."""
         obj = cls.__new__(cls)
-        obj.albedo = np.full(3, 0.5)
+        obj.albedo = np.full(3, float(albedo))
         obj.texture = None
         obj.spec = None
         return obj

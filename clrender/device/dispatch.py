@@ -117,8 +117,9 @@ SHAPE = Kind(
             ("cdf", "uint"),         # emitting meshes: offset of their triangle-area CDF in the `cdf` table
             ("area", "float")),      # emitting shapes: total surface area
     # per shape, set at packing (not capabilities of the plugin): HAS_NORMALS / HAS_UVS: per-vertex data present;
-    # NEEDS_UV: its BSDF reads a texture over the surface (analytic shapes compute uv only then)
-    param_bytes=16, flags=("HAS_NORMALS", "HAS_UVS", "NEEDS_UV"), dispatch_name="shape", row="s",
+    # NEEDS_UV: its BSDF reads a texture over the surface (analytic shapes compute uv only then); FLIP_NORMALS:
+    # analytic shapes turned inside out (meshes flip their winding and normals at loading instead)
+    param_bytes=16, flags=("HAS_NORMALS", "HAS_UVS", "NEEDS_UV", "FLIP_NORMALS"), dispatch_name="shape", row="s",
     methods=(
         Method("surface", "bool",
                "const SceneData* sd, __global const Shape* s, const Ray* r, const Hit* h, Intersection* its",

@@ -1,8 +1,24 @@
 """What the path-tracing integrators share (path_mats.py, path_ems.py, path_mis.py): Nori's optional maxDepth, and
 Russian roulette as Nori's (from depth 3, continue with probability min(max(throughput) eta², 0.99)).
 The kernel is kernels/integrators/path.h, selected by <name>.h.
+
+Mitsuba 3's `path` (MitsubaPath below) runs the same stages with Mitsuba's rules:
+
+```xml
+<integrator type="path">
+    <integer name="max_depth" value="-1"/>        <!-- -1 (default): no limit; 1: emitters seen directly;
+                                                        2: direct illumination; 0: nothing -->
+    <integer name="rr_depth" value="5"/>          <!-- Russian roulette from this depth on (default 5) -->
+    <boolean name="hide_emitters" value="false"/> <!-- camera rays see through emitters, not the environment -->
+</integrator>
+```
+Emitter and BSDF samples are combined by the power heuristic; after each BSDF sample, once the path has rr_depth
+segments, it continues with probability min(max(throughput) eta², 0.95) (Mitsuba's src/integrators/path.cpp).
+hide_emitters as Mitsuba 3.9 renders it: the camera ray passes through shapes that carry an area emitter (front or
+back) and sees black where it escapes; reflections still show emitters. Kernel: kernels/integrators/path_mitsuba.h.
 """
 from ..errors import SceneError
+from ..scene.registry import register
 from .integrator import NO_LIMIT, Integrator
 
 
@@ -14,3 +30,29 @@ class PathIntegrator(Integrator):
         if depth == 0 or depth < -1:
             raise SceneError(f"maxDepth must be -1 (no limit) or at least 1, got {depth}", props.location("maxDepth"))
         self.max_depth = NO_LIMIT if depth == -1 else depth
+
+
+def mitsuba_depths(props, integrator):
+    """Mitsuba's max_depth (-1 = no limit, else >= 0) and rr_depth (>= 1), checked as Mitsuba checks them."""
+    depth = props.get_int("max_depth", -1)
+    if depth < -1:
+        raise SceneError(f"{integrator}: max_depth must be -1 (no limit) or at least 0, got {depth}",
+                         props.location("max_depth"))
+    rr = props.get_int("rr_depth", 5)
+    if rr < 1:
+        raise SceneError(f"{integrator}: rr_depth must be at least 1, got {rr}", props.location("rr_depth"))
+    return (NO_LIMIT if depth == -1 else depth), rr
+
+
+@register("integrator", "path", fmt="mitsuba")
+class MitsubaPath(Integrator):
+    kernel = "path_mitsuba"
+    PARAMS = [("hide_emitters", "uint")]
+    needs_emitter = True  # sees nothing but emitted light
+
+    def __init__(self, props, children, spec):
+        self.max_depth, self.rr_depth = mitsuba_depths(props, '<integrator type="path">')
+        self.hide_emitters = props.get_bool("hide_emitters", False)
+
+    def fill(self, p):
+        p["hide_emitters"] = int(self.hide_emitters)

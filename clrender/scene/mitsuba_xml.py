@@ -12,9 +12,10 @@ It shares pass one (bytes -> located element tree) and the value parsing of the 
 - ``<ref id="..."/>`` (``<ref name="..." id="..."/>`` for a named parameter) to an object declared earlier with
   that ``id``; ``<alias id as>``;
 - ``<include filename="..."/>``: the included file's root ``<scene>`` children are spliced in where the include
-  is written. Relative paths are resolved as Mitsuba's file resolver does: against a list of folders searched in
-  order (first existing file wins) that starts with the main file's folder, gains each included file's folder
-  while that file is read, and ends with the current directory;
+  is written. Relative paths are resolved as Mitsuba 3.9 resolves them (first existing file wins): an include
+  in the main file's folder, then the folders of the files that include it, then the current directory; any
+  other filename (meshes, textures), even one written in an included file, in the main file's folder, then the
+  current directory;
 - ``<transform>`` ops ``translate scale rotate lookat matrix``; ``rotate`` axes are used as written (not
   normalised), as Mitsuba does.
 """
@@ -60,13 +61,16 @@ class _State:
         self.search = [main_dir]
         self.chain: list[str] = []
 
-    def resolve(self, name: str) -> str:
+    def resolve(self, name: str, include: bool = False) -> str:
         """Mitsuba's FileResolver: an absolute path as is; else the first folder of the list holding it; else
-        the name relative to the current directory (which the caller then reports as missing)."""
+        the name relative to the main file's folder (which the caller then reports as missing). An <include> is
+        looked for in the main file's folder, the folders of the files including it, then the current one; any
+        other file (a mesh, a texture) only in the main file's folder and the current one, since Mitsuba resolves
+        those when it builds the plugins, after the includes are read (checked against Mitsuba 3.9)."""
         name = os.path.expanduser(name)
         if os.path.isabs(name):
             return os.path.normpath(name)
-        for d in self.search + [os.getcwd()]:
+        for d in (self.search if include else self.search[:1]) + [os.getcwd()]:
             p = os.path.join(d, name)
             if os.path.exists(p):
                 return os.path.normpath(p)
@@ -197,16 +201,16 @@ class MitsubaBuilder(_x._Builder):
         if target is None:
             raise self.unknown_id(el, oid)
         name = self.substitute(el, "name") if "name" in el.attrs else None
-        if name is None or name == target.name:
-            return target
-        # The same object under another parameter name: one spec sharing the object's properties and children;
-        # the registry builds it once per distinct spec.
+        if name is None or name == target.name or target.tag != "texture":
+            return target   # one object wherever it is referenced (a bsdf's or emitter's name says nothing)
+        # A texture filling another parameter (its name tells the BSDF which): a spec sharing the texture's
+        # properties and children under that name.
         return replace(target, name=name)
 
     def build_include(self, el, spec: PluginSpec) -> None:
         a = self.attrs(el, ("filename",))
         self.no_children(el)
-        path = self.state.resolve(a["filename"])
+        path = self.state.resolve(a["filename"], include=True)
         if path in self.state.chain or len(self.state.chain) >= MAX_INCLUDE_DEPTH:
             raise self.err(f"<include> of '{a['filename']}' includes itself (include chain: "
                            f"{' -> '.join(self.state.chain + [path])})", self.attr_loc(el, "filename"))

@@ -70,4 +70,7 @@ class Shape(abc.ABC):
         if self.bsdf is None:
             from ..bsdfs.diffuse import Diffuse
 
-            self.bsdf = Diffuse.default()
+            # Nori gives every shape without a BSDF a diffuse one of albedo 0.5; Mitsuba 3 does too, except that
+            # an emitting shape's is black (reflectance 0: checked against Mitsuba 3.9's loaded scenes).
+            black = getattr(spec, "format", "nori") == "mitsuba" and self.emitter is not None
+            self.bsdf = Diffuse.default(0.0 if black else 0.5)

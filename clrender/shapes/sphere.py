@@ -12,6 +12,7 @@ row's first is that row. An emitting sphere is sampled analytically (the cone it
 """
 import numpy as np
 
+from ..device import dispatch
 from ..errors import SceneError
 from ..scene.registry import register
 from .shape import Shape
@@ -20,7 +21,6 @@ from .shape import Shape
 @register("mesh", "sphere")
 class Sphere(Shape):
     kernel = "shapes/sphere.h"
-    is_sphere = True
 
     def __init__(self, props, children, spec):
         self.center = np.asarray(props.get_point("center", np.zeros(3)), np.float64)
@@ -42,3 +42,46 @@ class Sphere(Shape):
 
     def area_distribution(self):
         return None, self.area()
+
+
+@register("shape", "sphere", fmt="mitsuba")
+class MitsubaSphere(Sphere):
+    """Mitsuba 3's analytic ``sphere``: the sphere of ``radius`` about ``center``, then ``to_world`` (which may
+    rotate, translate and scale uniformly; Mitsuba forbids non-uniform scales and shears, and so do we).
+    uv = (phi / 2pi, theta / pi) as above (the same as Mitsuba's).
+
+    ```xml
+    <shape type="sphere">
+        <point name="center" value="0, 0, 0"/>         <!-- default 0, 0, 0 -->
+        <float name="radius" value="1"/>               <!-- default 1 -->
+        <transform name="to_world"> ... </transform>   <!-- default identity -->
+        <boolean name="flip_normals" value="false"/>   <!-- default false: normals point outward -->
+        <bsdf type="..."/>  <emitter type="area"> ... </emitter>
+    </shape>
+    ```
+    """
+
+    def __init__(self, props, children, spec):
+        center = np.asarray(props.get_point("center", np.zeros(3)), np.float64)
+        radius = float(props.get_float("radius", 1.0))
+        m = np.asarray(props.get_transform("to_world").matrix, np.float64)
+        self.flip_normals = props.get_bool("flip_normals", False)
+        if not (np.all(np.isfinite(center)) and np.isfinite(radius) and radius > 0):
+            raise SceneError(f"sphere needs a finite center and a positive radius, got {center.tolist()}, {radius}",
+                             spec.location)
+        lin = m[:3, :3]
+        scales = np.linalg.norm(lin, axis=0)
+        gram = lin.T @ lin
+        if (not np.all(np.isfinite(m)) or np.any(m[3] != [0, 0, 0, 1]) or scales.min() <= 0
+                or np.abs(gram - np.diag(np.diag(gram))).max() > 1e-5 * scales.max() ** 2
+                or scales.max() - scales.min() > 1e-5 * scales.max()):
+            raise SceneError("a sphere's to_world may only rotate, translate and scale uniformly (Mitsuba forbids "
+                             "non-uniform scales and shears)", props.location("to_world") or spec.location)
+        self.center = lin @ center + m[:3, 3]
+        self.radius = radius * float(scales.mean())
+        self._attach(children, spec)
+
+    def fill(self, ctx, index, row):
+        super().fill(ctx, index, row)
+        if self.flip_normals:
+            row["flags"] |= dispatch.flag_defines()["SHAPE_FLIP_NORMALS"]

@@ -20,7 +20,6 @@ log = logging.getLogger("clrender")
 
 class TriangleMesh(Shape):
     kernel = "shapes/mesh.h"
-    is_sphere = False
 
     def fill(self, ctx, index, row):
         m = self.mesh

@@ -59,36 +59,104 @@ def compare_to_value(film, reference, alpha: float = 0.01, mask=None) -> ZTestRe
     return _ztest(img - ref, var, alpha, "film vs reference")
 
 
+#: relative agreement expected of two float32 renderers on a noiseless pixel (compare_to_reference)
+FLOAT_AGREEMENT = 1e-5
+
+
+def footprint_sample_variance(mean, sample_var, rfilter) -> np.ndarray:
+    """The variance of one filter-importance-sampled camera sample of each pixel, predicted from a reference
+    image: ``mean`` (H, W, 3) and the variance of one sample within each pixel, ``sample_var``.
+
+    A sample of pixel p lands at an offset drawn with density |f| (kernels/filter.h) and carries sign(f)·C·L,
+    C = ∫|f| / ∫f per axis. Taking L within pixel q to have q's mean m_q and variance v_q (the law of total
+    variance; the reference is itself filtered, so this is a proxy that understates sharp detail), with a_q the
+    share of |f| over pixel q: the variance is C² Σ_q a_q (v_q + m_q²) - (C Σ_q a_q sign_q m_q)². Pixels outside
+    the image count as absent (their share is given to the others)."""
+    x = (np.arange(8000) + 0.5) / 8000 * 2 * rfilter.radius - rfilter.radius   # midpoints
+    f = np.asarray(rfilter.eval(x), np.float64)
+    c = np.abs(f).sum() / f.sum()
+    k = int(np.ceil(rfilter.radius + 0.5))
+    offsets = np.arange(-k, k + 1)
+    cells = [(x >= o - 0.5) & (x < o + 0.5) for o in offsets]
+    share = np.array([np.abs(f[m]).sum() for m in cells])
+    signed = np.array([f[m].sum() for m in cells])
+    share, signed = share / share.sum(), signed / np.abs(f).sum()
+    mean = np.asarray(mean, np.float64)
+    second = np.asarray(sample_var, np.float64) + mean ** 2
+    h, w = mean.shape[:2]
+    acc2, acc1 = np.zeros_like(mean), np.zeros_like(mean)
+    norm = np.zeros(mean.shape[:2] + (1,))
+    for i, oy in enumerate(offsets):
+        for j, ox in enumerate(offsets):
+            a = share[i] * share[j]
+            if a == 0:
+                continue
+            ys, xs = slice(max(0, -oy), min(h, h - oy)), slice(max(0, -ox), min(w, w - ox))
+            yq, xq = slice(max(0, oy), min(h, h + oy)), slice(max(0, ox), min(w, w + ox))
+            acc2[ys, xs] += a * second[yq, xq]
+            acc1[ys, xs] += signed[i] * signed[j] * mean[yq, xq]
+            norm[ys, xs] += a
+    norm = np.maximum(norm, 1e-300)
+    return np.maximum(c * c * acc2 / norm - (c * acc1 / norm) ** 2, 0.0)
+
+
+def neighbourhood_mean(a: np.ndarray) -> np.ndarray:
+    """Each pixel's mean over its 3 x 3 neighbourhood (as far as it lies in the image)."""
+    h, w = a.shape[:2]
+    total = np.zeros_like(a, dtype=np.float64)
+    count = np.zeros((h, w) + (1,) * (a.ndim - 2))
+    for oy in (-1, 0, 1):
+        for ox in (-1, 0, 1):
+            ys, xs = slice(max(0, -oy), min(h, h - oy)), slice(max(0, -ox), min(w, w - ox))
+            yq, xq = slice(max(0, oy), min(h, h + oy)), slice(max(0, ox), min(w, w + ox))
+            total[ys, xs] += a[yq, xq]
+            count[ys, xs] += 1
+    return total / count
+
+
+def _film_variance(film, stderr, ref_samples, ref_mean, rfilter):
+    """The film's per-pixel variance, at least what the reference predicts for it and what the film's own
+    neighbouring pixels show (see compare_to_reference)."""
+    var = film.variance()
+    if ref_samples is None:
+        return var
+    var = np.maximum(var, neighbourhood_mean(var))
+    per_sample = np.asarray(stderr, np.float64) ** 2 * ref_samples
+    if rfilter is not None:
+        per_sample = np.maximum(per_sample, footprint_sample_variance(ref_mean, per_sample, rfilter))
+    return np.maximum(var, per_sample / np.maximum(film.count, 1)[..., None])
+
+
 def compare_to_reference(film, mean, stderr, alpha: float = 0.01, mask=None,
-                         ref_samples: int | None = None) -> ZTestResult:
+                         ref_samples: int | None = None, rfilter=None) -> ZTestResult:
     """Each pixel's estimate against an independent reference image with its own per-pixel standard error
     (e.g. a Mitsuba render): both errors combined.
 
     With ``ref_samples`` (the reference's samples per pixel) the film's variance is taken to be at least what the
-    reference's per-sample variance gives at the film's sample count: a pixel whose rare bright paths the film
-    happened not to sample (a penumbra, a caustic) has a sample variance far below its true error, and a test
-    that trusted it would fail on noise. A biased pixel still fails, since its difference does not shrink."""
+    reference predicts for the film's sample count: its per-sample variance within the pixel and, given the
+    film's reconstruction filter ``rfilter``, the spread of the reference over the filter's footprint
+    (:func:`footprint_sample_variance`), and at least the mean variance of its 3 x 3 neighbourhood in the film. A
+    pixel whose rare bright paths or rare far filter offsets the film happened not to sample has a sample variance
+    far below its true error, and a test trusting it would fail on noise; a biased pixel still fails, since its
+    difference does not shrink."""
     diff = film.image.astype(np.float64) - np.asarray(mean, np.float64)
     ref_var = np.asarray(stderr, np.float64) ** 2
-    film_var = film.variance()
-    if ref_samples is not None:
-        n = np.maximum(film.count, 1)[..., None]
-        film_var = np.maximum(film_var, ref_var * ref_samples / n)
-    var = film_var + ref_var
+    var = _film_variance(film, stderr, ref_samples, mean, rfilter) + ref_var
+    # Two float32 renderers agree to about 1e-5 relative where neither has noise (an emitter seen directly).
+    var = var + (FLOAT_AGREEMENT * np.asarray(mean, np.float64)) ** 2
     if mask is not None:
         diff, var = diff[mask], var[mask]
     return _ztest(diff, var, alpha, "film vs reference image")
 
 
-def compare_image_means(film, mean, stderr, ref_samples: int | None = None, alpha: float = 0.01) -> ZTestResult:
+def compare_image_means(film, mean, stderr, ref_samples: int | None = None, alpha: float = 0.01,
+                        rfilter=None) -> ZTestResult:
     """The film's mean over all pixels (per channel) against a reference image's, with the variances of
     :func:`compare_to_reference` summed over pixels (pixels are independent in a film)."""
     img = film.image.astype(np.float64).reshape(-1, 3)
     ref = np.asarray(mean, np.float64).reshape(-1, 3)
-    ref_var = np.asarray(stderr, np.float64).reshape(-1, 3) ** 2
-    film_var = film.variance().reshape(-1, 3)
-    if ref_samples is not None:
-        film_var = np.maximum(film_var, ref_var * ref_samples / np.maximum(film.count, 1).reshape(-1, 1))
+    ref_var = (np.asarray(stderr, np.float64) ** 2).reshape(-1, 3)
+    film_var = _film_variance(film, stderr, ref_samples, mean, rfilter).reshape(-1, 3)
     n = len(img)
     return _ztest(img.mean(axis=0) - ref.mean(axis=0), (film_var + ref_var).sum(axis=0) / n ** 2, alpha,
                   "image mean vs reference")

@@ -1,4 +1,5 @@
-/* Smooth dielectric interface. Row: p.dielectric.int_ior, ext_ior.
+/* Smooth dielectric interface. Row: p.dielectric = specular_reflectance, specular_transmittance (+ _tex:
+   Mitsuba's factors on the two weights; 1 for Nori's plugin), int_ior, ext_ior.
    Sampling: reflect with probability F (unpolarised Fresnel, total internal reflection gives F = 1), refract
    otherwise. The side is the sign of cos(theta_i) = wi.z: wi.z > 0 is outside (extIOR), wi.z < 0 inside.
    Weights (radiance transport): reflection 1; refraction (eta_i / eta_t)^2 with eta_i the index on wi's side
@@ -8,6 +9,7 @@
 #ifndef CLRENDER_BSDFS_DIELECTRIC_H
 #define CLRENDER_BSDFS_DIELECTRIC_H
 #include "common.h"
+#include "../texture.h"
 
 INLINE float3 dielectric_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     float eta_int = b->p.dielectric.int_ior, eta_ext = b->p.dielectric.ext_ior;
@@ -18,7 +20,7 @@ INLINE float3 dielectric_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) 
     if (u.x < F) {
         q->wo = reflect_local(q->wi);
         q->eta = 1.0f;
-        return (float3)(1.0f);
+        return param_color(q, b->p.dielectric.specular_reflectance, b->p.dielectric.specular_reflectance_tex);
     }
     bool outside = cos_i >= 0.0f;
     float eta_i = outside ? eta_ext : eta_int;
@@ -28,7 +30,8 @@ INLINE float3 dielectric_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) 
        the normal part goes to the other side. */
     q->wo = (float3)(-r * q->wi.x, -r * q->wi.y, outside ? -cos_t : cos_t);
     q->eta = eta_t / eta_i;
-    return (float3)(r * r);
+    return (r * r) * param_color(q, b->p.dielectric.specular_transmittance,
+                                 b->p.dielectric.specular_transmittance_tex);
 }
 
 #endif

@@ -13,6 +13,23 @@ INLINE __global const Bsdf* bsdf_at(const SceneData* sd, const Intersection* its
 
 INLINE float mis_balance(float a, float b) { return a + b > 0.0f ? a / (a + b) : 0.0f; }
 
+/* The power heuristic (exponent 2), Mitsuba's: 0 where the ratio is not finite (both pdfs 0, or overflow). */
+INLINE float mis_power(float a, float b) {
+    float a2 = a * a, w = a2 / (a2 + b * b);
+    return isfinite(w) ? w : 0.0f;
+}
+
+/* The MIS heuristic of sample_light and the path loop: an integrator may define it before including this file. */
+#ifndef LIGHTING_MIS
+#define LIGHTING_MIS mis_balance
+#endif
+
+/* Mitsuba's "smooth" BSDFs (a diffuse or glossy lobe, or no lobe flags at all: anything not purely delta):
+   the ones emitter sampling can serve. */
+INLINE bool bsdf_is_smooth(__global const Bsdf* b) {
+    return (b->flags & (BSDF_DIFFUSE | BSDF_GLOSSY)) != 0u || (b->flags & BSDF_DELTA) == 0u;
+}
+
 INLINE BsdfQuery bsdf_query(const SceneData* sd, const Intersection* its, float3 wi_world) {
     BsdfQuery q;
     q.textures = sd->textures;
@@ -52,7 +69,7 @@ INLINE bool light_occluded(const SceneData* sd, const Intersection* its, const E
     return scene_occluded(sd, o, d * (1.0f / len), 0.0f, tmax);
 }
 
-/* One emitter sample at a non-delta vertex: f * cos * Le / pdf, times the MIS weight against BSDF
+/* One emitter sample at a non-delta vertex: f * cos * Le / pdf, times the MIS weight (LIGHTING_MIS) against BSDF
    sampling when `mis` (delta lights always get full weight: BSDF sampling cannot find them). */
 INLINE float3 sample_light(const SceneData* sd, const Intersection* its, __global const Bsdf* b,
                            float3 wi_local, Sampler* smp, bool mis) {
@@ -69,11 +86,24 @@ INLINE float3 sample_light(const SceneData* sd, const Intersection* its, __globa
     if (is_black(f)) return (float3)(0.0f);
     if (light_occluded(sd, its, &q)) return (float3)(0.0f);
     float w = 1.0f;
-    if (mis && !q.delta) w = mis_balance(q.pdf, bsdf_pdf(b, &bq));
+    if (mis && !q.delta) w = LIGHTING_MIS(q.pdf, bsdf_pdf(b, &bq));
     return f * fabs(bq.wo.z) * le * w;
 }
 
 /* Radiance from the environment (infinite emitters) along an escaping direction d. */
 INLINE float3 escaped(const SceneData* sd, float3 d) { return scene_eval_environment(sd, d); }
+
+/* A camera ray under Mitsuba's hide_emitters: shapes that carry an area emitter are not there for it (Mitsuba
+   3.9 lets the camera see through them, front or back, to what lies behind), so it continues past each such hit;
+   every later segment sees them as usual. */
+INLINE bool scene_intersect_hiding_emitters(const SceneData* sd, Ray* ray, Intersection* its) {
+    for (;;) {
+        if (!scene_intersect(sd, ray, its)) return false;
+        if (sd->shapes[its->shape].emitter == NONE) return true;
+        Ray next = spawn_ray_from(its, ray->d);
+        next.tmax = ray->tmax - its->t;   /* keeps a far clip where it was */
+        *ray = next;
+    }
+}
 
 #endif

@@ -4,7 +4,16 @@
    Whatever the strategy, emission is always counted for the camera ray and after delta bounces, where
    only BSDF sampling can find it, and never twice.
    Russian roulette as Nori: from depth rr_depth (3) on, continue with q = min(max(throughput) eta², 0.99).
-   max_depth (SceneInfo) limits the number of path segments (1 = emitters seen directly), default none. */
+   max_depth (SceneInfo) limits the number of path segments (1 = emitters seen directly), default none.
+   Mitsuba's `path` (path_mitsuba.h) uses the same stages with PATH_MITSUBA defined: the power heuristic
+   (LIGHTING_MIS), emitter sampling at every smooth BSDF (bsdf_is_smooth, which includes the smooth lobes of mixed
+   BSDFs) and Mitsuba's roulette (after the BSDF sample, on the new throughput and depth, capped at 0.95). */
+#if defined(PATH_MITSUBA)
+#define LIGHTING_MIS mis_power
+#define PATH_SAMPLES_LIGHTS(b) bsdf_is_smooth(b)
+#else
+#define PATH_SAMPLES_LIGHTS(b) (!bsdf_is_delta(b))
+#endif
 #include "lighting.h"
 
 /* The state of one path between its stages. The megakernel below runs the stages in a loop per work-item (the
@@ -44,8 +53,8 @@ INLINE bool path_intersect(const SceneData* sd, PathState* ps, Intersection* its
         float w;
         if (ps->after_delta) w = 1.0f;
 #if defined(PATH_USE_MATS) && defined(PATH_USE_EMS)
-        else w = mis_balance(ps->prev_pdf, hit ? hit_emitter_pdf(sd, ps->prev_p, its)
-                                               : scene_environment_pdf(sd, ps->ray.d));
+        else w = LIGHTING_MIS(ps->prev_pdf, hit ? hit_emitter_pdf(sd, ps->prev_p, its)
+                                                : scene_environment_pdf(sd, ps->ray.d));
 #elif defined(PATH_USE_MATS)
         else w = 1.0f;
 #else
@@ -57,11 +66,11 @@ INLINE bool path_intersect(const SceneData* sd, PathState* ps, Intersection* its
     return ps->alive;
 }
 
-/* Stage 2: emitter sampling at a non-delta vertex (path_ems, path_mis). */
+/* Stage 2: emitter sampling at a non-delta vertex (path_ems, path_mis, Mitsuba's path). */
 INLINE void path_sample_lights(const SceneData* sd, PathState* ps, const Intersection* its, __global const Bsdf* b,
                                Sampler* smp) {
 #if defined(PATH_USE_EMS)
-    if (!bsdf_is_delta(b) && ps->depth + 2u <= sd->info->max_depth) {
+    if (PATH_SAMPLES_LIGHTS(b) && ps->depth + 2u <= sd->info->max_depth) {
         float3 wi = to_local(&its->sh, -ps->ray.d);
 #if defined(PATH_USE_MATS)
         ps->L += ps->beta * sample_light(sd, its, b, wi, smp, true);
@@ -72,14 +81,17 @@ INLINE void path_sample_lights(const SceneData* sd, PathState* ps, const Interse
 #endif
 }
 
-/* Stage 3: Russian roulette as Nori's, then the BSDF sample that makes the next segment. */
+/* Stage 3: Russian roulette as Nori's, then the BSDF sample that makes the next segment (Mitsuba: the sample, then
+   the roulette, from the depth counted after it). */
 INLINE void path_continue(const SceneData* sd, PathState* ps, const Intersection* its, __global const Bsdf* b,
                           Sampler* smp) {
+#if !defined(PATH_MITSUBA)
     if (ps->depth >= sd->info->rr_depth) {
         float q = minf(max3(ps->beta) * ps->eta * ps->eta, 0.99f);
         if (!(next1d(smp) < q)) { ps->alive = false; return; }
         ps->beta /= q;
     }
+#endif
     BsdfQuery bq = bsdf_query(sd, its, -ps->ray.d);
     float3 w = bsdf_sample(b, &bq, next2d(smp));
     if (is_black(w)) { ps->alive = false; return; }
@@ -90,10 +102,19 @@ INLINE void path_continue(const SceneData* sd, PathState* ps, const Intersection
     ps->prev_p = its->p;
     ps->ray = spawn_ray_from(its, to_world(&its->sh, bq.wo));
     ps->depth += 1u;
+#if defined(PATH_MITSUBA)
+    if (ps->depth >= sd->info->rr_depth) {
+        float q = minf(max3(ps->beta) * ps->eta * ps->eta, 0.95f);
+        if (!(next1d(smp) < q)) { ps->alive = false; return; }
+        ps->beta /= q;
+    }
+#endif
 }
 
 /* The megakernel: the stages in a loop. The random numbers are drawn in the same order as before the stages
-   were split out (emitter sample, roulette, BSDF sample per vertex), so images are unchanged. */
+   were split out (emitter sample, roulette, BSDF sample per vertex), so images are unchanged. Mitsuba's path
+   has a loop of its own (path_mitsuba.h). */
+#if !defined(PATH_MITSUBA)
 INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     PathState ps;
     path_begin(&ps, ray);
@@ -107,3 +128,4 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     }
     return ps.L;
 }
+#endif

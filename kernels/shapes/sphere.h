@@ -1,7 +1,7 @@
 /* Analytic spheres (clrender/shapes/sphere.py): the surface at a hit, and sampling of the visible cap.
 
-   Row: first = the sphere's row of the `spheres` table (centre xyz, radius w); flags SHAPE_NEEDS_UV when its BSDF
-   reads textures (uv = (atan2(n.y, n.x) / 2pi in [0,1), acos(n.z) / pi); otherwise uv is (0, 0): atan2 and acos
+   Row: first = the sphere's row of the `spheres` table (centre xyz, radius w); SHAPE_FLIP_NORMALS: normals point
+   inward (Mitsuba's flip_normals; uv is unchanged); SHAPE_NEEDS_UV when its BSDF reads textures (uv = (atan2(n.y, n.x) / 2pi in [0,1), acos(n.z) / pi); otherwise uv is (0, 0): atan2 and acos
    cost more than the rest of a hit); area = 4 pi r^2.
    Seen from outside (|ref - c| > r): uniform directions in the cone of half-angle asin(r / |ref - c|) about
    c - ref, density 1 / (2 pi (1 - cos theta_max)); the point is the near intersection of that direction with the
@@ -25,8 +25,9 @@ INLINE bool sphere_surface(const SceneData* sd, __global const Shape* s, const R
     its->p = sp.xyz + n * sp.w; /* re-project: the hit point lies on the sphere to float precision */
     its->off = SPAWN_OFFSET * (max3(fabs(sp.xyz)) + sp.w);
     its->po = its->p;
-    its->ng = n;
-    its->sh = frame_from_normal(n);
+    float3 nf = (s->flags & SHAPE_FLIP_NORMALS) ? -n : n;
+    its->ng = nf;
+    its->sh = frame_from_normal(nf);
     if (s->flags & SHAPE_NEEDS_UV) {
         float u = atan2(n.y, n.x) * INV_TWOPI;
         its->uv = (float2)(u < 0.0f ? u + 1.0f : u, acos(clampf(n.z, -1.0f, 1.0f)) * INV_PI);
@@ -59,6 +60,7 @@ INLINE float sphere_sample(const SceneData* sd, __global const Shape* s, float3 
         float t = d * cos_t - safe_sqrt(r2 - d2 * sin2);
         float3 n = normalize3(ref + wi * t - sp.xyz);
         float3 p = sp.xyz + n * sp.w;
+        if (s->flags & SHAPE_FLIP_NORMALS) n = -n;
         ss->wi = wi;
         ss->p = p;
         ss->n = n;
@@ -68,7 +70,8 @@ INLINE float sphere_sample(const SceneData* sd, __global const Shape* s, float3 
     }
     /* inside: uniform on the sphere */
     float3 n = square_to_uniform_sphere(u);
-    return shape_point_sample(ss, ref, sp.xyz + n * sp.w, n, n, 1.0f / s->area);
+    float3 nf = (s->flags & SHAPE_FLIP_NORMALS) ? -n : n;
+    return shape_point_sample(ss, ref, sp.xyz + n * sp.w, nf, nf, 1.0f / s->area);
 }
 
 INLINE float sphere_pdf(const SceneData* sd, __global const Shape* s, float3 ref, float3 p, float3 ng, float3 wi) {

@@ -1,0 +1,416 @@
+"""The Mitsuba 3 reader (clrender/scene/mitsuba_xml.py): format detection, defaults and -D, ids and references,
+nested includes (resolved as Mitsuba 3.9 resolves them), transforms, rgb/spectrum properties (numbers checked
+against Mitsuba 3.9), Mitsuba's mesh options and meshes, and every error path with its location."""
+import logging
+import os
+import re
+import struct
+import zlib
+
+import numpy as np
+import pytest
+
+import clrender.plugins  # noqa: F401
+from clrender.errors import SceneError
+from clrender.scene.registry import create
+from clrender.scene.xmlparser import parse_file, parse_string
+
+HEAD = '<scene version="3.0.0">'
+SENSOR = ('<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/>'
+          '<integer name="height" value="6"/></film></sensor>')
+
+
+def load(body: str, **kw):
+    """The Scene of a Mitsuba file made of `body` (and a sensor unless it has one)."""
+    sensor = "" if "<sensor" in body else SENSOR
+    return create(parse_string(f"{HEAD}{sensor}{body}</scene>", "m.xml", **kw))
+
+
+def err(text: str, **kw) -> SceneError:
+    with pytest.raises(SceneError) as e:
+        spec = parse_string(text, "m.xml", **kw)
+        from clrender.loader import load_scene  # noqa: F401  (instantiation errors name the reader too)
+
+        create(spec)
+    return e.value
+
+
+def at(e: SceneError, line: int, col: int | None = None, file: str = "m.xml") -> None:
+    assert e.location is not None, str(e)
+    assert (e.location.file, e.location.line) == (file, line), str(e)
+    if col is not None:
+        assert e.location.col == col, str(e)
+
+
+# ------------------------------------------------------------------------------------------------ detection
+def test_version_attribute_selects_the_mitsuba_reader():
+    assert parse_string(f"{HEAD}</scene>").format == "mitsuba"
+    assert parse_string('<scene version="2.1"></scene>').format == "mitsuba"
+    assert parse_string("<scene></scene>").format == "nori"
+
+
+def test_unsupported_version_is_located():
+    e = err('<scene\n version="0.6.0"></scene>')
+    at(e, 2, 2)
+    assert "'version'" in str(e) and "0.6.0" in str(e) and "Mitsuba 3 reader" in str(e)
+    e = err('<scene version="three"></scene>')
+    assert "major.minor" in str(e)
+
+
+def test_load_scene_detects_the_format(tmp_path):
+    from clrender import load_scene
+
+    (tmp_path / "s.xml").write_text(f"{HEAD}{SENSOR}<shape type='cube'/></scene>")
+    scene = load_scene(tmp_path / "s.xml")
+    assert (scene.width, scene.height, scene.sample_count) == (8, 6, 4)
+    assert len(scene.shapes) == 1 and type(scene.integrator).__name__ in ("PathMis", "MitsubaPath")
+
+
+# ------------------------------------------------------------------------------------------ defaults, -D
+def test_defaults_and_defines():
+    body = '<default name="w" value="0.25"/><shape type="cube"><bsdf type="diffuse"><float name="reflectance" value="$w"/></bsdf></shape>'
+    assert load(body).shapes[0].bsdf.albedo.tolist() == [0.25] * 3
+    assert load(body, defines={"w": "0.5"}).shapes[0].bsdf.albedo.tolist() == [0.5] * 3
+
+
+def test_undefined_variable_is_located():
+    e = err(f'{HEAD}\n<shape type="cube"><bsdf type="diffuse"><float name="reflectance" value="$nope"/></bsdf></shape></scene>')
+    at(e, 2)
+    assert "$nope" in str(e) and "-D nope=" in str(e)
+
+
+def test_default_given_twice():
+    e = err(f'{HEAD}<default name="a" value="1"/>\n<default name="a" value="2"/></scene>')
+    at(e, 2, 1)
+    assert "given twice" in str(e)
+
+
+# ------------------------------------------------------------------------------------------------ ids, refs
+def test_reference_shares_one_object():
+    scene = load('<bsdf type="diffuse" id="w"><rgb name="reflectance" value="0.1, 0.2, 0.3"/></bsdf>'
+                 '<shape type="cube"><ref id="w"/></shape><shape type="cube"><ref name="bsdf" id="w"/></shape>')
+    a, b = scene.shapes[0].bsdf, scene.shapes[1].bsdf
+    assert a is b and a.albedo.tolist() == [0.1, 0.2, 0.3]
+
+
+def test_alias_names_the_same_object():
+    scene = load('<bsdf type="diffuse" id="w"/><alias id="w" as="white"/><shape type="cube"><ref id="white"/></shape>')
+    assert scene.shapes[0].bsdf.albedo.tolist() == [0.5] * 3
+
+
+def test_reference_to_unknown_id_is_located():
+    e = err(f'{HEAD}<bsdf type="diffuse" id="w"/>\n<shape type="cube">  <ref id="white"/></shape></scene>')
+    at(e, 2, 31)
+    assert "unknown id 'white'" in str(e) and "declared so far: w" in str(e)
+
+
+def test_id_declared_twice_is_located():
+    e = err(f'{HEAD}<bsdf type="diffuse" id="w"/>\n<bsdf type="diffuse" id="w"/></scene>')
+    at(e, 2, 26)
+    assert "declared twice" in str(e)
+
+
+# ------------------------------------------------------------------------------------------------ includes
+def write(path, text):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+    return path
+
+
+CUBE_OBJ = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+
+
+def test_nested_includes_resolve_as_mitsuba(tmp_path, monkeypatch):
+    """Checked against Mitsuba 3.9: an include is found next to the file that includes it (or the main file);
+    a mesh named in an included file is found next to the main file (or the current directory), not next to
+    the included file."""
+    write(tmp_path / "main.xml", f'{HEAD}{SENSOR}<include filename="sub/a.xml"/></scene>')
+    write(tmp_path / "sub" / "a.xml", f'{HEAD}<include filename="deeper/b.xml"/></scene>')
+    write(tmp_path / "sub" / "deeper" / "b.xml",
+          f'{HEAD}<shape type="obj"><string name="filename" value="tri.obj"/></shape></scene>')
+    write(tmp_path / "tri.obj", CUBE_OBJ)
+    write(tmp_path / "sub" / "deeper" / "tri.obj", CUBE_OBJ)
+    monkeypatch.chdir(tmp_path / "sub")
+    spec = parse_file(tmp_path / "main.xml")
+    (shape,) = spec.children_with_tag("shape")
+    assert shape.props.get_string("filename") == str(tmp_path / "tri.obj")
+    assert shape.location.file == str(tmp_path / "sub" / "deeper" / "b.xml")
+
+
+def test_mesh_next_to_an_included_file_only_is_missing(tmp_path, monkeypatch):
+    from clrender import load_scene
+
+    write(tmp_path / "main.xml", f'{HEAD}{SENSOR}<include filename="sub/a.xml"/></scene>')
+    write(tmp_path / "sub" / "a.xml", f'{HEAD}\n<shape type="obj"><string name="filename" value="tri.obj"/></shape></scene>')
+    write(tmp_path / "sub" / "tri.obj", CUBE_OBJ)
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SceneError) as e:
+        load_scene(tmp_path / "main.xml")
+    at(e.value, 2, file=str(tmp_path / "sub" / "a.xml"))
+    assert str(tmp_path / "tri.obj") in str(e.value) and "Mitsuba 3 reader" in str(e.value)
+
+
+def test_missing_include_is_located(tmp_path):
+    write(tmp_path / "main.xml", f'{HEAD}\n  <include filename="nowhere.xml"/></scene>')
+    with pytest.raises(SceneError) as e:
+        parse_file(tmp_path / "main.xml")
+    at(e.value, 2, 22, file=str(tmp_path / "main.xml"))
+    assert "cannot include 'nowhere.xml'" in str(e.value) and "looked in" in str(e.value)
+
+
+def test_include_cycle_is_an_error(tmp_path):
+    write(tmp_path / "main.xml", f'{HEAD}<include filename="a.xml"/></scene>')
+    write(tmp_path / "a.xml", f'{HEAD}\n<include filename="a.xml"/></scene>')
+    with pytest.raises(SceneError) as e:
+        parse_file(tmp_path / "main.xml")
+    at(e.value, 2, file=str(tmp_path / "a.xml"))
+    assert "includes itself" in str(e.value)
+
+
+def test_error_inside_an_include_names_that_file(tmp_path):
+    write(tmp_path / "main.xml", f'{HEAD}<include filename="a.xml"/></scene>')
+    write(tmp_path / "a.xml", f'{HEAD}\n\n<shape type="cube"><float name="x" value="1,5"/></shape></scene>')
+    with pytest.raises(SceneError) as e:
+        parse_file(tmp_path / "main.xml")
+    at(e.value, 3, file=str(tmp_path / "a.xml"))
+
+
+# ---------------------------------------------------------------------------------------------- transforms
+def test_transform_chain_as_mitsuba():
+    # Mitsuba 3.9: the same chain's matrix (ScalarTransform4f ops composed as its parser composes them)
+    scene = load('<sensor type="perspective"><transform name="to_world"><translate x="1"/>'
+                 '<rotate x="1" y="1" angle="30"/><scale value="2"/><lookat origin="1,2,3" target="0,0,0" up="0,1,0"/>'
+                 '</transform><film type="hdrfilm"/></sensor>')
+    expected = [[-1.675397, -0.859522, -1.242562, -0.675397], [0.760981, 1.155786, -1.770974, 2.760981],
+                [1.298364, -1.731236, -0.565410, 4.298364], [0, 0, 0, 1]]
+    assert np.allclose(scene.camera.to_world.matrix, expected, atol=2e-6)
+
+
+def test_rotate_axis_is_not_normalised():
+    scene = load('<sensor type="perspective"><transform name="to_world"><rotate value="0, 2, 0" angle="90"/>'
+                 '</transform><film type="hdrfilm"/></sensor>')
+    assert np.allclose(scene.camera.to_world.matrix[:3, :3], [[0, 0, 2], [0, 4, 0], [-2, 0, 0]], atol=1e-12)
+
+
+def test_matrix_and_scale_forms():
+    spec = parse_string(f'{HEAD}<shape type="cube"><transform name="to_world"><matrix value="1 0 0 5  0 1 0 6  0 0 1 7  0 0 0 1"/>'
+                        f'<scale x="2"/></transform></shape></scene>')
+    m = spec.children[0].props.get_transform("to_world").matrix
+    assert np.allclose(m, [[2, 0, 0, 10], [0, 1, 0, 6], [0, 0, 1, 7], [0, 0, 0, 1]])
+
+
+def test_transform_op_errors_are_located():
+    e = err(f'{HEAD}<shape type="cube"><transform name="to_world">\n<rotate y="1"/></transform></shape></scene>')
+    at(e, 2, 1)
+    assert "'angle'" in str(e)
+    e = err(f'{HEAD}<shape type="cube"><transform name="to_world">\n<translate value="1" y="2"/></transform></shape></scene>')
+    at(e, 2)
+    assert "either 'value' or 'x', 'y', 'z'" in str(e)
+    e = err(f'{HEAD}<shape type="cube"><transform name="to_world">\n<shear value="1"/></transform></shape></scene>')
+    at(e, 2, 1)
+    assert "<shear> is not allowed" in str(e)
+
+
+# ---------------------------------------------------------------------------------------------- properties
+SPECTRUM = "400:0.1, 500:0.8, 600:0.3, 700:0.2"
+
+
+def test_colour_forms():
+    body = ''.join(f'<shape type="cube"><bsdf type="diffuse">{p}</bsdf></shape>' for p in (
+        '<rgb name="reflectance" value="0.3"/>', '<float name="reflectance" value="0.2"/>',
+        '<spectrum name="reflectance" value="0.4"/>', f'<spectrum name="reflectance" value="{SPECTRUM}"/>'))
+    got = [s.bsdf.albedo for s in load(body).shapes]
+    assert got[0].tolist() == [0.3] * 3 and got[1].tolist() == [0.2] * 3 and got[2].tolist() == [0.4] * 3
+    # Mitsuba 3.9 llvm_ad_rgb/scalar_rgb: the reflectance this spectrum becomes (D65-lit, bounded)
+    assert np.allclose(got[3], [0.137488, 0.624922, 0.470022], atol=2e-6)
+
+
+def test_spectrum_in_an_emitter_uses_mitsubas_emitter_convention():
+    scene = load(f'<shape type="cube"><emitter type="area"><spectrum name="radiance" value="{SPECTRUM}"/></emitter></shape>'
+                 '<shape type="cube"><emitter type="area"><spectrum name="radiance" value="2"/></emitter></shape>')
+    # Mitsuba 3.9's numbers: an emitter's spectrum is equal-energy based (no D65); a constant is
+    # value * xyz_to_srgb(1, 1, 1)
+    assert np.allclose(scene.shapes[0].emitter.radiance, [0.211765, 0.591459, 0.416992], atol=2e-6)
+    assert np.allclose(scene.shapes[1].emitter.radiance, [2.40959, 1.89658, 1.81783], atol=2e-5)
+
+
+def test_spectrum_conversion_matches_mitsuba_more_widely():
+    from clrender.scene.spectrum import spectrum_to_rgb
+
+    # (spectrum, Mitsuba 3.9's reflectance RGB, its emitter RGB)
+    for text, refl, emit in [
+        ("400:0.5, 700:0.5", [0.497671, 0.499878, 0.497455], [0.599847, 0.47476, 0.451722]),
+        ("360:1, 830:1", [0.998985, 0.998874, 0.998802], [1.20488, 0.948228, 0.909267]),
+        ("450:0.2, 550:0.1", [0, 0.0873444, 0.106762], [0, 0.0811989, 0.0910114]),
+    ]:
+        lam, val = zip(*[map(float, p.split(":")) for p in text.split(", ")])
+        assert np.allclose(spectrum_to_rgb(lam, val, warn=False), refl, atol=2e-5), text
+        assert np.allclose(spectrum_to_rgb(lam, val, emitter=True, warn=False), emit, atol=2e-5), text
+
+
+def test_out_of_gamut_spectrum_warns(caplog):
+    with caplog.at_level(logging.WARNING, logger="clrender"):
+        load('<shape type="cube"><bsdf type="diffuse"><spectrum name="reflectance" value="450:0.2, 550:0.1"/></bsdf></shape>')
+    assert "outside the sRGB gamut" in caplog.text
+
+
+@pytest.mark.parametrize("value, message", [
+    ("400:0.1, 300:0.2", "increase"),
+    ("400:0.1", "at least two"),
+    ("400:0.1, 500", "bad wavelength:value pair '500'"),
+    ("0.1 0.2 0.3", "neither one constant"),
+    ("400:x, 500:1", "bad wavelength:value pair '400:x'"),
+])
+def test_unsupported_spectrum_is_located(value, message):
+    e = err(f'{HEAD}<shape type="cube"><bsdf type="diffuse">\n  <spectrum name="reflectance" value="{value}"/></bsdf></shape></scene>')
+    at(e, 2, 39)
+    assert message in str(e)
+
+
+def test_spectrum_file_is_refused():
+    e = err(f'{HEAD}<shape type="cube"><bsdf type="diffuse">\n<spectrum name="reflectance" filename="a.spd"/></bsdf></shape></scene>')
+    at(e, 2, 1)
+    assert "not supported" in str(e)
+
+
+def test_point_written_as_xyz():
+    spec = parse_string(f'{HEAD}<emitter type="x"><point name="position" x="1" z="3"/></emitter></scene>')
+    assert spec.children[0].props.get_point("position").tolist() == [1, 0, 3]
+
+
+def test_bad_number_is_located():
+    e = err(f'{HEAD}<shape type="cube">\n   <float name="a" value="1.5.2"/></shape></scene>')
+    at(e, 2, 27)
+    assert "bad number '1.5.2'" in str(e) and "Mitsuba 3 reader" in str(e)
+    e = err(f'{HEAD}<shape type="cube">\n<integer name="a" value="2.5"/></shape></scene>')
+    at(e, 2)
+    assert "bad integer" in str(e)
+    e = err(f'{HEAD}<shape type="cube">\n<boolean name="a" value="yes"/></shape></scene>')
+    at(e, 2)
+    assert "bad boolean" in str(e)
+    e = err(f'{HEAD}<shape type="cube">\n<rgb name="a" value="1, 2"/></shape></scene>')
+    at(e, 2)
+    assert "needs 3 or 1 numbers" in str(e)
+
+
+# ------------------------------------------------------------------------------------- unknown things
+def test_unknown_plugin_names_the_known_ones():
+    e = err(f'{HEAD}{SENSOR}\n  <shape type="teapot"/></scene>')
+    at(e, 2, 3)
+    assert "unknown shape type 'teapot'" in str(e) and "Mitsuba 3" in str(e)
+    assert re.search(r"known: .*cube.*obj.*ply.*serialized", str(e))
+
+
+def test_unknown_parameter_names_the_supported_ones(tmp_path):
+    from clrender import load_scene
+
+    write(tmp_path / "s.xml", f'{HEAD}{SENSOR}<shape type="cube"><bsdf type="diffuse">\n'
+                              f'<rgb name="reflectanse" value="0.5"/></bsdf></shape></scene>')
+    with pytest.raises(SceneError) as e:
+        load_scene(tmp_path / "s.xml")
+    at(e.value, 2, 1, file=str(tmp_path / "s.xml"))
+    msg = str(e.value)
+    assert "'reflectanse' is not used by <bsdf type=\"diffuse\">; it takes reflectance" in msg
+    assert "[Mitsuba 3 reader]" in msg
+
+
+def test_unknown_tag_is_located():
+    e = err(f'{HEAD}\n<mesh type="obj"/></scene>')
+    at(e, 2, 1)
+    assert "unknown tag <mesh>" in str(e) and "<shape>" in str(e)
+
+
+def test_wrong_property_kind():
+    e = err(f'{HEAD}{SENSOR}<shape type="cube"><bsdf type="diffuse">\n<string name="reflectance" value="red"/></bsdf></shape></scene>')
+    at(e, 2)
+    assert "expects a <rgb>" in str(e)
+
+
+def test_scene_without_sensor_is_an_error():
+    e = err(f'{HEAD}<shape type="cube"/></scene>')
+    assert "no sensor" in str(e)
+
+
+def test_substitute_samplers_warn(caplog):
+    with caplog.at_level(logging.WARNING, logger="clrender"):
+        scene = load('<sensor type="perspective"><sampler type="stratified"><integer name="sample_count" value="16"/>'
+                     '<boolean name="jitter" value="false"/></sampler><film type="hdrfilm"/></sensor>')
+    assert scene.sample_count == 16 and "independent sampler" in caplog.text
+
+
+# ---------------------------------------------------------------------------------------------- meshes
+def test_smooth_normals_as_mitsuba(tmp_path):
+    """Mitsuba 3.9's vertex normals for this OBJ without normals (angle-weighted), and its flipped uvs."""
+    write(tmp_path / "q.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 1\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n")
+    scene = load(f'<shape type="obj"><string name="filename" value="{tmp_path / "q.obj"}"/></shape>'
+                 f'<shape type="obj"><string name="filename" value="{tmp_path / "q.obj"}"/>'
+                 '<boolean name="face_normals" value="true"/><boolean name="flip_tex_coords" value="false"/></shape>')
+    smooth, flat = scene.shapes[0].mesh, scene.shapes[1].mesh
+    assert np.allclose(smooth.normals, [[0.3705, -0.3705, 0.8518], [0, 0, 1], [0.3705, -0.3705, 0.8518],
+                                        [0.5774, -0.5774, 0.5774]], atol=1e-4)
+    assert smooth.uvs.tolist() == [[0, 1], [1, 1], [1, 0], [0, 0]]
+    assert flat.normals is None and flat.uvs.tolist() == [[0, 0], [1, 0], [1, 1], [0, 1]]
+
+
+def test_flip_normals_turns_the_surface():
+    a, b = (load(f'<shape type="cube"><boolean name="flip_normals" value="{v}"/></shape>').shapes[0].mesh
+            for v in ("false", "true"))
+    assert np.allclose(a.face_normals(), -b.face_normals()) and np.allclose(a.normals, -b.normals)
+
+
+def test_cube_is_mitsubas():
+    from clrender.shapes.cube import cube_mesh
+
+    m = cube_mesh()
+    # rows 0, 5, 13 and 22 of Mitsuba 3.9's cube (position, normal, uv), and its first and last faces
+    for i, p, n, uv in [(0, (1, -1, -1), (0, -1, 0), (0, 1)), (5, (-1, 1, -1), (0, 1, 0), (1, 1)),
+                        (13, (1, 1, 1), (0, 0, 1), (1, 1)), (22, (-1, -1, -1), (0, 0, -1), (1, 0))]:
+        assert (m.positions[i].tolist(), m.normals[i].tolist(), m.uvs[i].tolist()) == (list(p), list(n), list(uv))
+    assert m.faces[0].tolist() == [0, 1, 2] and m.faces[-1].tolist() == [23, 20, 22]
+    assert np.allclose(np.einsum("ij,ij->i", m.face_normals(), m.normals[m.faces[:, 0]]), 1)   # outward winding
+
+
+def test_serialized_round_trip_and_shape_index(tmp_path):
+    from clrender.shapes.cube import cube_mesh
+    from clrender.shapes.meshdata import MeshData
+    from clrender.shapes.serializedfile import load_serialized, write_serialized
+
+    tri = MeshData(positions=[[0, 0, 0], [1, 0, 0], [0, 1, 0]], normals=None, uvs=[[0, 0], [1, 0], [0, 1]],
+                   faces=[[0, 1, 2]])
+    for version in (3, 4):
+        for double in (False, True):
+            path = tmp_path / f"m{version}{double}.serialized"
+            write_serialized(path, [("cube", cube_mesh()), ("tri", tri)], version=version, double=double)
+            a, b = load_serialized(path, None, 0), load_serialized(path, None, 1)
+            assert np.array_equal(a.positions, cube_mesh().positions) and np.array_equal(a.faces, cube_mesh().faces)
+            assert np.array_equal(a.normals, cube_mesh().normals) and b.normals is None
+            assert b.uvs.tolist() == [[0, 0], [1, 0], [0, 1]]
+    scene = load(f'<shape type="serialized"><string name="filename" value="{path}"/>'
+                 '<integer name="shape_index" value="1"/></shape>')
+    assert len(scene.shapes[0].mesh.faces) == 1 and scene.shapes[0].mesh.normals is not None  # computed
+
+
+def test_serialized_errors_are_located(tmp_path):
+    from clrender import load_scene
+    from clrender.shapes.cube import cube_mesh
+    from clrender.shapes.serializedfile import write_serialized
+
+    write_serialized(tmp_path / "one.serialized", [cube_mesh()])
+    (tmp_path / "bad.serialized").write_bytes(struct.pack("<HH", 0x1234, 4) + zlib.compress(b"x"))
+    (tmp_path / "cut.serialized").write_bytes((tmp_path / "one.serialized").read_bytes()[:40])
+    for name, index, message in [("one", 1, "shape_index 1 is out of range: the file holds 1 mesh"),
+                                 ("bad", 0, "not the serialized format's 0x041C"),
+                                 ("cut", 0, "corrupt|ends inside")]:
+        write(tmp_path / "s.xml", f'{HEAD}{SENSOR}<shape type="serialized">\n<string name="filename" value="{name}.serialized"/>'
+                                  f'<integer name="shape_index" value="{index}"/></shape></scene>')
+        with pytest.raises(SceneError) as e:
+            load_scene(tmp_path / "s.xml")
+        at(e.value, 2, file=str(tmp_path / "s.xml"))
+        assert re.search(message, str(e.value)), str(e.value)
+
+
+def test_crop_window_must_fit():
+    e = err(f'{HEAD}<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="10"/>'
+            f'\n<integer name="crop_width" value="11"/></film></sensor></scene>')
+    at(e, 2)
+    assert "does not fit" in str(e)

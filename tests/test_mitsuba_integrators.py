@@ -1,0 +1,263 @@
+"""Mitsuba 3's integrators `path`, `direct` and `aov` (clrender/integrators/path.py, direct.py, aov.py) on scenes with
+closed-form images: the furnace's geometric series per max_depth, max_depth 1 and 2 as emitter-only and direct
+illumination, Russian roulette leaving the mean alone, hide_emitters, the direct integrator's sample counts, and the
+AOVs. The scenes are Nori files (tests/analytic_scenes.py) whose integrator is replaced by a Mitsuba-format one, as
+a Mitsuba file would make it (registry.instantiate(..., fmt="mitsuba")). Agreement with Mitsuba's own renders is
+tests/test_mitsuba_twins.py's job."""
+import numpy as np
+import pytest
+
+import clrender
+from clrender.errors import SceneError
+from clrender.scene.registry import instantiate
+from clrender.testing.stats import compare_mean_to_value, compare_to_value, mean_and_error
+import analytic_scenes as A
+
+ALPHA = 0.01
+TAGS = {bool: "boolean", int: "integer", str: "string", float: "float"}
+
+
+def mitsuba_integrator(type_name, **props):
+    return instantiate("integrator", type_name, {k: (TAGS[type(v)], v) for k, v in props.items()},
+                       fmt="mitsuba")
+
+
+def load(tmp_path, xml, type_name, **props):
+    p = tmp_path / "scene.xml"
+    p.write_text(xml)
+    scene = clrender.load_scene(p)
+    scene.integrator = mitsuba_integrator(type_name, **props)
+    return scene
+
+
+def render(tmp_path, xml, type_name, spp, seed=1, **props):
+    return clrender.render(load(tmp_path, xml, type_name, **props), spp=spp, seed=seed)
+
+
+def two_sample_z(a, b):
+    (ma, ea), (mb, eb) = mean_and_error(a), mean_and_error(b)
+    return (ma - mb) / np.sqrt(ea ** 2 + eb ** 2)
+
+
+# --- path: max_depth and Russian roulette ------------------------------------------------------------------------
+
+@pytest.mark.parametrize("max_depth", [1, 2, 3, 4, 7, -1])
+def test_furnace_series_per_max_depth(tmp_path, max_depth):
+    """Closed box, walls diffuse rho = 0.5 emitting Le = 1: a path of at most d segments gathers
+    Le (1 + rho + ... + rho^(d-1)); no limit gives Le / (1 - rho) = 2."""
+    rho = 0.5
+    expected = 1 / (1 - rho) if max_depth == -1 else sum(rho ** k for k in range(max_depth))
+    film = render(tmp_path, A.furnace_scene(tmp_path, "path_mis", rho=rho), "path", spp=1024, max_depth=max_depth)
+    if max_depth == 1:   # emitters seen directly, nothing sampled: exact
+        np.testing.assert_allclose(film.image, 1.0, rtol=1e-6)
+        return
+    res = compare_mean_to_value(film, expected, ALPHA)
+    assert res.passed, (max_depth, res.message, film.image.mean(), expected)
+
+
+def test_max_depth_zero_renders_nothing(tmp_path):
+    film = render(tmp_path, A.furnace_scene(tmp_path, "path_mis"), "path", spp=4, max_depth=0)
+    assert np.all(film.image == 0.0)
+
+
+@pytest.mark.parametrize("rr_depth", [1, 50])
+def test_russian_roulette_keeps_the_mean(tmp_path, rr_depth):
+    """rho = 0.8: the series is 5; roulette from the first bounce (rr_depth 1) or practically never (50)
+    changes the noise, not the mean."""
+    film = render(tmp_path, A.furnace_scene(tmp_path, "path_mis", rho=0.8), "path", spp=2048, rr_depth=rr_depth)
+    res = compare_mean_to_value(film, 5.0, ALPHA)
+    assert res.passed, (rr_depth, res.message, film.image.mean())
+
+
+def test_russian_roulette_depth_changes_the_noise(tmp_path):
+    """The check above can only fail if rr_depth reaches the kernel: roulette from depth 1 must be noisier."""
+    xml = A.furnace_scene(tmp_path, "path_mis", rho=0.8)
+    early = render(tmp_path, xml, "path", spp=1024, rr_depth=1)
+    late = render(tmp_path, xml, "path", spp=1024, rr_depth=50)
+    assert early.variance().mean() > 1.5 * late.variance().mean()
+
+
+def test_max_depth_one_shows_emitters_only(tmp_path):
+    """A plane lit by a quad light: with max_depth 1 the plane is black, the light (seen head on) its radiance."""
+    film = render(tmp_path, A.polygon_light_scene(tmp_path, "path_mis"), "path", spp=16, max_depth=1)
+    assert np.all(film.image == 0.0)
+    up = light_over_plane_from_below(tmp_path)
+    film = render(tmp_path, up, "path", spp=16, max_depth=1)
+    np.testing.assert_allclose(film.image, np.broadcast_to(A.LE, film.image.shape), rtol=1e-6)
+
+
+@pytest.mark.parametrize("max_depth", [2, -1])
+def test_path_direct_illumination_is_analytic(tmp_path, max_depth):
+    """The light's BSDF is black, so every path has one bounce: max_depth 2 and no limit both give
+    rho/pi Le E (polygon irradiance)."""
+    film = render(tmp_path, A.polygon_light_scene(tmp_path, "path_mis"), "path", spp=4096, max_depth=max_depth)
+    res = compare_to_value(film, A.polygon_light_value(), ALPHA)
+    assert res.passed, (res.message, film.image[0, 0], A.polygon_light_value())
+
+
+def test_path_with_max_depth_two_equals_direct(tmp_path):
+    """On the glossy box (indirect light everywhere), path with max_depth 2 and direct render the same image:
+    a two-sample z-test on the image means, and on a third strategy (Nori's direct_mis)."""
+    from test_path import GLOSSY, box_scene
+
+    scene = box_scene(tmp_path, "direct_mis", spheres=GLOSSY)
+    nori = clrender.render(scene, spp=256, seed=3)
+    scene.integrator = mitsuba_integrator("path", max_depth=2)
+    path2 = clrender.render(scene, spp=256, seed=1)
+    scene.integrator = mitsuba_integrator("direct")
+    direct = clrender.render(scene, spp=256, seed=2)
+    for other in (direct, nori):
+        z = two_sample_z(path2, other)
+        assert np.all(np.abs(z) < 3.5), z
+    scene.integrator = mitsuba_integrator("path", max_depth=3)
+    three = clrender.render(scene, spp=256, seed=4)
+    assert np.all(two_sample_z(three, path2) > 5), "one more bounce must add light (the test can fail)"
+
+
+def test_path_through_delta_bsdfs_agrees_with_nori_path(tmp_path):
+    """The box with a mirror and a glass sphere (delta BSDFs, caustics): Mitsuba's path and Nori's path_mis
+    converge to the same image mean."""
+    from test_path import box_scene
+
+    scene = box_scene(tmp_path, "path_mis")
+    nori = clrender.render(scene, spp=512, seed=1)
+    scene.integrator = mitsuba_integrator("path")
+    mi = clrender.render(scene, spp=512, seed=2)
+    z = two_sample_z(mi, nori)
+    assert np.all(np.abs(z) < 3.5), z
+
+
+def test_point_and_distant_lights(tmp_path):
+    """Delta lights are found by emitter sampling alone, exactly (no variance)."""
+    for make, value in ((A.point_light_scene, A.point_light_value()), (A.distant_light_scene, A.distant_light_value())):
+        for type_name in ("path", "direct"):
+            film = render(tmp_path, make(tmp_path, "path_mis"), type_name, spp=16)
+            np.testing.assert_allclose(film.image, np.broadcast_to(value, film.image.shape), rtol=2e-4,
+                                       err_msg=f"{make.__name__} {type_name}")
+
+
+# --- hide_emitters -----------------------------------------------------------------------------------------------
+
+def light_over_plane_from_below(tmp_path):
+    """The quad light seen from below, head on (camera under the light, looking up at its emitting side)."""
+    xml = A.polygon_light_scene(tmp_path, "path_mis")
+    c = A.QUAD_LIGHT.mean(axis=0)
+    cam = A.camera(target=tuple(c), origin=(c[0], c[1], 0.5)).replace('up="0,0,1"', 'up="0,1,0"')
+    start = xml.index("<camera")
+    return xml[:start] + cam + xml[xml.index("</camera>") + len("</camera>"):]
+
+
+def looking_down_through_the_light(tmp_path):
+    """The camera above the light, looking straight down through it at X0 on the plane: it sees the light's back
+    (black: its BSDF reflects nothing and it emits downwards only)."""
+    xml = A.polygon_light_scene(tmp_path, "path_mis")
+    cam = A.camera(target=tuple(A.X0), origin=(A.X0[0], A.X0[1], 3.0)).replace('up="0,0,1"', 'up="0,1,0"')
+    start = xml.index("<camera")
+    return xml[:start] + cam + xml[xml.index("</camera>") + len("</camera>"):]
+
+
+@pytest.mark.parametrize("type_name", ["path", "direct"])
+def test_hide_emitters_sees_through_emitters(tmp_path, type_name):
+    """As Mitsuba 3.9 renders hide_emitters: the camera ray passes through the light (from behind, here) and sees
+    the lit plane below; without it the light's black back hides the plane. Seen head on, the light is black
+    when hidden."""
+    xml = looking_down_through_the_light(tmp_path)
+    shown = render(tmp_path, xml, type_name, spp=64)
+    assert np.all(shown.image == 0.0)
+    hidden = render(tmp_path, xml, type_name, spp=4096, hide_emitters=True)
+    res = compare_to_value(hidden, A.polygon_light_value(), ALPHA)
+    assert res.passed, (res.message, hidden.image[0, 0], A.polygon_light_value())
+    up = light_over_plane_from_below(tmp_path)
+    assert np.all(render(tmp_path, up, type_name, spp=16, hide_emitters=True).image == 0.0)
+    np.testing.assert_allclose(render(tmp_path, up, type_name, spp=16).image[0, 0], A.LE, rtol=1e-6)
+    if type_name == "path":   # emitters hidden and no bounce allowed: nothing at all (as Mitsuba 3.9)
+        assert np.all(render(tmp_path, xml, type_name, spp=16, hide_emitters=True, max_depth=1).image == 0.0)
+
+
+@pytest.mark.parametrize("type_name", ["path", "direct"])
+def test_hide_emitters_hides_the_environment(tmp_path, type_name):
+    """Camera rays that escape see a constant environment unless it is hidden; the plane it lights stays lit."""
+    xml = A.polygon_light_scene(tmp_path, "path_mis").replace(
+        "</scene>", '<emitter type="constant"><color name="radiance" value="0.25"/></emitter></scene>')
+    sky = xml.replace(f'target="{",".join(f"{v:.9g}" for v in A.X0)}"', 'target="5,0.1,3"')
+    assert sky != xml
+    shown = render(tmp_path, sky, type_name, spp=16)
+    np.testing.assert_allclose(shown.image, 0.25, rtol=1e-6)
+    assert np.all(render(tmp_path, sky, type_name, spp=16, hide_emitters=True).image == 0.0)
+    lit = render(tmp_path, xml, type_name, spp=256, hide_emitters=True)
+    assert np.all(lit.image > 0.05)
+
+
+# --- direct: sample counts ---------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("counts", [dict(), dict(emitter_samples=4, bsdf_samples=0),
+                                    dict(emitter_samples=0, bsdf_samples=4), dict(emitter_samples=3, bsdf_samples=2),
+                                    dict(shading_samples=2)])
+def test_direct_sample_counts_converge_to_the_same_image(tmp_path, counts):
+    film = render(tmp_path, A.polygon_light_scene(tmp_path, "path_mis"), "direct", spp=2048, **counts)
+    res = compare_to_value(film, A.polygon_light_value(), ALPHA)
+    assert res.passed, (counts, res.message, film.image[0, 0], A.polygon_light_value())
+
+
+def test_direct_sample_counts_reach_the_kernel(tmp_path):
+    """More samples per pixel sample: lower variance (emitter-only vs BSDF-only differ most)."""
+    xml = A.polygon_light_scene(tmp_path, "path_mis")
+    one = render(tmp_path, xml, "direct", spp=512, emitter_samples=1, bsdf_samples=0)
+    eight = render(tmp_path, xml, "direct", spp=512, emitter_samples=8, bsdf_samples=0)
+    assert eight.variance().mean() < 0.3 * one.variance().mean()
+
+
+def test_direct_delta_lights_count_once_per_emitter_sample(tmp_path):
+    """Mitsuba 3.9's direct gives an emitter sample of a delta light weight 1, not 1/emitter_samples (measured:
+    a point light with emitter_samples=4 renders 4x as bright as with 1); we render Mitsuba's image. BSDF
+    sampling cannot find a point light: emitter_samples=0 is black."""
+    xml = A.point_light_scene(tmp_path, "path_mis")
+    for n in (1, 4):
+        film = render(tmp_path, xml, "direct", spp=4, emitter_samples=n)
+        np.testing.assert_allclose(film.image, np.broadcast_to(n * A.point_light_value(), film.image.shape),
+                                   rtol=2e-4)
+    assert np.all(render(tmp_path, xml, "direct", spp=16, emitter_samples=0, bsdf_samples=2).image == 0.0)
+
+
+# --- aov -----------------------------------------------------------------------------------------------------------
+
+def test_aovs_of_the_plane(tmp_path):
+    """Every pixel sees the plane near X0 (fov 0.05 degrees): depth = |camera - X0| less the near clip distance
+    (Mitsuba's camera rays start on the near plane; Nori's default near clip is 1e-4, so make it 0.25 here),
+    position = X0, both normals = +z (the plane's winding); 0 where rays escape."""
+    xml = A.polygon_light_scene(tmp_path, "path_mis").replace(
+        '<float name="fov"', '<float name="nearClip" value="0.25"/><float name="fov"')
+    origin = np.array([2.5, 0.1, 1.5])
+    expected = {"depth": np.full(3, np.linalg.norm(origin - A.X0) - 0.25), "position": A.X0,
+                "geo_normal": np.array([0.0, 0.0, 1.0]), "sh_normal": np.array([0.0, 0.0, 1.0])}
+    for kind, value in expected.items():
+        film = render(tmp_path, xml, "aov", spp=4, aovs=f"out:{kind}")
+        np.testing.assert_allclose(film.image, np.broadcast_to(value, film.image.shape), atol=5e-3, err_msg=kind)
+    sky = xml.replace(f'target="{",".join(f"{v:.9g}" for v in A.X0)}"', 'target="5,0.1,3"')
+    assert np.all(render(tmp_path, sky, "aov", spp=4, aovs="dd.y:depth").image == 0.0)
+
+
+# --- errors --------------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("type_name,props,message", [
+    ("path", dict(max_depth=-2), "max_depth must be -1"),
+    ("path", dict(rr_depth=0), "rr_depth must be at least 1"),
+    ("path", dict(maxDepth=3), "maxDepth"),
+    ("direct", dict(shading_samples=2, emitter_samples=1), "either shading_samples"),
+    ("direct", dict(emitter_samples=0, bsdf_samples=0), "at least one emitter or BSDF sample"),
+    ("direct", dict(bsdf_samples=-1), "bsdf_samples must be between 0"),
+    ("aov", dict(aovs="dd.y:depth,nn:sh_normal"), "one RGB image"),
+    ("aov", dict(aovs="a:albedo"), "Mitsuba AOV type clrender does not render"),
+    ("aov", dict(aovs="depth"), "not a <name>:<type> pair"),
+    ("aov", dict(), "aovs"),
+])
+def test_bad_parameters_are_clear_errors(type_name, props, message):
+    with pytest.raises(SceneError, match=message):
+        mitsuba_integrator(type_name, **props)
+
+
+def test_nori_names_stay_nori():
+    """Mitsuba's `path` does not exist in Nori files, and Nori's `direct` is still Nori's there."""
+    with pytest.raises(SceneError, match="unknown integrator type 'path'"):
+        instantiate("integrator", "path")
+    assert type(instantiate("integrator", "direct")).__name__ == "Direct"
