@@ -23,6 +23,8 @@ GALLERY = [
     ("sun/sun_path_mis.xml", "analytic spheres under distantdisk + sky, path_mis"),
     ("furnace/furnace_path_mis.xml", "furnace (expected 2 everywhere), path_mis"),
     ("largemesh/largemesh_path_mis.xml", "1 M triangles, path_mis"),
+    ("mitsuba/showcase.xml", "a Mitsuba 3 scene (rough gold/copper, rough glass, textured roughplastic, blendbsdf; "
+                             "spot, disk and constant lights), Mitsuba's path"),
 ]
 
 

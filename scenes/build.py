@@ -1182,7 +1182,9 @@ MITSUBA_SHOWCASE = """<?xml version="1.0"?>
             <bsdf type="diffuse">
                 <rgb name="reflectance" value="0.7, 0.15, 0.1"/>
             </bsdf>
-            <bsdf type="conductor"/>
+            <bsdf type="roughconductor">
+                <float name="alpha" value="0.1"/>
+            </bsdf>
         </bsdf>
     </shape>
 </scene>
