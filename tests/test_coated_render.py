@@ -16,6 +16,7 @@ import pytest
 HERE = Path(__file__).resolve().parent / "mitsuba"
 
 
+@pytest.mark.slow   # six renders at the twins' precision (~2 min): run by .ci/run with the other slow suites
 @pytest.mark.parametrize("integrator", ["path_mats", "path_ems", "path_mis"])
 @pytest.mark.parametrize("name", ["coated_plastics", "composites"])
 def test_mixed_delta_lobes_in_every_path_integrator(name, integrator):
