@@ -227,7 +227,12 @@ def main(argv=None) -> int:
 
     # From the start: a Ctrl-C during the first imports must not be swallowed by a library's import guard.
     with CtrlC() as ctrl_c:
-        return _main(argv, ctrl_c)
+        try:
+            return _main(argv, ctrl_c)
+        except KeyboardInterrupt:
+            # before the command started (building the parser, parsing): nothing to save
+            print("clrender: interrupted", file=sys.stderr)
+            return 130
 
 
 def _main(argv, ctrl_c) -> int:
