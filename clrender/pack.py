@@ -215,5 +215,11 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     own = dict(nodes=_nonempty(nodes), prims=_nonempty(prims), shapes=_nonempty(shape_rows),
                bsdfs=np.array(bsdf_rows, layout.dtype("Bsdf")) if bsdf_rows else layout.zeros("Bsdf"),
                emitters=emitters, textures=ctx.textures.array(), infinite=_nonempty(infinite), info=info)
+    # Per-vertex normals and uvs are read only where a shape's flags say it has them: when none has, their tables
+    # are not uploaded (one zero row; 8 + 4 bytes per vertex saved).
+    for table, flag in (("normals", "SHAPE_HAS_NORMALS"), ("uvs", "SHAPE_HAS_UVS")):
+        if not np.any(shape_rows["flags"] & flags[flag]):
+            own[table] = ctx.array(table)[:1] * 0
     tables = {name: own[name] if name in own else ctx.array(name) for name, _, _ in layout.SCENE_TABLES}
+    stats["device_bytes"] = int(sum(a.nbytes for a in tables.values()))
     return SceneBuffers(tables=tables, camera=camera, filter_cdf=filter_cdf, stats=stats, bvh_width=bvh_width)
