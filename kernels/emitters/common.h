@@ -27,4 +27,19 @@ INLINE float emitter_far(const SceneData* sd, float3 ref) {
     return 2.0f * (len3(ref - b.xyz) + b.w) + 1.0f;
 }
 
+/* Fill q for a light at the point p (delta in position: pdf 1, delta 1); returns 1 / dist^2 (0 at p itself). */
+INLINE float emitter_point_query(EmitterQuery* q, float3 p) {
+    float3 d = p - q->ref;
+    float d2 = dot3(d, d);
+    float l = sqrt(d2);
+    q->p = p;
+    q->wi = l > 0.0f ? d * (1.0f / l) : (float3)(0.0f, 0.0f, 1.0f);
+    q->n = -q->wi;
+    q->ng = -q->wi;
+    q->dist = l;
+    q->pdf = 1.0f;
+    q->delta = 1u;
+    return d2 > 0.0f ? 1.0f / d2 : 0.0f;
+}
+
 #endif

@@ -20,19 +20,9 @@ INLINE float spot_falloff(__global const Emitter* em, float3 d) {
 }
 
 INLINE float3 spot_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
-    float3 p = em->p.spot.position.xyz;
-    float3 d = p - q->ref;
-    float d2 = dot3(d, d);
-    float l = sqrt(d2);
-    q->p = p;
-    q->wi = l > 0.0f ? d * (1.0f / l) : (float3)(0.0f, 0.0f, 1.0f);
-    q->n = -q->wi;
-    q->ng = -q->wi;
-    q->dist = l;
-    q->pdf = 1.0f;
-    q->delta = 1u;
-    if (!(d2 > 0.0f)) return (float3)(0.0f);
-    return em->p.spot.intensity.xyz * (spot_falloff(em, -q->wi) / d2);
+    float inv_d2 = emitter_point_query(q, em->p.spot.position.xyz);
+    if (!(inv_d2 > 0.0f)) return (float3)(0.0f);
+    return em->p.spot.intensity.xyz * (spot_falloff(em, -q->wi) * inv_d2);
 }
 
 #endif
