@@ -17,6 +17,7 @@ from clrender.scene.registry import create
 from clrender.scene.spec import PluginSpec
 from clrender.testing.chi2 import (bin_directions, chi2_test, expected_from_grid, refined_direction_grid,
                                    sidak)
+from clrender.testing.mitsuba_dict import spec_from_dict
 from clrender.testing.kernels import bsdf_pdf_eval_batch, bsdf_sample_batch
 from clrender.textures.texture import TextureTable
 
@@ -29,25 +30,6 @@ SUB = 8
 def rgb(*v):
     return {"type": "rgb", "value": list(v)}
 
-
-def spec_from_dict(d, tag="bsdf"):
-    """A clrender plugin spec from a Mitsuba-style plugin dict (nested dicts with a type: child plugins)."""
-    props = PropertyList(f'<{tag} type="{d["type"]}">', None, fmt="mitsuba")
-    children = []
-    for k, v in d.items():
-        if k == "type":
-            continue
-        if isinstance(v, dict) and v.get("type") == "rgb":
-            props.add(k, "color", v["value"])
-        elif isinstance(v, dict):
-            children.append(spec_from_dict(v))
-        elif isinstance(v, bool):
-            props.add(k, "boolean", v)
-        elif isinstance(v, (int, float)):
-            props.add(k, "float", float(v))
-        else:
-            props.add(k, "string", v)
-    return PluginSpec(tag, d["type"], None, props, children, None, format="mitsuba")
 
 
 def rows_of(d):

@@ -12,34 +12,14 @@ import pytest
 
 from clrender import plugins  # noqa: F401  (registers the plugins)
 from clrender.device import layout
-from clrender.scene.properties import PropertyList
 from clrender.scene.registry import create
-from clrender.scene.spec import PluginSpec
+from clrender.testing.mitsuba_dict import spec_from_dict
 from clrender.testing.kernels import bsdf_pdf_eval_batch
 from clrender.textures.texture import TextureTable
 
 VALUES = Path(__file__).resolve().parent / "mitsuba" / "bsdf_values"
 FILES = ("plastic.json", "roughplastic.json", "composites.json")
 
-
-def spec_from_dict(d, tag="bsdf"):
-    """The clrender plugin spec of a Mitsuba plugin dict (nested dicts with a type other than rgb: children)."""
-    props = PropertyList(f'<{tag} type="{d["type"]}">', None, fmt="mitsuba")
-    children = []
-    for k, v in d.items():
-        if k == "type":
-            continue
-        if isinstance(v, dict) and v.get("type") == "rgb":
-            props.add(k, "color", v["value"])
-        elif isinstance(v, dict):
-            children.append(spec_from_dict(v))
-        elif isinstance(v, bool):
-            props.add(k, "boolean", v)
-        elif isinstance(v, (int, float)):
-            props.add(k, "float", float(v))
-        else:
-            props.add(k, "string", v)
-    return PluginSpec(tag, d["type"], None, props, children, None, format="mitsuba")
 
 
 def rows_of(d):

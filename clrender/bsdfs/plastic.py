@@ -39,22 +39,11 @@ def fresnel_diffuse_reflectance(eta: float) -> float:
 
 
 def colour_texture_children(children, names, owner):
-    """{name: nested texture} for the textures named in `names`; any other nested texture is an error."""
+    """{name: nested texture} for the textures named in `names` (nested BSDFs are not textures)."""
     from .bsdf import Bsdf as _Bsdf
+    from .mitsuba_params import named_textures
 
-    found = {}
-    for c in children:
-        if isinstance(c, _Bsdf):
-            continue
-        spec = getattr(c, "spec", None)
-        cname = getattr(spec, "name", None)
-        if cname not in names:
-            raise SceneError(f"{owner} takes textures named {', '.join(repr(n) for n in names)}, not {cname!r}",
-                             getattr(spec, "location", None))
-        if cname in found:
-            raise SceneError(f"{owner} has two '{cname}' textures", getattr(spec, "location", None))
-        found[cname] = c
-    return found
+    return named_textures([c for c in children if not isinstance(c, _Bsdf)], names, owner)
 
 
 def texture_mean(tex):
