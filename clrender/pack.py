@@ -99,7 +99,7 @@ def _nonempty(a: np.ndarray, dtype=None, shape=None) -> np.ndarray:
     return np.zeros(shape if shape is not None else (1,) + a.shape[1:], dtype or a.dtype)
 
 
-DEFAULT_BVH_WIDTH = 4   # kernels/scene.h's default for BVH_WIDTH; measured faster on PoCL (benchmarks/README.md)
+DEFAULT_BVH_WIDTH = 8   # kernels/scene.h's default for BVH_WIDTH; measured faster on PoCL (benchmarks/README.md)
 
 
 EMITTER_SELECTIONS = ("uniform", "power")

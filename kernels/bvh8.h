@@ -41,8 +41,16 @@ BVH_INLINE bool bvh8_traverse(__global const float4* nodes, __global const float
             float8 tn = bvh8_max(bvh8_max((n[nx] - ox) * ix, (n[ny] - oy) * iy), bvh8_max((n[nz] - oz) * iz, tmin8));
             float8 tf = bvh8_min(bvh8_min((n[fx] - ox) * ix, (n[fy] - oy) * iy), (n[fz] - oz) * iz) * 1.0000004f;
             int8 m = (tn <= tf) & (tn <= (float8)(hit->t));
+            int k = m.s0 + m.s1 + m.s2 + m.s3 + m.s4 + m.s5 + m.s6 + m.s7;   /* minus the number of hits */
             int base = sp;
-            if (any(m)) {
+            if (k == -1) {
+                /* One child hit (the commonest case): go there without the stack. */
+                uint8 r = m ? as_uint8(n[6]) : (uint8)(0u);
+                uint4 r4 = r.lo | r.hi;
+                cur = r4.s0 | r4.s1 | r4.s2 | r4.s3;
+                continue;
+            }
+            if (k != 0) {
                 uint8 ref = as_uint8(n[6]);
                 if (m.s0) { stack[sp] = ref.s0; stack_t[sp] = tn.s0; ++sp; }
                 if (m.s1) { stack[sp] = ref.s1; stack_t[sp] = tn.s1; ++sp; }

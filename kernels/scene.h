@@ -5,11 +5,12 @@
 #include "math.h"
 #include "frame.h"
 #include "camera.h"
-/* BVH_WIDTH picks the node table the host packed (SceneBuffers.bvh_width): 4 = kernels/bvh4.h (default),
-   8 = kernels/bvh8.h, 2 = kernels/bvh.h. All define bvh_closest_hit / bvh_any_hit over the same primitive
+/* BVH_WIDTH picks the node table the host packed (SceneBuffers.bvh_width): 8 = kernels/bvh8.h (default: ×1.15
+   on the Cornell twin and ×1.12 on a 1 M-triangle mesh over 4-wide, benchmarks/README.md), 4 = kernels/bvh4.h,
+   2 = kernels/bvh.h. All define bvh_closest_hit / bvh_any_hit over the same primitive
    table. */
 #ifndef BVH_WIDTH
-#define BVH_WIDTH 4
+#define BVH_WIDTH 8
 #endif
 #if BVH_WIDTH == 4
 #include "bvh4.h"

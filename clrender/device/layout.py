@@ -24,7 +24,7 @@ STRUCTS: dict[str, list[tuple]] = {}
 # struct, its SCENE_ARGS argument list (each table is the argument s_<name>) and SCENE_INIT are generated from
 # this list; clrender.pack.SceneBuffers holds one numpy array per entry, and the host sets them by name.
 SCENE_TABLES: list[tuple[str, str, str]] = [
-    ("nodes", "float4", "BVH nodes (2- or 4-wide layout, see BVH_WIDTH)"),
+    ("nodes", "float4", "BVH nodes (2-, 4- or 8-wide layout, see BVH_WIDTH)"),
     ("prims", "float4", "primitives in BVH leaf order (triangles as three float4, spheres)"),
     ("positions", "float4", "per vertex, xyz"),
     ("normals", "float4", "per vertex, xyz (meshes with SHAPE_HAS_NORMALS)"),
