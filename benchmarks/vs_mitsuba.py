@@ -1,6 +1,9 @@
 """clrender and Mitsuba 3 side by side: the same twin scenes, rendered by both in one run, interleaved.
 
-    python benchmarks/vs_mitsuba.py [--spp 64] [--repeat 5] [--reference-spp 1024] [--json OUT] [--only NAME ...]
+    python benchmarks/vs_mitsuba.py [--spp 64] [--repeat 5] [--reference-spp 1024] [--res 256] [--json OUT]
+                                    [--only NAME ...] [--quick] [--no-count-rays]
+
+`--quick` is for trying it (spp 4, repeat 1, reference 16 spp, 128x128; its figures mean nothing).
 
 Mitsuba is a benchmark-only dependency (never needed to install, run or test clrender): `pip install mitsuba`;
 its LLVM backend needs libLLVM >= 16 on this Debian (`apt-get install libllvm19`), found through
@@ -14,11 +17,25 @@ DRJIT_LIBLLVM_PATH (set below when the file exists). Each twin is written once f
   Nori's, from depth 3; Mitsuba's from depth 5), so samples/s alone is not the whole story: the script also
   reports the time each needs to reach the same relMSE against a long reference (Mitsuba's, `--reference-spp`).
 
+The twins `cornell_spheres` and `cornell` are written that way (Nori XML against Mitsuba XML: two integrators).
+clrender also reads Mitsuba 3's XML, so the others are ONE Mitsuba file read by both, with Mitsuba's `path`
+integrator (its MIS and its roulette from depth 5) on both sides, the fairest comparison:
+- `cornell_spheres_mi`: the Cornell twin's Mitsuba file;
+- `rough_plates`: four metal plates from nearly smooth to rough under four spherical lights of equal power and
+  very different sizes (the MIS test case; described in our own words below);
+- `large_mesh`: a bumpy sphere of 1,003,520 triangles (scenes/build.py's blob, written as binary PLY) on a
+  diffuse floor under a square area light;
+- `furnace`: a diffuse sphere (albedo 0.8) in a constant sky of radiance 1: the sphere's pixels are 0.8 and the
+  others 1, exactly; both renderers' region means are reported against those values.
+
 Figures per twin and renderer (medians of --repeat interleaved renders after a warm-up): render seconds and
 samples/s (render only, in process), whole-process seconds (a fresh `clrender render` / `python -c` Mitsuba
 process: start, load, build, render, write), relMSE at --spp and the time to equal error (seconds x relMSE:
-the render time at which each reaches the other's error, assuming error ~ 1/time). Written to
-benchmarks/results/vs_mitsuba-<date>.json and printed as a table.
+the render time at which each reaches the other's error, assuming error ~ 1/time). clrender's rays per sample
+come from one more render of the same samples (seed) by a program built with -DCLRENDER_COUNT_RAYS, after the
+timed ones; its rays/s = rays per sample x the timed samples/s (Mitsuba's: not known, null). Written to
+benchmarks/results/vs_mitsuba-<date>.json, printed as a table and plotted (clrender / Mitsuba ratios) into the
+PNG of the same name.
 """
 from __future__ import annotations
 
@@ -474,9 +491,13 @@ def plot(doc: dict, path: Path) -> Path:
     img = Image.new("RGB", (W, H), "white")
     g = ImageDraw.Draw(img)
     lo, hi = 1 / 8, 8.0  # log2 axis from 1/8x to 8x
-    x_of = lambda q: left + (W - left - right) * (np.log2(np.clip(q, lo, hi)) - np.log2(lo)) / np.log2(hi / lo)  # noqa: E731
+
+    def x_of(q):
+        return left + (W - left - right) * (np.log2(np.clip(q, lo, hi)) - np.log2(lo)) / np.log2(hi / lo)
+
+    trial = "  (--quick: a trial)" if doc.get("quick") else ""
     g.text((10, 8), f"clrender / Mitsuba 3 llvm_ad_rgb (> 1: clrender faster)  {doc['spp']} spp, medians of "
-                    f"{doc['repeat']}, {doc['cpu']}, {doc['date'][:16]}", fill="black", font=f)
+                    f"{doc['repeat']}, {doc['cpu']}, {doc['date'][:16]}{trial}", fill="black", font=f)
     for k, (_, label, colour) in enumerate(PLOT_BARS):
         x = 10 + k * 190
         g.rectangle([x, 32, x + 12, 44], fill=colour)
