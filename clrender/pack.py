@@ -128,7 +128,7 @@ class PackContext:
         """Table `name` as one contiguous array (OpenCL has no zero-sized buffers: an empty table is one zero row)."""
         np_type, shape = layout.table_element(name)
         chunks = self._chunks[name]
-        if not chunks:
+        if not self._sizes[name]:
             return np.zeros((1,) + shape, np_type)
         return np.ascontiguousarray(np.concatenate(chunks))
 
