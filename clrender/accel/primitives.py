@@ -13,8 +13,10 @@ triangle ``v0.xyz, as_float(i)``          ``v1.xyz, 0``      ``v2.xyz, 0``
 sphere   ``center.xyz, as_float(j|2^31)`` ``radius, 0, 0, 0`` ``0, 0, 0, 0``
 ======== ================================ ================== ==============
 
-in float32. The vertices themselves, not edges, so that a vertex shared by several triangles is the same
-float in each: the watertight test (kernels/bvh_common.h) relies on it. An empty table has shape
+in float32 (pack_scene gives triangles their :func:`leaf_refs` as id words instead of their numbers, so that a
+hit says where the vertices are: the device keeps no other copy of them). The vertices themselves, not edges,
+so that a vertex shared by several triangles is the same float in each: the watertight test
+(kernels/bvh_common.h) relies on it. An empty table has shape
 (0, 4); OpenCL cannot allocate a zero-size buffer, so callers upload at least one (unused) row.
 """
 from __future__ import annotations
