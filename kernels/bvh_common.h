@@ -3,7 +3,9 @@
 
    Primitive table: 10 words per primitive in leaf order, each leaf cut into blocks of up to 4 primitives
    stored structure of arrays (clrender/accel/primitives.py pack_leaf_blocks; bvh_isect_leaf reads it):
-       triangle i: v0.xyz, v1.xyz, v2.xyz, id = i
+       triangle:   v0.xyz, v1.xyz, v2.xyz, id = its leaf reference (pack_scene: pos << 4 | lane << 2 | (c - 1),
+                   clrender/accel/primitives.py leaf_refs; kernels/shapes/mesh.h finds its vertices from it:
+                   this table is their only copy) or, in tables that the tests pack, its triangle number
        sphere j:   centre.xyz, radius, 0 x 5, id = j | 0x80000000
 
    Hits count for tmin < t < tmax, both sides of triangles. Ray directions need not be normalised.
@@ -19,7 +21,7 @@ typedef struct {
     float t;
     float u;      /* barycentric weight of v1 (triangles; 0 for spheres) */
     float v;      /* barycentric weight of v2 */
-    uint prim;    /* the primitive's id word: triangle id, or sphere id | 0x80000000 */
+    uint prim;    /* the primitive's id word: a triangle's leaf reference, or sphere id | 0x80000000 */
 } Hit;
 
 BVH_INLINE float bvh_min(float a, float b) { return a < b ? a : b; }
