@@ -15,7 +15,8 @@ import numpy as np
 
 from .accel.bvh import build_bvh
 from .accel.bvh4 import Bvh4Unsupported, collapse_bvh4
-from .accel.primitives import BUILD_OPTIONS, bvh_leaves, leaf_refs, pack_leaf_blocks, primitive_bounds
+from .accel.primitives import (BUILD_OPTIONS, BUILD_OPTIONS_BY_WIDTH, bvh_leaves, leaf_refs, pack_leaf_blocks,
+                               primitive_bounds)
 from .device import dispatch, layout
 from .device.layout import ENUMS, NONE
 from .errors import SceneError
@@ -163,7 +164,8 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
                emitter_selection: str | None = None) -> SceneBuffers:
     """Pack ``scene`` into device tables; ``bvh_width`` 4 (or 8) collapses the binary BVH into 4- (8-)wide nodes
     (falls back to 2 when the tree does not fit the wide kernel, see clrender/accel/bvh4.py); ``bvh_options`` go
-    to :func:`clrender.accel.bvh.build_bvh` over BUILD_OPTIONS (e.g. ``max_leaf_size``, ``traversal_cost``);
+    to :func:`clrender.accel.bvh.build_bvh` over BUILD_OPTIONS and BUILD_OPTIONS_BY_WIDTH (e.g. ``max_leaf_size``,
+    ``traversal_cost``);
     ``emitter_selection``
     ("uniform" or "power"; default: the scene's ``emitter_selection`` attribute, else uniform) is how light
     sampling chooses an emitter (kernels/emitter.h scene_pick_emitter)."""
@@ -209,7 +211,7 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
 
     t_bvh = time.perf_counter()
     lo, hi = primitive_bounds(tris[:, 0], tris[:, 1], tris[:, 2], sph)
-    bvh = build_bvh(lo, hi, **{**BUILD_OPTIONS, **(bvh_options or {})})
+    bvh = build_bvh(lo, hi, **{**BUILD_OPTIONS, **BUILD_OPTIONS_BY_WIDTH.get(bvh_width, {}), **(bvh_options or {})})
     leaves = bvh_leaves(bvh)
     # A hit names its triangle by leaf reference (where its vertices are in the primitive table, the only copy
     # on the device); tri_index holds the vertex indices by leaf-order position too.

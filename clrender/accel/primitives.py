@@ -92,6 +92,10 @@ BLOCK_LANES = 4        # primitives tested together, one per float4 lane (kernel
 # benchmarks/README.md ("Trace speed and memory"): faster on the Cornell twin and the 1 M mesh, and half
 # the nodes.
 BUILD_OPTIONS = {"traversal_cost": 2.5}
+# and over 8-wide nodes (the default), leaves of up to 6 (two blocks): the same speed within noise (Cornell
+# twin x1.07 and x0.96, 1 M mesh x1.05 and x1.10 in two interleaved runs) with a fifth fewer nodes (1.3 M
+# blob: 28.9 -> 23.4 device bytes per triangle of nodes).
+BUILD_OPTIONS_BY_WIDTH = {8: {"max_leaf_size": 6}}
 BLOCK_WORDS = 10       # words per primitive: v0.xyz, v1.xyz, v2.xyz, id
 
 

@@ -27,7 +27,8 @@ SCENE_TABLES: list[tuple[str, str, str]] = [
     ("nodes", "float4", "BVH nodes (2-, 4- or 8-wide layout, see BVH_WIDTH)"),
     ("prims", "float4", "primitives in BVH leaf order, 10 words each in blocks of up to 4 (triangles' vertices, "
                         "spheres), clrender/accel/primitives.py pack_leaf_blocks; the only copy of the vertices"),
-    ("normals", "float", "per vertex, x y z (meshes with SHAPE_HAS_NORMALS)"),
+    ("normals", "ushort", "per vertex, x y z as IEEE half floats (meshes with SHAPE_HAS_NORMALS; "
+                          "clrender/shapes/trianglemesh.py half_normals)"),
     ("uvs", "float2", "per vertex (meshes with SHAPE_HAS_UVS)"),
     ("tri_index", "uint", "per leaf-order position (Hit.prim >> PRIM_REF_POS_SHIFT): the triangle's three vertex "
                           "indices (NONE at a sphere's position)"),
@@ -172,8 +173,8 @@ def _plain_dtype_cached(struct: str) -> np.dtype:
     return _plain_dtype(STRUCTS[struct])
 
 
-_ELEMENTS = {"float": (np.float32, ()), "uint": (np.uint32, ()), "float2": (np.float32, (2,)),
-             "uint2": (np.uint32, (2,)), "float4": (np.float32, (4,)), "uint4": (np.uint32, (4,))}
+_ELEMENTS = {"float": (np.float32, ()), "uint": (np.uint32, ()), "ushort": (np.uint16, ()),
+             "float2": (np.float32, (2,)), "uint2": (np.uint32, (2,)), "float4": (np.float32, (4,)), "uint4": (np.uint32, (4,))}
 
 
 def table_element(name: str) -> tuple:

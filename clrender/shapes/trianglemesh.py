@@ -35,7 +35,7 @@ class TriangleMesh(Shape):
             flags |= dispatch.flag_defines()["SHAPE_HAS_NORMALS"]
             normals = m.normals
         # one row per vertex either way: a triangle's vertex indices address both
-        if ctx.add_table("normals", "float", normals) != 3 * base:
+        if ctx.add_table("normals", "ushort", half_normals(normals)) != 3 * base:
             raise AssertionError("the normals table is out of step with the mesh vertices")
         if m.uvs is not None:
             flags |= dispatch.flag_defines()["SHAPE_HAS_UVS"]
@@ -85,6 +85,19 @@ class TriangleMesh(Shape):
         self.filename = filename
         self.dropped = dropped
         self._attach(children, spec)
+
+
+def half_normals(normals) -> np.ndarray:
+    """Vertex normals (V, 3) as the bits of IEEE half floats, the normals table's element (kernels/shapes/mesh.h
+    decodes them): 6 bytes a vertex instead of 12, for issue 11's memory target. A half keeps 11 significant bits,
+    so the interpolated shading normal turns by at most about 5e-4 rad, and a normal's length (which weights it in
+    the interpolation, as in Nori and Mitsuba) is kept to 1e-3. A normal too long for a half (> 65504) is scaled
+    down as a whole; non-finite ones become 0, which the kernel treats as no normal (the face's own)."""
+    n = np.asarray(normals, np.float32).reshape(-1, 3)
+    n = np.where(np.isfinite(n).all(axis=1, keepdims=True), n, np.float32(0))
+    big = np.abs(n).max(axis=1, keepdims=True)
+    n = np.where(big > 60000.0, n * (np.float32(60000.0) / np.maximum(big, np.float32(1))), n)
+    return n.astype(np.float16).view(np.uint16)
 
 
 def angle_weighted_normals(mesh) -> np.ndarray:

@@ -33,10 +33,18 @@ INLINE MeshTriangle mesh_triangle(const SceneData* sd, uint ref) {
     return t;
 }
 
-/* Per-vertex normal i (3 floats a row: the table has no padding). */
+/* An IEEE half float (bits h) as a float, without vload_half (a call on PoCL): normal numbers, subnormals and
+   zeros, which is all half_normals writes. */
+INLINE float mesh_half(uint h) {
+    uint e = (h >> 10) & 31u, m = h & 1023u;
+    float mag = e != 0u ? as_float(((e + 112u) << 23) | (m << 13)) : (float)m * 5.9604644775390625e-8f;
+    return (h & 0x8000u) ? -mag : mag;
+}
+
+/* Per-vertex normal i (3 halves a row: the table has no padding). */
 INLINE float3 mesh_normal(const SceneData* sd, uint i) {
-    __global const float* n = sd->normals + 3u * i;
-    return (float3)(n[0], n[1], n[2]);
+    __global const ushort* n = sd->normals + 3u * i;
+    return (float3)(mesh_half(n[0]), mesh_half(n[1]), mesh_half(n[2]));
 }
 
 /* The shading normal at barycentrics (b0, b1, b2) of triangle t: interpolated vertex normals, or ng. */
