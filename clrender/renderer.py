@@ -28,11 +28,14 @@ TARGET_LAUNCH_SECONDS = 0.2  # keeps progress, Ctrl-C and time limits responsive
 
 
 def render_defines(scene, buffers, extra: dict | None = None) -> dict:
-    """The -D defines of a program over `buffers`: the scene's integrator (if a scene is given) and the BVH layout
-    the packer chose (the default needs no define)."""
+    """The -D defines of a program over `buffers`: the scene's integrator (if a scene is given), the BVH layout
+    the packer chose (the default needs no define) and the device plugins the tables use (the program compiles
+    only those; ``extra={"CLR_USE_ALL_PLUGINS": 1}`` builds the full program, which gives the same image)."""
     defines = {} if scene is None else {"INTEGRATOR": scene.integrator.kernel}
     if buffers.bvh_width != DEFAULT_BVH_WIDTH:
         defines["BVH_WIDTH"] = buffers.bvh_width
+    if getattr(buffers, "plugins", None) is not None:
+        defines.update(buffers.plugins.defines())
     return {**defines, **(extra or {})}
 
 
