@@ -15,10 +15,11 @@ import numpy as np
 
 from .accel.bvh import build_bvh
 from .accel.bvh4 import Bvh4Unsupported, collapse_bvh4
-from .accel.primitives import BUILD_OPTIONS, bvh_leaves, pack_leaf_blocks, primitive_bounds
+from .accel.primitives import BUILD_OPTIONS, bvh_leaves, leaf_refs, pack_leaf_blocks, primitive_bounds
 from .bsdfs.composite import composite_depth
 from .device import dispatch, layout
 from .device.layout import ENUMS, NONE
+from .errors import SceneError
 from .filters.filter import with_guide
 from .textures.texture import TextureTable
 
@@ -36,6 +37,9 @@ class SceneBuffers:
     #: node table layout: 4 (kernels/bvh4.h, the default), 8 (kernels/bvh8.h) or 2 (kernels/bvh.h); the Renderer
     #: passes it to the kernels as BVH_WIDTH
     bvh_width: int = 4
+    #: host only: the primitive number at each leaf-order position (triangles first, in the order their meshes
+    #: added them, then spheres), for :meth:`triangle_numbers`
+    leaf_order: np.ndarray | None = None
     #: the device plugins the tables use (the Renderer builds its program for them); None: unknown (all)
     plugins: dispatch.PluginSet | None = None
 
@@ -54,6 +58,12 @@ class SceneBuffers:
         """The tables in kernel-argument order (SCENE_ARGS)."""
         return list(self.tables.values())
 
+    def triangle_numbers(self, refs) -> np.ndarray:
+        """The triangle numbers (each mesh's faces in order, meshes in shape order) of triangles' leaf references
+        (what a kernel's Hit.prim / Intersection.tri holds)."""
+        pos = np.asarray(refs, np.uint32) >> np.uint32(ENUMS["PRIM_REF_POS_SHIFT"])
+        return self.leaf_order[pos.astype(np.int64)]
+
     @property
     def nbytes(self) -> int:
         return sum(a.nbytes for a in self.scene_arrays())
@@ -66,6 +76,8 @@ class PackContext:
     def __init__(self):
         self._chunks: dict[str, list[np.ndarray]] = {n: [] for n, _, _ in layout.SCENE_TABLES}
         self._sizes = dict.fromkeys(self._chunks, 0)
+        self._meshes, self._positions, self._faces = [], [], []
+        self._n_vertices = self._n_triangles = 0
         self.textures = TextureTable()
 
     def add_table(self, name: str, dtype: str, rows) -> int:
@@ -83,6 +95,35 @@ class PackContext:
         self._sizes[name] += len(rows)
         return off
 
+    def add_mesh(self, shape_index: int, positions, faces) -> int:
+        """Add mesh shape `shape_index`'s vertex positions (V, 3) and triangles (F, 3: indices into them); returns
+        its first vertex index, where its rows of the per-vertex tables (normals, uvs) start. The positions and
+        triangles stay here: pack_scene puts the vertices into the primitive table and the vertex indices into
+        tri_index, both in BVH leaf order, and makes the mesh's mesh_vertices row."""
+        base = self._n_vertices
+        self._meshes.append((shape_index, base, self._n_triangles, len(faces)))
+        self._positions.append(np.asarray(positions, np.float32).reshape(-1, 3))
+        self._faces.append(np.asarray(faces, np.int64).reshape(-1, 3) + base)
+        self._n_vertices += len(self._positions[-1])
+        self._n_triangles += len(faces)
+        return base
+
+    def meshes(self) -> list[tuple[int, int, int, int]]:
+        """(shape index, first vertex, first triangle, triangle count) of each mesh, in the order added."""
+        return list(self._meshes)
+
+    def triangles(self) -> np.ndarray:
+        """The vertices of every triangle of every mesh, in the order added: float32 (T, 3, 3)."""
+        if not self._faces:
+            return np.zeros((0, 3, 3), np.float32)
+        return np.concatenate(self._positions)[np.concatenate(self._faces)]
+
+    def triangle_vertex_indices(self) -> np.ndarray:
+        """The vertex indices of every triangle, in the order added: uint32 (T, 3)."""
+        if not self._faces:
+            return np.zeros((0, 3), np.uint32)
+        return np.concatenate(self._faces).astype(np.uint32)
+
     def size(self, name: str) -> int:
         return self._sizes[name]
 
@@ -90,7 +131,7 @@ class PackContext:
         """Table `name` as one contiguous array (OpenCL has no zero-sized buffers: an empty table is one zero row)."""
         np_type, shape = layout.table_element(name)
         chunks = self._chunks[name]
-        if not chunks:
+        if not self._sizes[name]:
             return np.zeros((1,) + shape, np_type)
         return np.ascontiguousarray(np.concatenate(chunks))
 
@@ -102,7 +143,7 @@ def _nonempty(a: np.ndarray, dtype=None, shape=None) -> np.ndarray:
     return np.zeros(shape if shape is not None else (1,) + a.shape[1:], dtype or a.dtype)
 
 
-DEFAULT_BVH_WIDTH = 4   # kernels/scene.h's default for BVH_WIDTH; measured faster on PoCL (benchmarks/README.md)
+DEFAULT_BVH_WIDTH = 8   # kernels/scene.h's default for BVH_WIDTH; measured faster on PoCL (benchmarks/README.md)
 
 
 EMITTER_SELECTIONS = ("uniform", "power")
@@ -165,16 +206,31 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
         emitter_rows.append(em.pack(ctx, shape_index=NONE, shape=None, shape_row=None))
         emitter_objs.append((em, None))
 
-    # The BVH's primitives: every triangle (its tri_index row is its id) and every sphere.
-    tri_index = ctx.array("tri_index")[:ctx.size("tri_index")]
-    positions = ctx.array("positions")
-    tris = positions[:, :3][tri_index[:, :3]] if len(tri_index) else np.zeros((0, 3, 3), np.float32)
+    # The BVH's primitives: every triangle (numbered as the meshes added them) and every sphere.
+    tris = ctx.triangles()
     sph = ctx.array("spheres")[:ctx.size("spheres")]
 
     t_bvh = time.perf_counter()
     lo, hi = primitive_bounds(tris[:, 0], tris[:, 1], tris[:, 2], sph)
     bvh = build_bvh(lo, hi, **{**BUILD_OPTIONS, **(bvh_options or {})})
-    prims = pack_leaf_blocks(tris[:, 0], tris[:, 1], tris[:, 2], sph, bvh.order, *bvh_leaves(bvh))
+    leaves = bvh_leaves(bvh)
+    # A hit names its triangle by leaf reference (where its vertices are in the primitive table, the only copy
+    # on the device); tri_index holds the vertex indices by leaf-order position too.
+    try:
+        refs = leaf_refs(*leaves)
+    except ValueError as exc:
+        raise SceneError(f"the scene is too large for the device tables: {exc}") from None
+    on_tri = bvh.order < len(tris)
+    tri_ref = np.empty(len(tris), np.uint32)
+    tri_ref[bvh.order[on_tri]] = refs[on_tri]
+    prims = pack_leaf_blocks(tris[:, 0], tris[:, 1], tris[:, 2], sph, bvh.order, *leaves, tri_ids=tri_ref)
+    tri_index = np.full((len(lo), 3), NONE, np.uint32)
+    tri_index[on_tri] = ctx.triangle_vertex_indices()[bvh.order[on_tri]]
+    ctx.add_table("tri_index", "uint", tri_index)
+    for shape, first_vertex, first_tri, count in ctx.meshes():
+        ctx.add_table("mesh_vertices", "uint2", [first_vertex, shape])
+        if shape_rows[shape]["emitter"] != NONE:     # mesh_sample picks its triangles by leaf reference
+            shape_rows[shape]["first"] = ctx.add_table("tri_refs", "uint", tri_ref[first_tri:first_tri + count])
     nodes, node_count = bvh.nodes, bvh.node_count
     if bvh_width in (4, 8):
         try:
@@ -189,6 +245,7 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     info["n_prims"] = len(lo)
     info["n_tris"] = len(tris)
     info["n_spheres"] = len(sph)
+    info["n_meshes"] = len(ctx.meshes())
     info["n_emitters"] = len(emitter_rows)
     flag_infinite = 1 << dispatch.EMITTER.flags.index("INFINITE")
     infinite = np.array([i for i, r in enumerate(emitter_rows) if r["flags"] & flag_infinite], np.uint32)
@@ -219,7 +276,7 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
                bsdfs=np.array(bsdf_rows, layout.dtype("Bsdf")) if bsdf_rows else layout.zeros("Bsdf"),
                emitters=emitters, textures=ctx.textures.array(), infinite=_nonempty(infinite), info=info)
     # Per-vertex normals and uvs are read only where a shape's flags say it has them: when none has, their tables
-    # are not uploaded (one zero row; 8 + 4 bytes per vertex saved).
+    # are not uploaded (one zero row; 12 + 8 bytes per vertex saved).
     for table, flag in (("normals", "SHAPE_HAS_NORMALS"), ("uvs", "SHAPE_HAS_UVS")):
         if not np.any(shape_rows["flags"] & flags[flag]):
             own[table] = ctx.array(table)[:1] * 0
@@ -232,4 +289,4 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
          "rfilter": {int(camera[0]["filter_type"])}},
         {"bsdf": max((composite_depth(b) for b in {id(s.bsdf): s.bsdf for s in shapes}.values()), default=0)})
     return SceneBuffers(tables=tables, camera=camera, filter_cdf=filter_cdf, stats=stats, bvh_width=bvh_width,
-                        plugins=used)
+                        leaf_order=np.asarray(bvh.order, np.int64), plugins=used)

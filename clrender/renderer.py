@@ -20,7 +20,7 @@ from .device.program import build_program
 from .film import Film
 from .interrupt import SigintHandler, wait_for
 from .memcheck import check_film_fits
-from .pack import DEFAULT_BVH_WIDTH, pack_scene
+from .pack import pack_scene
 
 LOCAL_SIZE = 64              # one fixed launch shape: every new shape costs PoCL a fresh compile
 MAX_LAUNCH_PIXELS = 1 << 16  # pixels per launch; a pass over a larger image is several launches
@@ -29,11 +29,11 @@ TARGET_LAUNCH_SECONDS = 0.2  # keeps progress, Ctrl-C and time limits responsive
 
 def render_defines(scene, buffers, extra: dict | None = None) -> dict:
     """The -D defines of a program over `buffers`: the scene's integrator (if a scene is given), the BVH layout
-    the packer chose (the default needs no define) and the device plugins the tables use (the program compiles
-    only those; ``extra={"CLR_USE_ALL_PLUGINS": 1}`` builds the full program, which gives the same image)."""
+    the packer chose (always passed, so kernels/scene.h's own default never has to agree with the host's) and the
+    device plugins the tables use (the program compiles only those; ``extra={"CLR_USE_ALL_PLUGINS": 1}`` builds
+    the full program, which gives the same image)."""
     defines = {} if scene is None else {"INTEGRATOR": scene.integrator.kernel}
-    if buffers.bvh_width != DEFAULT_BVH_WIDTH:
-        defines["BVH_WIDTH"] = buffers.bvh_width
+    defines["BVH_WIDTH"] = buffers.bvh_width
     if getattr(buffers, "plugins", None) is not None:
         defines.update(buffers.plugins.defines())
     return {**defines, **(extra or {})}

@@ -49,6 +49,14 @@ BVH_INLINE bool bvh4_traverse(__global const float4* nodes, __global const float
             float4 tf = bvh4_min(bvh4_min((n[fx] - ox) * ix, (n[fy] - oy) * iy), (n[fz] - oz) * iz) * 1.0000004f;
             int4 m = (tn <= tf) & (tn <= (float4)(hit->t));
             uint4 ref = as_uint4(n[6]);
+#ifndef BVH4_NO_SINGLE
+            /* One child hit (the commonest case): go there without the stack. */
+            if (m.s0 + m.s1 + m.s2 + m.s3 == -1) {
+                uint4 r = m ? ref : (uint4)(0u);
+                cur = r.s0 | r.s1 | r.s2 | r.s3;
+                continue;
+            }
+#endif
             int base = sp;
             if (m.s0) { stack[sp] = ref.s0; stack_t[sp] = tn.s0; ++sp; }
             if (m.s1) { stack[sp] = ref.s1; stack_t[sp] = tn.s1; ++sp; }
@@ -56,7 +64,6 @@ BVH_INLINE bool bvh4_traverse(__global const float4* nodes, __global const float
             if (m.s3) { stack[sp] = ref.s3; stack_t[sp] = tn.s3; ++sp; }
             if (sp > base) {
                 if (!any_hit) {
-                    /* Insertion sort of the new entries, farthest at the bottom. */
                     for (int i = base + 1; i < sp; ++i) {
                         uint r = stack[i];
                         float t = stack_t[i];
@@ -81,7 +88,6 @@ BVH_INLINE bool bvh4_traverse(__global const float4* nodes, __global const float
                 if (any_hit) return true;
             }
         }
-        /* Pop, skipping entries that a later hit has moved behind t. */
         for (;;) {
             if (sp == 0) return found;
             --sp;

@@ -29,8 +29,8 @@ BVH_INLINE bool bvh8_traverse(__global const float4* nodes, __global const float
     float8 ix = (float8)(inv4.x), iy = (float8)(inv4.y), iz = (float8)(inv4.z);
     float8 tmin8 = (float8)(tmin);
     __global const float8* rows = (__global const float8*)nodes;
-    uint stack[BVH8_STACK_SIZE];
-    float stack_t[BVH8_STACK_SIZE];
+    uint stack[BVH8_STACK_SIZE + 1];   /* + 1: a branchless push stores a missed child one past the top */
+    float stack_t[BVH8_STACK_SIZE + 1];
     int sp = 0;
     uint cur = 0u;
     bool found = false;
@@ -41,17 +41,26 @@ BVH_INLINE bool bvh8_traverse(__global const float4* nodes, __global const float
             float8 tn = bvh8_max(bvh8_max((n[nx] - ox) * ix, (n[ny] - oy) * iy), bvh8_max((n[nz] - oz) * iz, tmin8));
             float8 tf = bvh8_min(bvh8_min((n[fx] - ox) * ix, (n[fy] - oy) * iy), (n[fz] - oz) * iz) * 1.0000004f;
             int8 m = (tn <= tf) & (tn <= (float8)(hit->t));
+            int k = m.s0 + m.s1 + m.s2 + m.s3 + m.s4 + m.s5 + m.s6 + m.s7;   /* minus the number of hits */
             int base = sp;
-            if (any(m)) {
+            if (k == -1) {
+                /* One child hit (the commonest case): go there without the stack. */
+                uint8 r = m ? as_uint8(n[6]) : (uint8)(0u);
+                uint4 r4 = r.lo | r.hi;
+                cur = r4.s0 | r4.s1 | r4.s2 | r4.s3;
+                continue;
+            }
+            if (k != 0) {
                 uint8 ref = as_uint8(n[6]);
-                if (m.s0) { stack[sp] = ref.s0; stack_t[sp] = tn.s0; ++sp; }
-                if (m.s1) { stack[sp] = ref.s1; stack_t[sp] = tn.s1; ++sp; }
-                if (m.s2) { stack[sp] = ref.s2; stack_t[sp] = tn.s2; ++sp; }
-                if (m.s3) { stack[sp] = ref.s3; stack_t[sp] = tn.s3; ++sp; }
-                if (m.s4) { stack[sp] = ref.s4; stack_t[sp] = tn.s4; ++sp; }
-                if (m.s5) { stack[sp] = ref.s5; stack_t[sp] = tn.s5; ++sp; }
-                if (m.s6) { stack[sp] = ref.s6; stack_t[sp] = tn.s6; ++sp; }
-                if (m.s7) { stack[sp] = ref.s7; stack_t[sp] = tn.s7; ++sp; }
+                /* every child is stored, sp passes the hit ones (no branch per child) */
+                stack[sp] = ref.s0; stack_t[sp] = tn.s0; sp -= m.s0;
+                stack[sp] = ref.s1; stack_t[sp] = tn.s1; sp -= m.s1;
+                stack[sp] = ref.s2; stack_t[sp] = tn.s2; sp -= m.s2;
+                stack[sp] = ref.s3; stack_t[sp] = tn.s3; sp -= m.s3;
+                stack[sp] = ref.s4; stack_t[sp] = tn.s4; sp -= m.s4;
+                stack[sp] = ref.s5; stack_t[sp] = tn.s5; sp -= m.s5;
+                stack[sp] = ref.s6; stack_t[sp] = tn.s6; sp -= m.s6;
+                stack[sp] = ref.s7; stack_t[sp] = tn.s7; sp -= m.s7;
                 if (!any_hit) {
                     /* Insertion sort of the new entries, farthest at the bottom. */
                     for (int i = base + 1; i < sp; ++i) {

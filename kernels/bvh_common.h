@@ -3,7 +3,9 @@
 
    Primitive table: 10 words per primitive in leaf order, each leaf cut into blocks of up to 4 primitives
    stored structure of arrays (clrender/accel/primitives.py pack_leaf_blocks; bvh_isect_leaf reads it):
-       triangle i: v0.xyz, v1.xyz, v2.xyz, id = i
+       triangle:   v0.xyz, v1.xyz, v2.xyz, id = its leaf reference (pack_scene: pos << 4 | lane << 2 | (c - 1),
+                   clrender/accel/primitives.py leaf_refs; kernels/shapes/mesh.h finds its vertices from it:
+                   this table is their only copy) or, in tables that the tests pack, its triangle number
        sphere j:   centre.xyz, radius, 0 x 5, id = j | 0x80000000
 
    Hits count for tmin < t < tmax, both sides of triangles. Ray directions need not be normalised.
@@ -19,10 +21,15 @@ typedef struct {
     float t;
     float u;      /* barycentric weight of v1 (triangles; 0 for spheres) */
     float v;      /* barycentric weight of v2 */
-    uint prim;    /* the primitive's id word: triangle id, or sphere id | 0x80000000 */
+    uint prim;    /* the primitive's id word: a triangle's leaf reference, or sphere id | 0x80000000 */
 } Hit;
 
 BVH_INLINE float bvh_min(float a, float b) { return a < b ? a : b; }
+
+/* vload4 and any() of our own: PoCL 3.0 leaves its builtins as calls in large kernels, and a call in the
+   traversal loop spills every vector register around it. Four scalar loads become one unaligned vector load. */
+BVH_INLINE float4 bvh_load4(__global const float* p) { return (float4)(p[0], p[1], p[2], p[3]); }
+BVH_INLINE bool bvh_any4(int4 m) { return (m.s0 | m.s1 | m.s2 | m.s3) != 0; }
 BVH_INLINE float bvh_max(float a, float b) { return a > b ? a : b; }
 
 /* 1/x, with zero components mapped to a huge value of the same sign so slab tests never produce 0*inf. */
@@ -151,15 +158,15 @@ BVH_INLINE bool bvh_isect_leaf(__global const float4* prims, uint first, uint co
         continue;
 #endif
         int4 live = (int4)(0, 1, 2, 3) < (int4)((int)c);
-        uint4 id = as_uint4(vload4(0, q + 9u * c));
+        uint4 id = as_uint4(bvh_load4(q + 9u * c));
         int4 tri = live & ((id & (uint4)(BVH_SPHERE_BIT)) == (uint4)(0u));
         uint kx = (uint)r->kx * c, ky = (uint)r->ky * c, kz = (uint)r->kz * c, c3 = 3u * c;
         float4 okx = (float4)(r->okx), oky = (float4)(r->oky), okz = (float4)(r->okz);
         float4 sx = (float4)(r->sx), sy = (float4)(r->sy);
-        float4 az = vload4(0, q + kz) - okz, bz = vload4(0, q + c3 + kz) - okz, cz = vload4(0, q + 2u * c3 + kz) - okz;
-        float4 ax = vload4(0, q + kx) - okx - sx * az, ay = vload4(0, q + ky) - oky - sy * az;
-        float4 bx = vload4(0, q + c3 + kx) - okx - sx * bz, by = vload4(0, q + c3 + ky) - oky - sy * bz;
-        float4 cx = vload4(0, q + 2u * c3 + kx) - okx - sx * cz, cy = vload4(0, q + 2u * c3 + ky) - oky - sy * cz;
+        float4 az = bvh_load4(q + kz) - okz, bz = bvh_load4(q + c3 + kz) - okz, cz = bvh_load4(q + 2u * c3 + kz) - okz;
+        float4 ax = bvh_load4(q + kx) - okx - sx * az, ay = bvh_load4(q + ky) - oky - sy * az;
+        float4 bx = bvh_load4(q + c3 + kx) - okx - sx * bz, by = bvh_load4(q + c3 + ky) - oky - sy * bz;
+        float4 cx = bvh_load4(q + 2u * c3 + kx) - okx - sx * cz, cy = bvh_load4(q + 2u * c3 + ky) - oky - sy * cz;
         float4 e0 = cx * by - cy * bx;     /* edge p1 p2: weight of p0 */
         float4 e1 = ax * cy - ay * cx;     /* edge p2 p0: weight of p1 */
         float4 e2 = bx * ay - by * ax;     /* edge p0 p1: weight of p2 */
@@ -171,7 +178,7 @@ BVH_INLINE bool bvh_isect_leaf(__global const float4* prims, uint first, uint co
         float4 adet = neg ? -det : det, att = neg ? -tt : tt;
         /* det = 0 (ray in the triangle's plane) or NaN fails here too */
         int4 ok = tri & ~out & (att > (float4)(tmin) * adet) & (att < (float4)(hit->t) * adet);
-        if (any(ok)) {
+        if (bvh_any4(ok)) {
             float4 inv = (float4)(1.0f) / det;
             float4 t4 = ok ? tt * inv : (float4)(INFINITY);
             float m = bvh_min(bvh_min(t4.x, t4.y), bvh_min(t4.z, t4.w));
@@ -185,7 +192,7 @@ BVH_INLINE bool bvh_isect_leaf(__global const float4* prims, uint first, uint co
             if (any_hit) return true;
         }
         int4 sph = live & ~tri;
-        if (any(sph)) {
+        if (bvh_any4(sph)) {
             for (uint l = 0u; l < c; ++l) {
                 uint sid = l == 0u ? id.x : (l == 1u ? id.y : (l == 2u ? id.z : id.w));
                 if (!(sid & BVH_SPHERE_BIT)) continue;

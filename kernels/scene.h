@@ -5,11 +5,12 @@
 #include "math.h"
 #include "frame.h"
 #include "camera.h"
-/* BVH_WIDTH picks the node table the host packed (SceneBuffers.bvh_width): 4 = kernels/bvh4.h (default),
-   8 = kernels/bvh8.h, 2 = kernels/bvh.h. All define bvh_closest_hit / bvh_any_hit over the same primitive
+/* BVH_WIDTH picks the node table the host packed (SceneBuffers.bvh_width): 8 = kernels/bvh8.h (default: ×1.15
+   on the Cornell twin and ×1.12 on a 1 M-triangle mesh over 4-wide, benchmarks/README.md), 4 = kernels/bvh4.h,
+   2 = kernels/bvh.h. All define bvh_closest_hit / bvh_any_hit over the same primitive
    table. */
 #ifndef BVH_WIDTH
-#define BVH_WIDTH 4
+#define BVH_WIDTH 8
 #endif
 #if BVH_WIDTH == 4
 #include "bvh4.h"
@@ -46,7 +47,7 @@ typedef struct {
     float3 po;       /* where rays leaving the surface start from, before the offset along ng (spawn_origin) */
     float off;       /* how far they are pushed off the surface along ng */
     uint shape;
-    uint tri;        /* triangle id, or NONE for spheres */
+    uint tri;        /* the triangle's leaf reference (Hit.prim, see kernels/shapes/mesh.h), or NONE for spheres */
 } Intersection;
 
 /* Spawned rays start off the surface, on the side they leave to, and take tmin = 0, so they neither re-hit
@@ -65,12 +66,25 @@ typedef struct {
 /* The shapes' surface/sample/pdf functions (kernels/shapes/<name>.h) behind generated switches on Shape.type. */
 #include "gen/mesh_dispatch.h"
 
+/* The shape of the triangle at leaf-order position pos: the mesh whose vertex range holds its first vertex index
+   (mesh_vertices rows: (first vertex, shape), ascending; a binary search over a table of one row per mesh). */
+INLINE uint scene_triangle_shape(const SceneData* sd, uint pos) {
+    uint i0 = sd->tri_index[3u * pos];
+    uint lo = 0u, hi = sd->info->n_meshes - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi + 1u) >> 1;
+        if (sd->mesh_vertices[mid].x <= i0) lo = mid; else hi = mid - 1u;
+    }
+    return sd->mesh_vertices[lo].y;
+}
+
 INLINE bool scene_intersect(const SceneData* sd, const Ray* r, Intersection* its) {
     Hit h;
     COUNT_RAY(sd, n_closest);
     if (!bvh_closest_hit(sd->nodes, sd->prims, r->o, r->d, r->tmin, r->tmax, &h)) return false;
     its->t = h.t;
-    uint shape = (h.prim & BVH_SPHERE_BIT) ? sd->sphere_shape[h.prim & ~BVH_SPHERE_BIT] : sd->tri_index[h.prim].w;
+    uint shape = (h.prim & BVH_SPHERE_BIT) ? sd->sphere_shape[h.prim & ~BVH_SPHERE_BIT]
+                                           : scene_triangle_shape(sd, h.prim >> PRIM_REF_POS_SHIFT);
     its->shape = shape;
     return shape_surface(sd, &sd->shapes[shape], r, &h, its);
 }

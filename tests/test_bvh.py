@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from clrender.accel.bvh import LEAF_FLAG, build_bvh
-from clrender.accel.primitives import SPHERE_FLAG, bvh_leaves, pack_leaf_blocks, pack_primitives, primitive_bounds
+from clrender.accel.primitives import (SPHERE_FLAG, bvh_leaves, leaf_refs, pack_leaf_blocks, pack_primitives,
+                                       primitive_bounds)
 
 LOCAL = 64
 
@@ -397,6 +398,39 @@ def test_leaf_blocks_layout():
     assert len(words) >= 10 * 45 + 3                       # a 4-word load at the last row stays inside
     with pytest.raises(ValueError, match="exactly once"):
         pack_leaf_blocks(v0, v1, v2, sp, order, first, count + 1)
+
+
+def test_leaf_refs_find_the_vertices():
+    # pack_scene's id words: a triangle's leaf reference pos << 4 | lane << 2 | (c - 1) leads back to its own
+    # vertices as kernels/shapes/mesh.h mesh_triangle reads them (block at pos - lane, rows of c words);
+    # spheres keep their ids.
+    rng = np.random.default_rng(2)
+    v0, v1, v2 = random_soup(rng, 40)
+    sp = random_spheres(rng, 5)
+    order = rng.permutation(45)
+    count = np.array([1, 2, 3, 4, 5, 6, 7, 8, 9])
+    first = np.concatenate([[0], np.cumsum(count)[:-1]])
+    perm = rng.permutation(len(count))
+    refs = leaf_refs(first[perm], count[perm])
+    tri = order < 40
+    tri_ref = np.empty(40, np.uint32)
+    tri_ref[order[tri]] = refs[tri]
+    words = pack_leaf_blocks(v0, v1, v2, sp, order, first[perm], count[perm], tri_ids=tri_ref).reshape(-1)
+    bits = words.view(np.uint32)
+    for i in range(40):
+        ref = int(tri_ref[i])
+        pos, lane, c = ref >> 4, (ref >> 2) & 3, (ref & 3) + 1
+        assert order[pos] == i
+        q = 10 * (pos - lane) + lane
+        got = np.array([words[q + r * c] for r in range(9)]).reshape(3, 3)
+        want = np.array([v0[i], v1[i], v2[i]], np.float32)
+        assert np.array_equal(got, want), i
+        assert bits[q + 9 * c] == ref
+    spheres = [int(bits[10 * (p - ((r >> 2) & 3)) + ((r >> 2) & 3) + 9 * ((r & 3) + 1)])
+               for p, r in enumerate(refs) if not tri[p]]
+    assert sorted(spheres) == [j | 0x80000000 for j in range(5)]
+    with pytest.raises(ValueError, match="one word per triangle"):
+        pack_leaf_blocks(v0, v1, v2, sp, order, first, count, tri_ids=tri_ref[:-1])
 
 
 # ---------------------------------------------------------------------------------------------- traversal

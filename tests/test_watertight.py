@@ -289,7 +289,7 @@ def test_spawned_rays_neither_rehit_nor_tunnel(tmp_path, ctx, queue, spawn_kerne
     t = verts[tris]
     nrm = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
     nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
-    f, g = first[~outward].astype(np.int64), second[~outward].astype(np.int64)
+    f, g = bufs.triangle_numbers(first[~outward]), bufs.triangle_numbers(second[~outward])
     size = np.ptp(verts, axis=0).max()
     same = (np.abs(np.sum(nrm[f] * nrm[g], 1)) > 1 - 1e-9) & \
         (np.abs(np.sum((t[g, 0] - t[f, 0]) * nrm[f], 1)) < 1e-6 * size)

@@ -13,8 +13,10 @@ triangle ``v0.xyz, as_float(i)``          ``v1.xyz, 0``      ``v2.xyz, 0``
 sphere   ``center.xyz, as_float(j|2^31)`` ``radius, 0, 0, 0`` ``0, 0, 0, 0``
 ======== ================================ ================== ==============
 
-in float32. The vertices themselves, not edges, so that a vertex shared by several triangles is the same
-float in each: the watertight test (kernels/bvh_common.h) relies on it. An empty table has shape
+in float32 (pack_scene gives triangles their :func:`leaf_refs` as id words instead of their numbers, so that a
+hit says where the vertices are: the device keeps no other copy of them). The vertices themselves, not edges,
+so that a vertex shared by several triangles is the same float in each: the watertight test
+(kernels/bvh_common.h) relies on it. An empty table has shape
 (0, 4); OpenCL cannot allocate a zero-size buffer, so callers upload at least one (unused) row.
 """
 from __future__ import annotations
@@ -104,7 +106,39 @@ def bvh_leaves(bvh):
     return (ref[leaf] & np.uint32(~np.uint32(LEAF_FLAG))).astype(np.int64), cnt[leaf]
 
 
-def pack_leaf_blocks(tri_v0, tri_v1, tri_v2, spheres, order, leaf_first, leaf_count):
+def _block_of(n, leaf_first, leaf_count):
+    """Per leaf-order position 0..n-1: the start s of its block, the block's size c and its lane (see
+    :func:`pack_leaf_blocks`); checks that the leaves cover the n positions exactly once."""
+    first = np.asarray(leaf_first, np.int64)
+    count = np.asarray(leaf_count, np.int64)
+    if count.sum() != n or (n and not np.array_equal(np.sort(first), np.concatenate([[0], np.cumsum(
+            count[np.argsort(first)])[:-1]]))):
+        raise ValueError(f"the leaves must cover the {n} primitives of the leaf order exactly once")
+    # Per leaf-order position: its leaf's first and count, then its block's start s, size c and lane l.
+    lf = np.repeat(first, count)
+    lc = np.repeat(count, count)
+    pos = np.repeat(first - np.cumsum(np.concatenate([[0], count[:-1]])), count) + np.arange(n)
+    rel = pos - lf
+    s = lf + rel // BLOCK_LANES * BLOCK_LANES
+    c = np.minimum(BLOCK_LANES, lf + lc - s)
+    out_s, out_c = np.empty(n, np.int64), np.empty(n, np.int64)
+    out_s[pos], out_c[pos] = s, c
+    return out_s, out_c, np.arange(n) - out_s
+
+
+def leaf_refs(leaf_first, leaf_count):
+    """The leaf reference of every leaf-order position (layout.ENUMS PRIM_REF_*): ``pos << 4 | lane << 2 |
+    (c - 1)``, uint32; what :func:`pack_leaf_blocks` writes as a triangle's id word when given them as
+    ``tri_ids``, so that a hit names where the triangle's vertices are (kernels/shapes/mesh.h mesh_triangle)."""
+    n = int(np.sum(leaf_count))
+    if n - 1 > ENUMS["PRIM_REF_MAX_POS"]:
+        raise ValueError(f"{n} primitives: leaf references address at most {ENUMS['PRIM_REF_MAX_POS'] + 1}")
+    s, c, lane = _block_of(n, leaf_first, leaf_count)
+    pos = np.arange(n, dtype=np.int64)
+    return (pos << ENUMS["PRIM_REF_POS_SHIFT"] | lane << 2 | (c - 1)).astype(np.uint32)
+
+
+def pack_leaf_blocks(tri_v0, tri_v1, tri_v2, spheres, order, leaf_first, leaf_count, tri_ids=None):
     """The primitive table the traversal kernels read: ``BLOCK_WORDS`` (40 bytes) per primitive, in leaf
     ``order``, as float32 rows of 4 (padded so that a 4-float load at any row start stays inside).
 
@@ -118,23 +152,22 @@ def pack_leaf_blocks(tri_v0, tri_v1, tri_v2, spheres, order, leaf_first, leaf_co
     read but ignored). A sphere lane holds its centre in rows 0..2 and its radius in row 3; the id word is
     as in :func:`pack_primitives` (sphere ids have bit 31 set). 40 bytes per primitive, no padding, and a
     block's 10 c words are contiguous: the same cache lines as the 3-row table of :func:`pack_primitives`,
-    one ``float4`` per primitive fewer."""
+    one ``float4`` per primitive fewer.
+
+    ``tri_ids`` (uint32, one per triangle id) replaces the triangles' id words; pack_scene gives the triangles'
+    :func:`leaf_refs`. Spheres keep theirs."""
     aos = pack_primitives(tri_v0, tri_v1, tri_v2, spheres, order).reshape(-1, 3, 4)
     n = len(aos)
-    first = np.asarray(leaf_first, np.int64)
-    count = np.asarray(leaf_count, np.int64)
-    if count.sum() != n or (n and not np.array_equal(np.sort(first), np.concatenate([[0], np.cumsum(
-            count[np.argsort(first)])[:-1]]))):
-        raise ValueError(f"the leaves must cover the {n} primitives of the leaf order exactly once")
-    # Per leaf-order position: its leaf's first and count, then its block's start s, size c and lane l.
-    lf = np.repeat(first, count)
-    lc = np.repeat(count, count)
-    pos = np.repeat(first - np.cumsum(np.concatenate([[0], count[:-1]])), count) + np.arange(n)
-    rel = pos - lf
-    s = lf + rel // BLOCK_LANES * BLOCK_LANES
-    c = np.minimum(BLOCK_LANES, lf + lc - s)
-    lane = pos - s
-    bits = aos.view(np.uint32)[pos]                 # moved as bits: ids are not floats
+    s, c, lane = _block_of(n, leaf_first, leaf_count)
+    bits = aos.view(np.uint32)                      # moved as bits: ids are not floats
+    if tri_ids is not None:
+        order = np.asarray(order, np.int64)
+        T = _as3(tri_v0, "tri_v0").shape[0]
+        tri_ids = np.asarray(tri_ids, np.uint32)
+        if tri_ids.shape != (T,):
+            raise ValueError(f"tri_ids must have one word per triangle ({T}), got shape {tri_ids.shape}")
+        tri = order < T
+        bits[tri, 0, 3] = tri_ids[order[tri]]
     words = np.concatenate([bits[:, 0, :3], bits[:, 1, :3], bits[:, 2, :3], bits[:, 0, 3:]], axis=1)
     out = np.zeros(((BLOCK_WORDS * n + BLOCK_LANES) // 4 + 1) * 4, np.uint32)
     at = BLOCK_WORDS * s[:, None] + np.arange(BLOCK_WORDS)[None, :] * c[:, None] + lane[:, None]

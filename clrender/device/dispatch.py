@@ -124,7 +124,8 @@ SHAPE = Kind(
     header=(("type", "uint"), ("flags", "uint"),
             ("bsdf", "uint"),
             ("emitter", "uint"),     # NONE if the shape does not emit
-            ("first", "uint"),       # meshes: first triangle (tri_index row); spheres: row of the spheres table
+            ("first", "uint"),       # emitting meshes: offset of their triangles' leaf references in the `tri_refs`
+                                     # table (NONE when not emitting); spheres: row of the spheres table
             ("count", "uint"),       # meshes: triangle count; spheres: 1
             ("cdf", "uint"),         # emitting meshes: offset of their triangle-area CDF in the `cdf` table
             ("area", "float")),      # emitting shapes: total surface area
@@ -152,7 +153,8 @@ INTEGRATOR = Kind(
             ("max_depth", "uint"),        # path length limit (0xFFFFFFFF: none)
             ("rr_depth", "uint"),         # Russian roulette starts at this depth
             ("n_infinite", "uint"),       # entries of the infinite-emitter index table
-            ("emitter_cdf", "uint")),     # NONE: choose a light uniformly; else its selection CDF's offset in `cdf`
+            ("emitter_cdf", "uint"),      # NONE: choose a light uniformly; else its selection CDF's offset in `cdf`
+            ("n_meshes", "uint")),        # rows of the mesh_vertices table
     param_bytes=32, flags=(), dispatch_name="integrator", row="info", methods=(), dispatched=False)
 
 # Reconstruction filters: their parameters are a union in the Camera row; the kernels evaluate the profile f(x)

@@ -24,12 +24,16 @@ STRUCTS: dict[str, list[tuple]] = {}
 # struct, its SCENE_ARGS argument list (each table is the argument s_<name>) and SCENE_INIT are generated from
 # this list; clrender.pack.SceneBuffers holds one numpy array per entry, and the host sets them by name.
 SCENE_TABLES: list[tuple[str, str, str]] = [
-    ("nodes", "float4", "BVH nodes (2- or 4-wide layout, see BVH_WIDTH)"),
-    ("prims", "float4", "primitives in BVH leaf order (triangles as three float4, spheres)"),
-    ("positions", "float4", "per vertex, xyz"),
-    ("normals", "float4", "per vertex, xyz (meshes with SHAPE_HAS_NORMALS)"),
+    ("nodes", "float4", "BVH nodes (2-, 4- or 8-wide layout, see BVH_WIDTH)"),
+    ("prims", "float4", "primitives in BVH leaf order, 10 words each in blocks of up to 4 (triangles' vertices, "
+                        "spheres), clrender/accel/primitives.py pack_leaf_blocks; the only copy of the vertices"),
+    ("normals", "float", "per vertex, x y z (meshes with SHAPE_HAS_NORMALS)"),
     ("uvs", "float2", "per vertex (meshes with SHAPE_HAS_UVS)"),
-    ("tri_index", "uint4", "i0, i1, i2, shape"),
+    ("tri_index", "uint", "per leaf-order position (Hit.prim >> PRIM_REF_POS_SHIFT): the triangle's three vertex "
+                          "indices (NONE at a sphere's position)"),
+    ("mesh_vertices", "uint2", "per mesh, in shape order: (its first vertex index, its shape); a triangle's shape is "
+                               "the row of the last first vertex <= its i0"),
+    ("tri_refs", "uint", "emitting meshes' triangles' leaf references (Hit.prim), in mesh order (Shape.first)"),
     ("spheres", "float4", "centre xyz, radius"),
     ("sphere_shape", "uint", "the shape of each sphere"),
     ("shapes", "Shape", "one row per shape"),
@@ -57,6 +61,11 @@ ENUMS: dict[str, int] = {
     "BVH8_STACK_SIZE": 96,            # 8-wide traversal stack (likewise)
     "BVH4_COUNT_SHIFT": 27,           # 4-wide leaf reference: LEAF_BIT | (count - 1) << 27 | first
     "BVH4_MAX_LEAF_COUNT": 16,
+    # A triangle's leaf reference, the id word of its lane in the primitive table (so Hit.prim): its leaf-order
+    # position pos, its lane l in its block and the block's size c, as pos << 4 | l << 2 | (c - 1); the block
+    # starts at pos - l, so the kernels find its vertices there (kernels/shapes/mesh.h mesh_triangle)
+    "PRIM_REF_POS_SHIFT": 4,
+    "PRIM_REF_MAX_POS": (1 << 27) - 1,
 }
 
 
@@ -164,7 +173,7 @@ def _plain_dtype_cached(struct: str) -> np.dtype:
 
 
 _ELEMENTS = {"float": (np.float32, ()), "uint": (np.uint32, ()), "float2": (np.float32, (2,)),
-             "float4": (np.float32, (4,)), "uint4": (np.uint32, (4,))}
+             "uint2": (np.uint32, (2,)), "float4": (np.float32, (4,)), "uint4": (np.uint32, (4,))}
 
 
 def table_element(name: str) -> tuple:

@@ -88,6 +88,14 @@ def _compiler_stderr():
 _PROGRAMS: dict = {}
 
 
+def is_pocl(ctx) -> bool:
+    """Whether the context's device runs on PoCL (its platform is "Portable Computing Language")."""
+    try:
+        return "Portable Computing Language" in ctx.devices[0].platform.name
+    except Exception:  # noqa: BLE001  (a context without a readable platform: build as for any driver)
+        return False
+
+
 def build_program(ctx, source: str, defines: dict | None = None, fast_math: bool = False,
                   with_types: bool = True, use_cache: bool = True):
     """Build (and cache) a program; ``source`` may ``#include`` any header under kernels/.
@@ -100,6 +108,11 @@ def build_program(ctx, source: str, defines: dict | None = None, fast_math: bool
         from .layout import c_header
 
         source = c_header() + "\n" + source
+    defines = dict(defines or {})
+    if is_pocl(ctx):
+        # kernels/builtins.h: PoCL leaves its builtins as calls; ours compile to the instructions
+        defines.setdefault("CLRENDER_INLINE_BUILTINS", None)
+    source = '#include "builtins.h"\n' + source
     opts = build_options(defines, fast_math)
     key = (ctx.int_ptr, source, tuple(opts))
     prg = _PROGRAMS.get(key) if use_cache else None

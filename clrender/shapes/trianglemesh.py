@@ -1,8 +1,11 @@
 """Shared by the mesh plugins: load, bake into world space, drop degenerate triangles, pack the triangles.
 
-Tables (kernels/shapes/mesh.h): positions/normals/uvs per vertex (normals and uvs zero where the mesh has none,
-flagged by SHAPE_HAS_NORMALS / SHAPE_HAS_UVS), tri_index (i0, i1, i2, shape) per triangle; the row's first/count
-are the mesh's range of tri_index. An emitting mesh is sampled by picking a triangle from its area CDF.
+Tables (kernels/shapes/mesh.h): normals/uvs per vertex (zero where the mesh has none, flagged by
+SHAPE_HAS_NORMALS / SHAPE_HAS_UVS); the positions and triangles go to PackContext.add_mesh, from which pack_scene
+makes the primitive table (the vertices) and tri_index (vertex indices), both in BVH leaf order, and the
+mesh_vertices row that gives a triangle's shape. The row's count is the mesh's triangle count; an emitting mesh is
+sampled by picking a triangle from its area CDF, and its first is the offset of its triangles' leaf references
+in the tri_refs table.
 """
 from __future__ import annotations
 
@@ -11,6 +14,7 @@ import logging
 import numpy as np
 
 from ..device import dispatch
+from ..device.layout import NONE
 from ..errors import SceneError
 from ..scene.transform import Transform
 from .shape import Shape
@@ -25,23 +29,20 @@ class TriangleMesh(Shape):
         m = self.mesh
         nv = len(m.positions)
         flags = 0
-        p4 = np.zeros((nv, 4), np.float32)
-        p4[:, :3] = m.positions
-        base = ctx.add_table("positions", "float4", p4)
-        n4 = np.zeros((nv, 4), np.float32)
+        base = ctx.add_mesh(index, m.positions, m.faces)
+        normals = np.zeros((nv, 3), np.float32)
         if m.normals is not None:
             flags |= dispatch.flag_defines()["SHAPE_HAS_NORMALS"]
-            n4[:, :3] = m.normals
-        ctx.add_table("normals", "float4", n4)     # one row per vertex either way: tri_index addresses both
+            normals = m.normals
+        # one row per vertex either way: a triangle's vertex indices address both
+        if ctx.add_table("normals", "float", normals) != 3 * base:
+            raise AssertionError("the normals table is out of step with the mesh vertices")
         if m.uvs is not None:
             flags |= dispatch.flag_defines()["SHAPE_HAS_UVS"]
             ctx.add_table("uvs", "float2", m.uvs)
         else:
             ctx.add_table("uvs", "float2", np.zeros((nv, 2), np.float32))
-        idx = np.empty((len(m.faces), 4), np.uint32)
-        idx[:, :3] = m.faces + base
-        idx[:, 3] = index
-        row["first"] = ctx.add_table("tri_index", "uint4", idx)
+        row["first"] = NONE         # pack_scene: emitting meshes' offset in the tri_refs table
         row["count"] = len(m.faces)
         row["flags"] = flags
 

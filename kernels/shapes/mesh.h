@@ -1,28 +1,58 @@
 /* Triangle meshes (clrender/shapes/trianglemesh.py): the surface at a hit and uniform-by-area sampling.
 
-   Row: first/count = the mesh's range of tri_index (i0, i1, i2, shape); flags SHAPE_HAS_NORMALS (interpolated
-   per-vertex normals shade) and SHAPE_HAS_UVS (per-vertex uvs; otherwise uv = the barycentrics (b1, b2));
-   emitting meshes: cdf = offset of the triangle-area CDF in the `cdf` table, area = total area.
+   A triangle is named by its leaf reference (Hit.prim: layout.py ENUMS PRIM_REF_*, clrender/accel/primitives.py
+   leaf_refs), which says where its vertices are in the primitive table, their only copy on the device;
+   tri_index holds its vertex indices at the same leaf-order position, for the per-vertex normals and uvs.
+   Row: count = the mesh's triangle count; flags SHAPE_HAS_NORMALS (interpolated per-vertex normals shade) and
+   SHAPE_HAS_UVS (per-vertex uvs; otherwise uv = the barycentrics (b1, b2)); emitting meshes: first = offset of
+   their triangles' leaf references in `tri_refs`, cdf = offset of the triangle-area CDF in the `cdf` table
+   (both in the mesh's triangle order), area = total area.
    Sampling picks a triangle by binary search in the CDF (probability area_i / A), rescales the sample and reuses
    it for uniform barycentrics, so the point has area density 1/A. */
 #ifndef CLRENDER_SHAPES_MESH_H
 #define CLRENDER_SHAPES_MESH_H
 #include "common.h"
 
-/* The shading normal at barycentrics (b0, b1, b2) of triangle idx: interpolated vertex normals, or ng. */
-INLINE float3 mesh_shading_normal(const SceneData* sd, __global const Shape* s, uint4 idx, float b0, float b1,
-                                  float b2, float3 ng) {
+typedef struct {
+    float3 p0, p1, p2;
+    uint i0, i1, i2;   /* vertex indices (rows of the per-vertex tables) */
+} MeshTriangle;
+
+/* The triangle with leaf reference `ref` (pos << PRIM_REF_POS_SHIFT | lane << 2 | (c - 1)): its block of c
+   primitives starts at leaf-order position pos - lane, and row r of its lane is word 10 (pos - lane) + r c + lane
+   of the primitive table (the block layout that bvh_isect_leaf reads, kernels/bvh_common.h). */
+INLINE MeshTriangle mesh_triangle(const SceneData* sd, uint ref) {
+    uint pos = ref >> PRIM_REF_POS_SHIFT, lane = (ref >> 2) & 3u, c = (ref & 3u) + 1u;
+    __global const float* q = (__global const float*)sd->prims + (10u * (pos - lane) + lane);
+    MeshTriangle t;
+    t.p0 = (float3)(q[0], q[c], q[2u * c]);
+    t.p1 = (float3)(q[3u * c], q[4u * c], q[5u * c]);
+    t.p2 = (float3)(q[6u * c], q[7u * c], q[8u * c]);
+    __global const uint* idx = sd->tri_index + 3u * pos;
+    t.i0 = idx[0]; t.i1 = idx[1]; t.i2 = idx[2];
+    return t;
+}
+
+/* Per-vertex normal i (3 floats a row: the table has no padding). */
+INLINE float3 mesh_normal(const SceneData* sd, uint i) {
+    __global const float* n = sd->normals + 3u * i;
+    return (float3)(n[0], n[1], n[2]);
+}
+
+/* The shading normal at barycentrics (b0, b1, b2) of triangle t: interpolated vertex normals, or ng. */
+INLINE float3 mesh_shading_normal(const SceneData* sd, __global const Shape* s, const MeshTriangle* t, float b0,
+                                  float b1, float b2, float3 ng) {
     if (!(s->flags & SHAPE_HAS_NORMALS)) return ng;
-    float3 n = sd->normals[idx.x].xyz * b0 + sd->normals[idx.y].xyz * b1 + sd->normals[idx.z].xyz * b2;
+    float3 n = mesh_normal(sd, t->i0) * b0 + mesh_normal(sd, t->i1) * b1 + mesh_normal(sd, t->i2) * b2;
     float l2 = dot3(n, n);
     return l2 > 0.0f ? n * (1.0f / sqrt(l2)) : ng;
 }
 
 INLINE bool mesh_surface(const SceneData* sd, __global const Shape* s, const Ray* r, const Hit* h,
                          Intersection* its) {
-    uint4 idx = sd->tri_index[h->prim];
+    MeshTriangle tri = mesh_triangle(sd, h->prim);
     float b0 = 1.0f - h->u - h->v;
-    float3 p0 = sd->positions[idx.x].xyz, p1 = sd->positions[idx.y].xyz, p2 = sd->positions[idx.z].xyz;
+    float3 p0 = tri.p0, p1 = tri.p1, p2 = tri.p2;
     its->p = p0 * b0 + p1 * h->u + p2 * h->v;
     float3 c = cross3(p1 - p0, p2 - p0);
     float a2 = len3(c);                          /* twice the area */
@@ -37,12 +67,11 @@ INLINE bool mesh_surface(const SceneData* sd, __global const Shape* s, const Ray
     float w0 = maxf(b0, k * len3(p2 - p1)), w1 = maxf(h->u, k * len3(p0 - p2)), w2 = maxf(h->v, k * len3(p1 - p0));
     float ws = w0 + w1 + w2;
     its->po = ws > 0.0f && ws < INFINITY ? (p0 * w0 + p1 * w1 + p2 * w2) * (1.0f / ws) : its->p;
-    its->sh = frame_from_normal(mesh_shading_normal(sd, s, idx, b0, h->u, h->v, ng));
+    its->sh = frame_from_normal(mesh_shading_normal(sd, s, &tri, b0, h->u, h->v, ng));
     if (s->flags & SHAPE_HAS_UVS)
-        its->uv = sd->uvs[idx.x] * b0 + sd->uvs[idx.y] * h->u + sd->uvs[idx.z] * h->v;
+        its->uv = sd->uvs[tri.i0] * b0 + sd->uvs[tri.i1] * h->u + sd->uvs[tri.i2] * h->v;
     else
         its->uv = (float2)(h->u, h->v);
-    its->shape = idx.w;
     its->tri = h->prim;
     return true;
 }
@@ -53,16 +82,16 @@ INLINE float mesh_sample(const SceneData* sd, __global const Shape* s, float3 re
     float lo = i > 0u ? cdf[i - 1u] : 0.0f, hi = cdf[i];
     float ux = hi > lo ? (u.x - lo) / (hi - lo) : 0.5f;
     ux = clampf(ux, 0.0f, 0x1.fffffep-1f);
-    uint4 idx = sd->tri_index[s->first + i];
-    float3 p0 = sd->positions[idx.x].xyz, p1 = sd->positions[idx.y].xyz, p2 = sd->positions[idx.z].xyz;
+    MeshTriangle tri = mesh_triangle(sd, sd->tri_refs[s->first + i]);
+    float3 p0 = tri.p0, p1 = tri.p1, p2 = tri.p2;
     float2 b = square_to_uniform_triangle((float2)(ux, u.y));
     float b0 = 1.0f - b.x - b.y;
     float3 p = p0 * b0 + p1 * b.x + p2 * b.y;
     float3 ng = normalize3(cross3(p1 - p0, p2 - p0));
-    float3 n = mesh_shading_normal(sd, s, idx, b0, b.x, b.y, ng);
+    float3 n = mesh_shading_normal(sd, s, &tri, b0, b.x, b.y, ng);
     float pdf = shape_point_sample(ss, ref, p, n, ng, 1.0f / s->area);
     /* the uv mesh_surface gives at this point (textured emission) */
-    ss->uv = (s->flags & SHAPE_HAS_UVS) ? sd->uvs[idx.x] * b0 + sd->uvs[idx.y] * b.x + sd->uvs[idx.z] * b.y : b;
+    ss->uv = (s->flags & SHAPE_HAS_UVS) ? sd->uvs[tri.i0] * b0 + sd->uvs[tri.i1] * b.x + sd->uvs[tri.i2] * b.y : b;
     return pdf;
 }
 
