@@ -17,6 +17,7 @@ from .accel.bvh import build_bvh
 from .accel.bvh4 import Bvh4Unsupported, collapse_bvh4
 from .accel.primitives import (BUILD_OPTIONS, BUILD_OPTIONS_BY_WIDTH, bvh_leaves, leaf_refs, pack_leaf_blocks,
                                primitive_bounds)
+from .bsdfs.composite import composite_depth
 from .device import dispatch, layout
 from .device.layout import ENUMS, NONE
 from .errors import SceneError
@@ -40,6 +41,8 @@ class SceneBuffers:
     #: host only: the primitive number at each leaf-order position (triangles first, in the order their meshes
     #: added them, then spheres), for :meth:`triangle_numbers`
     leaf_order: np.ndarray | None = None
+    #: the device plugins the tables use (the Renderer builds its program for them); None: unknown (all)
+    plugins: dispatch.PluginSet | None = None
 
     def __post_init__(self):
         names = [n for n, _, _ in layout.SCENE_TABLES]
@@ -281,5 +284,11 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
             own[table] = ctx.array(table)[:1] * 0
     tables = {name: own[name] if name in own else ctx.array(name) for name, _, _ in layout.SCENE_TABLES}
     stats["device_bytes"] = int(sum(a.nbytes for a in tables.values()))
+    # Tags from the real rows only (an empty table's zero row and texel rows are not plugins).
+    used = dispatch.PluginSet.from_tags(
+        {"bsdf": {int(r["type"]) for r in bsdf_rows}, "mesh": set(shape_rows["type"].tolist()),
+         "emitter": {int(r["type"]) for r in emitter_rows}, "texture": ctx.textures.tags,
+         "rfilter": {int(camera[0]["filter_type"])}},
+        {"bsdf": max((composite_depth(b) for b in {id(s.bsdf): s.bsdf for s in shapes}.values()), default=0)})
     return SceneBuffers(tables=tables, camera=camera, filter_cdf=filter_cdf, stats=stats, bvh_width=bvh_width,
-                        leaf_order=np.asarray(bvh.order, np.int64))
+                        leaf_order=np.asarray(bvh.order, np.int64), plugins=used)

@@ -28,10 +28,14 @@ TARGET_LAUNCH_SECONDS = 0.2  # keeps progress, Ctrl-C and time limits responsive
 
 
 def render_defines(scene, buffers, extra: dict | None = None) -> dict:
-    """The -D defines of a program over `buffers`: the scene's integrator (if a scene is given) and the BVH layout
-    the packer chose (always passed, so kernels/scene.h's own default never has to agree with the host's)."""
+    """The -D defines of a program over `buffers`: the scene's integrator (if a scene is given), the BVH layout
+    the packer chose (always passed, so kernels/scene.h's own default never has to agree with the host's) and the
+    device plugins the tables use (the program compiles only those; ``extra={"CLR_USE_ALL_PLUGINS": 1}`` builds
+    the full program, which gives the same image)."""
     defines = {} if scene is None else {"INTEGRATOR": scene.integrator.kernel}
     defines["BVH_WIDTH"] = buffers.bvh_width
+    if getattr(buffers, "plugins", None) is not None:
+        defines.update(buffers.plugins.defines())
     return {**defines, **(extra or {})}
 
 
@@ -153,11 +157,6 @@ class Renderer:
         args = self.args.set_scene(self._scene_bufs)
         args.set(cam=self._camera, filter_cdf=self._filter, acc0=d_acc0, acc1=d_acc1, bad=d_bad, rays=d_rays)
         stats = RenderStats(build_seconds=self.build_seconds, upload_seconds=self.upload_seconds)
-        bar = None
-        if progress:
-            from tqdm import tqdm
-
-            bar = tqdm(total=spp, unit="spp", desc="rendering", dynamic_ncols=True, leave=True)
         done = 0
         per_pass = 1
         if not self._warm:
@@ -171,6 +170,11 @@ class Renderer:
             self._warm = True
             self.build_seconds += time.perf_counter() - t0
             stats.build_seconds = self.build_seconds
+        bar = None
+        if progress:  # after the warm-up launch: the bar says rendering has started (a Ctrl-C now keeps an image)
+            from tqdm import tqdm
+
+            bar = tqdm(total=spp, unit="spp", desc="rendering", dynamic_ncols=True, leave=True)
         t_start = time.perf_counter()
         with _SigintFlag() as flag:
             try:

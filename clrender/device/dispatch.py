@@ -18,6 +18,12 @@ From the registered plugins of each kind this module derives, at program build t
 - ``gen/<kind>_dispatch.h``: the plugin headers' includes and one ``switch`` per method, written into a
   generated-headers folder that build_program puts on the include path. A plugin whose header lacks a method
   it declares fails the build (an undeclared function is an error in OpenCL C).
+
+Each plugin's include and cases are guarded by ``CLR_USE_<KIND>_<PREFIX>`` (or ``CLR_USE_ALL_PLUGINS``), and the
+composite levels by ``<KIND>_COMPOSITE_LEVELS``: a render program gets the defines of the plugins its packed
+scene uses (PluginSet, filled by pack_scene), so it compiles only their code. Tags never depend on the set: the
+same tables run on a specialised and on a full program, and a tag outside the set takes the method's default
+body. A build that defines no ``CLR_PLUGIN_SET`` (unit-test kernels, tools) holds every plugin.
 Compare pbrt-v4's TaggedPointer::Dispatch and Mitsuba 3's BSDFFlags/EmitterFlags.
 """
 from __future__ import annotations
@@ -55,10 +61,16 @@ class Kind:
     type_field: str = "type"   # the row's tag field the switch reads
     composite_levels: int = 0  # nesting levels of composite plugins (COMPOSITE = True) the generated code supports
     registry_tags: tuple = ()  # the object tags its plugins register under, per format (default: (tag,))
+    use_name: str = ""         # the kind's word in CLR_USE_<KIND>_<PREFIX> (default: tag in capitals)
 
     @property
     def tags(self) -> tuple:
         return self.registry_tags or (self.tag,)
+
+    @property
+    def levels_define(self) -> str:
+        """The define that says how many composite levels a specialised program compiles (0..composite_levels)."""
+        return f"{self.use_name or self.tag.upper()}_COMPOSITE_LEVELS"
 
 
 BSDF = Kind(
@@ -108,7 +120,7 @@ EMITTER = Kind(
 # kernels/shapes/<prefix>.h, the surface at a BVH hit (used by scene_intersect) and the sampling of a point on it
 # with its solid-angle density (used by the area emitter). Nori files call them <mesh>, Mitsuba files <shape>.
 SHAPE = Kind(
-    tag="mesh", struct="Shape", registry_tags=("mesh", "shape"),
+    tag="mesh", struct="Shape", registry_tags=("mesh", "shape"), use_name="SHAPE",
     header=(("type", "uint"), ("flags", "uint"),
             ("bsdf", "uint"),
             ("emitter", "uint"),     # NONE if the shape does not emit
@@ -281,54 +293,121 @@ def is_composite(cls) -> bool:
     return bool(getattr(cls, "COMPOSITE", False))
 
 
+ALL_PLUGINS = "CLR_USE_ALL_PLUGINS"   # defined (or no CLR_PLUGIN_SET): every registered plugin is compiled
+PLUGIN_SET = "CLR_PLUGIN_SET"         # defined by a specialised build, with one CLR_USE_* per plugin it uses
+
+
+def use_define(kind: Kind, prefix: str) -> str:
+    """The define that puts plugin `prefix` of `kind` into a specialised program (CLR_USE_BSDF_DIFFUSE)."""
+    return f"CLR_USE_{kind.use_name or kind.tag.upper()}_{prefix.upper()}"
+
+
+@dataclass(frozen=True)
+class PluginSet:
+    """The device plugins a packed scene uses: (kind tag, prefix) pairs, and the composite nesting depth of each
+    kind that has composites (0: no composite). ``defines()`` are the -D options of a program built for it."""
+    used: frozenset
+    levels: tuple = ()     # ((kind tag, depth), ...)
+
+    @classmethod
+    def from_tags(cls, tags: dict, levels: dict | None = None) -> "PluginSet":
+        """From the type tags found in packed rows, per kind tag ({"bsdf": {3, 6}, ...})."""
+        used = set()
+        for kind_tag, found in tags.items():
+            classes = plugins(kind_tag)
+            for t in found:
+                t = int(t)
+                if not 0 <= t < len(classes):
+                    raise ValueError(f"{kind_tag} tag {t} is not a registered plugin (0..{len(classes) - 1})")
+                used.add((kind_tag, prefix_of(classes[t])))
+        return cls(frozenset(used), tuple(sorted((levels or {}).items())))
+
+    def defines(self) -> dict:
+        out = {PLUGIN_SET: None}
+        for kind_tag, prefix in sorted(self.used):
+            out[use_define(KINDS[kind_tag], prefix)] = None
+        for kind_tag, depth in self.levels:
+            kind = KINDS[kind_tag]
+            if not 0 <= depth <= kind.composite_levels:
+                raise ValueError(f"{kind_tag} composites nested {depth} deep; at most {kind.composite_levels}")
+            out[kind.levels_define] = int(depth)
+        return out
+
+
 def dispatch_source(kind: Kind) -> str:
     """The generated header: includes of the plugins' headers and one switch per method.
 
     With composite plugins, level 0 is a switch over the leaf plugins and level n (1..kind.composite_levels) a
     switch over the composites whose children are dispatched by level n-1 (any other tag falls through to level
-    n-1); <dispatch_name>_<method> is the top level. A composite's header has no include guard: it is included
+    n-1); <dispatch_name>_<method> calls the top level. A composite's header has no include guard: it is included
     once per level with COMPOSITE_FN(f) naming its functions at that level (f_l<n>) and CHILD_FN(m) the level
     below's dispatcher (<dispatch_name>_l<n-1>_<m>). Composite levels are out-of-line functions, so code size
-    grows with the number of levels, not with the product of the composites' calls."""
+    grows with the number of levels, not with the product of the composites' calls.
+
+    Every plugin's include and cases sit under its CLR_USE_* guard, and the levels above
+    <KIND>_COMPOSITE_LEVELS (all of them without a plugin set) are left out: see the module docstring."""
+    up = kind.tag.upper()
     out = [f"/* generated by clrender/device/dispatch.py from the registered {kind.tag} plugins: do not edit */",
-           f"#ifndef CLRENDER_GEN_{kind.tag.upper()}_DISPATCH_H", f"#define CLRENDER_GEN_{kind.tag.upper()}_DISPATCH_H"]
+           f"#ifndef CLRENDER_GEN_{up}_DISPATCH_H", f"#define CLRENDER_GEN_{up}_DISPATCH_H",
+           f"#if !defined({PLUGIN_SET}) && !defined({ALL_PLUGINS})",
+           f"#define {ALL_PLUGINS} 1", "#endif"]
     out += [f'#include "{h}"' for h in kind.after]
     classes = plugins(kind.tag)
     composites = [c for c in classes if is_composite(c)]
     levels = kind.composite_levels if composites else 0
-    for cls in classes:
-        if not is_composite(cls):
-            out.append(f'#include "{cls.kernel}"')
+
+    def guard(cls):
+        return f"#if defined({ALL_PLUGINS}) || defined({use_define(kind, prefix_of(cls))})"
 
     def name(level, m):
-        return f"{kind.dispatch_name}_{m.name}" if level == levels else f"{kind.dispatch_name}_l{level}_{m.name}"
+        return f"{kind.dispatch_name}_{m.name}" if not levels else f"{kind.dispatch_name}_l{level}_{m.name}"
 
+    def cases(m, pick, call):
+        for tag, cls in enumerate(classes):
+            if m.name in methods_of(cls, kind) and pick(cls):
+                out.extend([guard(cls), f"    case {tag}u: return {call(cls)}({m.args});", "#endif"])
+
+    for cls in classes:
+        if not is_composite(cls):
+            out.extend([guard(cls), f'#include "{cls.kernel}"', "#endif"])
+    if levels:
+        # how many composite levels this program compiles: all without a plugin set, else the set's depth
+        lv = f"CLR_{up}_LEVELS"
+        out += [f"#if defined({ALL_PLUGINS}) || !defined({kind.levels_define})", f"#define {lv} {levels}",
+                "#else", f"#define {lv} {kind.levels_define}", "#endif",
+                f"#if {lv} < 0 || {lv} > {levels}",
+                f'#error "{kind.levels_define} must be 0..{levels}"', "#endif"]
     for m in kind.methods:
         out.append(f"INLINE {m.ret} {name(0, m)}({m.params}) {{")
         out.append(f"    switch ({kind.row}->{kind.type_field}) {{")
-        for tag, cls in enumerate(classes):
-            if m.name in methods_of(cls, kind) and not is_composite(cls):
-                out.append(f"    case {tag}u: return {prefix_of(cls)}_{m.name}({m.args});")
+        cases(m, lambda c: not is_composite(c), lambda c: f"{prefix_of(c)}_{m.name}")
         out.append(f"    default: {m.default}")
         out.append("    }")
         out.append("}")
     for level in range(1, levels + 1):
+        out.append(f"#if {lv} >= {level}")
         out.append(f"#define COMPOSITE_FN(f) f##_l{level}")
-        out.append(f"#define CHILD_FN(m) {kind.dispatch_name}_l{level - 1}_##m" if level > 1 else
-                   f"#define CHILD_FN(m) {kind.dispatch_name}_{'l0_' if levels else ''}##m")
+        out.append(f"#define CHILD_FN(m) {kind.dispatch_name}_l{level - 1}_##m")
         for cls in composites:
-            out.append(f'#include "{cls.kernel}"')
+            out.extend([guard(cls), f'#include "{cls.kernel}"', "#endif"])
         out.append("#undef COMPOSITE_FN")
         out.append("#undef CHILD_FN")
         for m in kind.methods:
             out.append(f"static __attribute__((noinline)) {m.ret} {name(level, m)}({m.params}) {{")
             out.append(f"    switch ({kind.row}->{kind.type_field}) {{")
-            for tag, cls in enumerate(classes):
-                if m.name in methods_of(cls, kind) and is_composite(cls):
-                    out.append(f"    case {tag}u: return {prefix_of(cls)}_{m.name}_l{level}({m.args});")
+            cases(m, is_composite, lambda c: f"{prefix_of(c)}_{m.name}_l{level}")
             out.append(f"    default: return {name(level - 1, m)}({m.args});")
             out.append("    }")
             out.append("}")
+        out.append("#endif")
+    if levels:
+        # the kind's entry points call the top level this program has
+        for level in range(levels + 1):
+            out.append(f"#{'if' if level == 0 else 'elif'} {lv} == {level}")
+            for m in kind.methods:
+                out.append(f"INLINE {m.ret} {kind.dispatch_name}_{m.name}({m.params}) "
+                           f"{{ return {name(level, m)}({m.args}); }}")
+        out.append("#endif")
     out.append("#endif")
     return "\n".join(out) + "\n"
 

@@ -139,11 +139,11 @@ def _textures(ctx, textures):
 
 
 def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 0.5), row_index=None,
-                      first: int = 0, textures=None) -> BsdfSamples:
+                      first: int = 0, textures=None, defines=None) -> BsdfSamples:
     """n calls of bsdf_sample on the device. `bsdf_row`: one packed row or an array of rows (then
     `row_index` (n,) picks each sample's row); `wi`: (3,) or (n,3) in the local frame (normalised here);
-    `uv`: (2,) or (n,2); `textures`: the table the rows' texture parameters index. Sample i uses the Sampler stream
-    (seed, first + i, 0)."""
+    `uv`: (2,) or (n,2); `textures`: the table the rows' texture parameters index; `defines`: of the program (a
+    plugin set's, say; default: every plugin). Sample i uses the Sampler stream (seed, first + i, 0)."""
     cl = _cl()
     rows = _rows(bsdf_row)
     wi = np.asarray(wi, np.float64)
@@ -154,7 +154,7 @@ def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 
         raise ValueError("row_index must be (n,) indices into bsdf_row")
     args[:, 3] = idx.view(np.float32)
     uvs = _per_item(uv, n, 2)
-    k = _kernel(ctx, "bsdf_sample_batch")
+    k = _kernel(ctx, "bsdf_sample_batch", defines=defines)
     mf = cl.mem_flags
     d_rows = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=rows)
     d_tex = _textures(ctx, textures)

@@ -48,12 +48,14 @@ class TextureTable:
     def __init__(self):
         self.rows: list = []
         self._index: dict[int, int] = {}
+        self.tags: set[int] = set()     # the texture plugins' tags (texel rows hold no tag)
 
     def add(self, texture) -> int:
         key = id(texture)
         if key not in self._index:
             self._index[key] = len(self.rows)
             self.rows.append(texture.pack())
+            self.tags.add(int(self.rows[-1]["type"]))
             px = texture.texels()
             if px is not None:
                 self.add_texels(px)
