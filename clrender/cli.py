@@ -33,8 +33,6 @@ def _seconds(text: str) -> float:
 
 
 def cmd_render(args) -> int:
-    from .background import Background
-    from .device.context import get_context
     from .loader import load_scene
     from .output import output_paths
     from .renderer import Interrupted, Renderer
@@ -49,23 +47,14 @@ def cmd_render(args) -> int:
         return cmd_render_distributed(args, _defines(args.define))
     t0 = time.perf_counter()
     out, png = output_paths(args.output, args.scene)  # before any work: an unwritable -o fails now
-    # The OpenCL driver starts (pyopencl's import, the platforms, a probe build, the context) on another thread
-    # while the scene loads; its errors still come after the scene's.
-    device = Background(get_context, args.device)
-    try:
-        scene = load_scene(args.scene, nori_dialect=args.nori_dialect, **_defines(args.define))
-        if args.emitter_selection == "power":
-            if getattr(getattr(scene, "spec", None), "format", "nori") != "mitsuba":
-                print(f"clrender: error: {args.scene}: --emitter-selection power is for Mitsuba scenes (a Nori file "
-                      "chooses its lights uniformly)", file=sys.stderr)
-                device.wait()
-                return 2
-            scene.emitter_selection = "power"
-    except Exception:
-        device.wait()  # the process may end now: never while the driver works on another thread
-        raise
+    scene = load_scene(args.scene, nori_dialect=args.nori_dialect, **_defines(args.define))
+    if args.emitter_selection == "power":
+        if getattr(getattr(scene, "spec", None), "format", "nori") != "mitsuba":
+            print(f"clrender: error: {args.scene}: --emitter-selection power is for Mitsuba scenes (a Nori file "
+                  "chooses its lights uniformly)", file=sys.stderr)
+            return 2
+        scene.emitter_selection = "power"
     args.ctrl_c.check()  # a Ctrl-C that a library swallowed still stops us
-    device.result()
     renderer = Renderer(scene, device=args.device)
     args.ctrl_c.check()
     st = renderer.buffers.stats
