@@ -183,6 +183,8 @@ def main(argv=None) -> int:
     ap.add_argument("--spp", type=int, default=64, help="spp of the whole-process runs (default 64)")
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--cold", type=int, default=0, help="cold-cache first-image runs per tree (default 0)")
+    ap.add_argument("--no-whole", action="store_true",
+                    help="skip the --spp N runs (first image and phases only: more runs in the same time)")
     ap.add_argument("--tree", action="append", metavar="LABEL=PATH",
                     help="a source tree to run (repeatable; default: this checkout)")
     ap.add_argument("--json", metavar="OUT")
@@ -203,11 +205,12 @@ def main(argv=None) -> int:
     for i in range(args.runs):
         for label in labels[i % len(labels):] + labels[:i % len(labels)]:
             r = runs[label]
-            r["whole"].append(whole(trees[label], scene, args.spp, out, cache))
+            if not args.no_whole:
+                r["whole"].append(whole(trees[label], scene, args.spp, out, cache))
             r["first_image"].append(whole(trees[label], scene, 1, out, cache))
             r["phases"].append(phases(trees[label], scene, out, cache))
-            print(f"run {i + 1}/{args.runs} {label}: whole {r['whole'][-1]['wall']:.2f} s "
-                  f"(render {r['whole'][-1]['render']:.2f} s), first image {r['first_image'][-1]['wall']:.2f} s",
+            said = f"whole {r['whole'][-1]['wall']:.2f} s (render {r['whole'][-1]['render']:.2f} s), " if r["whole"] else ""
+            print(f"run {i + 1}/{args.runs} {label}: {said}first image {r['first_image'][-1]['wall']:.2f} s",
                   file=sys.stderr, flush=True)
     for i in range(args.cold):
         for label in labels:
