@@ -130,9 +130,28 @@ def _render_seconds(stderr: str) -> float:
 
 
 def whole(tree, scene, spp, out, cache) -> dict:
-    wall, cpu, err = _run([sys.executable, "-c", LAUNCH, "render", str(scene), "--spp", str(spp), "-q", "-o",
-                           str(out)], _env(tree, cache))
-    return {"wall": wall, "cpu": cpu, "render": _render_seconds(err)}
+    """One plain process: wall and CPU seconds, the render seconds it prints, and when its two lines arrived
+    (``loaded``: the scene line, printed once the Renderer is ready; ``written``: after both images)."""
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.time()
+    p = subprocess.Popen([sys.executable, "-c", LAUNCH, "render", str(scene), "--spp", str(spp), "-q", "-o", str(out)],
+                         env=_env(tree, cache), stderr=subprocess.PIPE, text=True)
+    marks, lines = {}, []
+    for line in p.stderr:
+        lines.append(line)
+        if "triangles" in line:
+            marks.setdefault("loaded", time.time() - t0)
+        if "wrote" in line:
+            marks.setdefault("written", time.time() - t0)
+    p.wait()
+    wall = time.time() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    err = "".join(lines)
+    if p.returncode != 0:
+        raise RuntimeError(f"clrender render exited {p.returncode}:\n{err}")
+    return {"wall": wall, "cpu": (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime),
+            "render": _render_seconds(err), "loaded": marks.get("loaded", float("nan")),
+            "written": marks.get("written", float("nan"))}
 
 
 def phases(tree, scene, out, cache) -> dict:
@@ -229,6 +248,11 @@ def main(argv=None) -> int:
             "whole_minus_render_seconds": _median([w["wall"] - w["render"] for w in r["whole"]]),
             "first_image_seconds": _median([w["wall"] for w in r["first_image"]]),
             "first_image_cpu_seconds": _median([w["cpu"] for w in r["first_image"]]),
+            # the first image's stages from its own output lines: to the scene line (Renderer ready), from there
+            # to both images written, and the exit after that
+            "first_image_to_loaded_seconds": _median([w["loaded"] for w in r["first_image"]]),
+            "first_image_render_and_write_seconds": _median([w["written"] - w["loaded"] for w in r["first_image"]]),
+            "first_image_exit_seconds": _median([w["wall"] - w["written"] for w in r["first_image"]]),
             "cold_first_image_seconds": _median(r["cold_first_image"]),
             "phases": {n: {k: _median([p[n][k] for p in r["phases"] if n in p]) for k in ("seconds", "start", "end")}
                        for n in names},
@@ -261,7 +285,10 @@ def format_table(result) -> str:
     lines.append("-" * len(head))
     spp = result["spp"]
     for key, name in (("first_image_seconds", "first image (--spp 1)"),
-                      ("first_image_cpu_seconds", "  its CPU time"), ("whole_seconds", f"whole (--spp {spp})"),
+                      ("first_image_cpu_seconds", "  its CPU time"),
+                      ("first_image_to_loaded_seconds", "  to the scene line"),
+                      ("first_image_render_and_write_seconds", "  then render + write"),
+                      ("first_image_exit_seconds", "  then exit"), ("whole_seconds", f"whole (--spp {spp})"),
                       ("render_seconds", f"  render (--spp {spp})"), ("whole_minus_render_seconds", "  whole - render"),
                       ("cold_first_image_seconds", "cold cache, first image")):
         lines.append(f"{name:<{w}}" + "".join(f"{1000 * s[lab][key]:>22.0f}" for lab in labels))
