@@ -1,7 +1,7 @@
 """One call run on another thread while this one does something else; its result (or error) collected later.
 
-clrender overlaps work that leaves the GIL free (an OpenCL program build, the driver's start) with Python work
-(loading and packing the scene). The thread is a daemon: a Ctrl-C that ends the program does not wait for it.
+The Renderer packs the scene (Python and numpy) on such a thread while its own builds the OpenCL program, which
+leaves the GIL free. The thread is a daemon: a Ctrl-C that ends the program does not wait for it.
 """
 from __future__ import annotations
 
