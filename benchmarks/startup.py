@@ -105,6 +105,8 @@ def _child_phases() -> None:
     sys.exit(rc)
 
 
+# The children run in the temporary folder: `python -c` puts its working folder first on sys.path, before
+# PYTHONPATH, so started inside a checkout it would import that checkout's clrender whatever the tree.
 def _env(tree: Path, cache: str) -> dict:
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     env["PYTHONPATH"] = os.pathsep.join([str(tree)] + ([env["PYTHONPATH"]] if env.get("PYTHONPATH") else []))
@@ -116,7 +118,7 @@ def _run(cmd, env) -> tuple[float, float, str]:
     """(wall seconds, CPU seconds (user + system, all threads), stderr) of one child process."""
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.time()
-    p = subprocess.run(cmd, env=env, capture_output=True, text=True)
+    p = subprocess.run(cmd, env=env, capture_output=True, text=True, cwd=tempfile.gettempdir())
     wall = time.time() - t0
     r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     if p.returncode != 0:
@@ -135,7 +137,7 @@ def whole(tree, scene, spp, out, cache) -> dict:
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.time()
     p = subprocess.Popen([sys.executable, "-c", LAUNCH, "render", str(scene), "--spp", str(spp), "-q", "-o", str(out)],
-                         env=_env(tree, cache), stderr=subprocess.PIPE, text=True)
+                         env=_env(tree, cache), stderr=subprocess.PIPE, text=True, cwd=tempfile.gettempdir())
     marks, lines = {}, []
     for line in p.stderr:
         lines.append(line)
