@@ -14,7 +14,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import __version__
-from .background import Background
 from .device.context import get_context
 from .device.kernelargs import KernelArgs
 from .device.program import build_program
@@ -26,24 +25,15 @@ from .pack import DEFAULT_BVH_WIDTH, pack_scene
 LOCAL_SIZE = 64              # one fixed launch shape: every new shape costs PoCL a fresh compile
 MAX_LAUNCH_PIXELS = 1 << 16  # pixels per launch; a pass over a larger image is several launches
 TARGET_LAUNCH_SECONDS = 0.2  # keeps progress, Ctrl-C and time limits responsive
-RENDER_SOURCE = '#include "render.cl"\n'
 
 
 def render_defines(scene, buffers, extra: dict | None = None) -> dict:
     """The -D defines of a program over `buffers`: the scene's integrator (if a scene is given) and the BVH layout
-    the packer chose (the default needs no define; ``buffers=None``: the default layout, what pack_scene makes
-    unless the tree does not fit it)."""
+    the packer chose (the default needs no define)."""
     defines = {} if scene is None else {"INTEGRATOR": scene.integrator.kernel}
-    width = DEFAULT_BVH_WIDTH if buffers is None else buffers.bvh_width
-    if width != DEFAULT_BVH_WIDTH:
-        defines["BVH_WIDTH"] = width
+    if buffers.bvh_width != DEFAULT_BVH_WIDTH:
+        defines["BVH_WIDTH"] = buffers.bvh_width
     return {**defines, **(extra or {})}
-
-
-def _timed_build(ctx, defines: dict, fast_math: bool):
-    t0 = time.perf_counter()
-    program = build_program(ctx, RENDER_SOURCE, defines=defines, fast_math=fast_math)
-    return program, time.perf_counter() - t0
 
 
 class Interrupted(Exception):
@@ -100,27 +90,15 @@ class Renderer:
         dev = self.ctx.devices[0]
         self.device_name = f"{dev.platform.name.strip()} / {dev.name.strip()}"
         check_film_fits(scene, dev, self.count_rays)
-        # Packing (Python and numpy) runs on another thread while this one builds the program, which leaves the GIL
-        # free (tens of ms with PoCL's cache, seconds without). The program depends on the packed tables only
-        # through the BVH layout: built for the default one, and again in the rare case the tree does not fit it.
-        guess, program, build_seconds = None, None, 0.0
-        if buffers is None:
-            packing = Background(pack_scene, scene)
-            guess = render_defines(scene, None, defines)
-            program, build_seconds = _timed_build(self.ctx, guess, fast_math)
-            buffers = packing.result()
-        self.buffers = buffers
-        defines = render_defines(scene, buffers, defines)
-        if defines != guess:  # buffers given, or a tree that did not fit the default layout
-            program, seconds = _timed_build(self.ctx, defines, fast_math)
-            build_seconds += seconds
-        #: the -D defines of the render program (`clrender bench` times builds of this very program)
-        self.defines = defines
-        self.program = program
+        self.buffers = buffers if buffers is not None else pack_scene(scene)
         t0 = time.perf_counter()
+        #: the -D defines of the render program (`clrender bench` times builds of this very program)
+        self.defines = render_defines(scene, self.buffers, defines)
+        self.program = build_program(self.ctx, '#include "render.cl"\n', defines=self.defines,
+                                     fast_math=fast_math)
         self.kernel = cl.Kernel(self.program, "render_pass")
         self.args = KernelArgs(self.kernel)
-        self.build_seconds = build_seconds + time.perf_counter() - t0
+        self.build_seconds = time.perf_counter() - t0
         t0 = time.perf_counter()
         mf = cl.mem_flags
         ro = mf.READ_ONLY | mf.COPY_HOST_PTR

@@ -1,6 +1,5 @@
 """What makes `clrender render` start and finish sooner keeps its behaviour: the PNG preview's own encoder, the
-scene packed on another thread while the program builds (and rebuilt for a BVH layout other than the guessed
-one), the layout cache that follows plugin registrations, and the command's fast exit and BLAS thread setting."""
+layout cache that follows plugin registrations, and the command's fast exit and BLAS thread setting."""
 import io
 import os
 import subprocess
@@ -10,14 +9,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-import clrender
-from clrender import renderer as render_mod
-from clrender.background import Background
 from clrender.bsdfs.bsdf import Bsdf
 from clrender.device import layout
-from clrender.device.program import build_program
 from clrender.film import read_exr, to_srgb8
-from clrender.pack import pack_scene
 from clrender.png import encode_png
 from clrender.scene import registry
 
@@ -33,10 +27,10 @@ SCENE = """<scene>
 QUAD = "v -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nf 1 4 3 2\n"  # facing +y, the camera
 
 
-def write_scene(d, w=24, h=16, integrator="path_mis"):
+def write_scene(d, w=24, h=16):
     (d / "quad.obj").write_text(QUAD)
     p = d / "s.xml"
-    p.write_text(SCENE.format(w=w, h=h).replace("path_mis", integrator))
+    p.write_text(SCENE.format(w=w, h=h))
     return p
 
 
@@ -68,55 +62,6 @@ def test_png_filters_smooth_images_well():
 def test_png_refuses_what_is_not_an_rgb8_image(bad):
     with pytest.raises(ValueError, match="uint8 image"):
         encode_png(bad)
-
-
-def test_background_returns_the_value_or_raises_the_error():
-    assert Background(sum, [1, 2, 3]).result() == 6
-
-    def fails():
-        raise KeyError("boom")
-
-    job = Background(fails)
-    job.wait()
-    with pytest.raises(KeyError, match="boom"):
-        job.result()
-
-
-def test_packing_beside_the_build_renders_what_a_serial_renderer_renders(tmp_path):
-    scene = clrender.load_scene(write_scene(tmp_path))
-    serial = render_mod.Renderer(scene, buffers=pack_scene(scene))
-    overlapped = render_mod.Renderer(scene)
-    assert overlapped.defines == serial.defines and "BVH_WIDTH" not in overlapped.defines
-    a, b = serial.render(spp=8, seed=3), overlapped.render(spp=8, seed=3)
-    assert np.array_equal(a.image, b.image) and a.image.max() > 0
-
-
-def test_program_is_rebuilt_for_a_tree_that_needs_another_layout(tmp_path, monkeypatch):
-    # The program is built for the default 4-wide BVH while the scene packs; a scene whose tree ends up 2-wide
-    # (pack_scene's fallback) must get a program for that layout, or it renders garbage. (direct_mats: the 2-wide
-    # program test_watertight builds too, one compile fewer on a cold cache.)
-    scene = clrender.load_scene(write_scene(tmp_path, integrator="direct_mats"))
-    two_wide = pack_scene(scene, bvh_width=2)
-    assert two_wide.bvh_width == 2
-    monkeypatch.setattr(render_mod, "pack_scene", lambda s: pack_scene(s, bvh_width=2))
-    r = render_mod.Renderer(scene)
-    assert r.defines["BVH_WIDTH"] == 2 and r.buffers.bvh_width == 2
-    # the program is the one built for those defines (the in-memory cache hands back the very object); checked
-    # before rendering, because a program for the wrong layout may never finish
-    assert r.program is build_program(r.ctx, render_mod.RENDER_SOURCE, defines=r.defines)
-    ref = render_mod.Renderer(scene, buffers=two_wide)
-    assert np.array_equal(r.render(spp=8, seed=5).image, ref.render(spp=8, seed=5).image)
-
-
-def test_an_error_while_packing_reaches_the_caller(tmp_path, monkeypatch):
-    scene = clrender.load_scene(write_scene(tmp_path))
-
-    def broken(s):
-        raise MemoryError
-
-    monkeypatch.setattr(render_mod, "pack_scene", broken)
-    with pytest.raises(MemoryError):
-        render_mod.Renderer(scene)
 
 
 class Throwaway(Bsdf):
