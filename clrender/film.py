@@ -66,10 +66,10 @@ class Film:
         return _atomic_write(Path(path), lambda tmp: OpenEXR.File(header, {"RGB": img}).write(str(tmp)))
 
     def write_png(self, path) -> Path:
-        from PIL import Image
+        from .png import encode_png
 
-        rgb = to_srgb8(self.image)
-        return _atomic_write(Path(path), lambda tmp: Image.fromarray(rgb, "RGB").save(str(tmp), format="PNG"))
+        data = encode_png(to_srgb8(self.image))
+        return _atomic_write(Path(path), lambda tmp: tmp.write_bytes(data))
 
 
 def to_srgb8(img: np.ndarray) -> np.ndarray:

@@ -109,6 +109,15 @@ def _layout(fields):
 
 
 def _signature() -> tuple:
+    from .. import plugins  # noqa: F401  (registers every plugin before the registry is read)
+    from ..scene.registry import snapshot
+
+    return _signature_of(snapshot())
+
+
+@functools.lru_cache(maxsize=8)
+def _signature_of(registrations: tuple) -> tuple:
+    # dispatch.signature() walks the whole registry (ms per call); dtype() asks for it for every table row packed
     from .dispatch import signature
 
     return signature()

@@ -44,6 +44,11 @@ def unregister(tag: str, type_name: str, fmt: str = "nori") -> None:
     _REGISTRY.pop((fmt, tag, type_name), None)
 
 
+def snapshot() -> tuple:
+    """Every registration as it is now: a cheap key for caches of what is derived from the registry."""
+    return tuple(_REGISTRY.items())
+
+
 def registered(tag: str, fmt: str | None = "nori") -> list[str]:
     """Known type names for ``tag`` in format ``fmt`` (None: in any format), sorted."""
     return sorted({t for (f, g, t) in _REGISTRY if g == tag and (fmt is None or f == fmt)})
