@@ -63,11 +63,9 @@ def main(argv=None):
     if args.scene:
         xml = Path(args.scene)
     else:
-        from vs_mitsuba import scene_xml, twin_cornell
+        from vs_mitsuba import cornell_twin_xml
 
-        d = Path(tmp.name)
-        xml = d / "clrender.xml"
-        xml.write_text(scene_xml(twin_cornell(d, 64), "nori"))
+        xml = cornell_twin_xml(Path(tmp.name))
     scene = clrender.load_scene(xml)
     runs = []
     for text in args.variants:

@@ -75,11 +75,9 @@ def main(argv=None):
         xml = str(Path(args.scene).resolve())
     else:
         sys.path.insert(0, str(ROOT / "benchmarks"))
-        from vs_mitsuba import scene_xml, twin_cornell
+        from vs_mitsuba import cornell_twin_xml
 
-        d = Path(tmp.name)
-        (d / "clrender.xml").write_text(scene_xml(twin_cornell(d, 64), "nori"))
-        xml = str(d / "clrender.xml")
+        xml = str(cornell_twin_xml(Path(tmp.name)))
     names = ["A", "B"]
     procs, info = {}, {}
     for name, root in zip(names, args.trees):

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import platform
 import statistics
 import sys
 import time
@@ -25,9 +24,11 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from clrender.accel.bvh import build_bvh  # noqa: E402
 from clrender.accel.primitives import bvh_leaves, pack_leaf_blocks, primitive_bounds  # noqa: E402
+from vs_mitsuba import cpu_name  # noqa: E402
 
 
 def noisy_sphere(n, seed=0):
@@ -76,17 +77,6 @@ def embree_build_seconds(v):
     TriangleMesh(scene, tris)
     scene.run(*one)                                                     # the first query commits (builds)
     return time.perf_counter() - t, time.process_time() - c
-
-
-def cpu_name():
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 def trace_bench(v, trees, n_rays=1 << 18, repeat=3):

@@ -21,7 +21,6 @@ import argparse
 import datetime as dt
 import json
 import os
-import platform
 import statistics
 import sys
 import tempfile
@@ -34,18 +33,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+from vs_mitsuba import cpu_name  # noqa: E402
+
 CAP = 64          # recorded rays per pixel (more are counted as dropped; a path that long is very rare)
 SAMPLE = 3        # the sample number every timed pass renders
-
-
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 def main(argv=None):
@@ -69,11 +60,9 @@ def main(argv=None):
     if args.scene:
         xml = Path(args.scene)
     else:
-        from vs_mitsuba import scene_xml, twin_cornell
+        from vs_mitsuba import cornell_twin_xml
 
-        d = Path(tmp.name)
-        xml = d / "clrender.xml"
-        xml.write_text(scene_xml(twin_cornell(d, 64), "nori"))
+        xml = cornell_twin_xml(Path(tmp.name))
     scene = clrender.load_scene(xml)
     from clrender.pack import pack_scene
 
@@ -150,7 +139,7 @@ def main(argv=None):
     }
     res = {
         "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
-        "label": args.label, "cpu": _cpu(), "cores": os.cpu_count(), "device": r.device_name,
+        "label": args.label, "cpu": cpu_name(), "cores": os.cpu_count(), "device": r.device_name,
         "load_average": [load0, os.getloadavg()],
         "scene": str(xml) if args.scene else "vs_mitsuba cornell_spheres twin (256x256, path_mis)",
         "pixels": n, "sample": SAMPLE, "repeat": args.repeat, "defines": r.defines, "bvh_options": bvh_options,

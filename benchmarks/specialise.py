@@ -93,10 +93,9 @@ def main(argv=None):
     if args.scene:
         xml = Path(args.scene)
     else:
-        from vs_mitsuba import scene_xml, twin_cornell
+        from vs_mitsuba import cornell_twin_xml
 
-        xml = Path(tmp.name) / "clrender.xml"
-        xml.write_text(scene_xml(twin_cornell(Path(tmp.name), 64), "nori"))
+        xml = cornell_twin_xml(Path(tmp.name))
     scene = clrender.load_scene(xml)
     buffers = pack_scene(scene)
     variants = {"full": render_defines(scene, dataclasses.replace(buffers, plugins=None)),

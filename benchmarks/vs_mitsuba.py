@@ -456,7 +456,17 @@ QUICK = dict(spp=4, repeat=1, reference_spp=16, res=128)
 FULL = dict(spp=64, repeat=5, reference_spp=1024, res=256)
 
 
+def cornell_twin_xml(folder: Path, spp: int = 64) -> Path:
+    """The Cornell twin in our Nori XML, written into `folder` (the default scene of the A/B and profiling
+    tools in this folder)."""
+    folder = Path(folder)
+    xml = folder / "clrender.xml"
+    xml.write_text(scene_xml(twin_cornell(folder, spp), "nori"))
+    return xml
+
+
 def cpu_name() -> str:
+    """The CPU's model name (for results files): /proc/cpuinfo, else what platform knows."""
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
             if line.startswith("model name"):

@@ -12,7 +12,8 @@
    allows 3 ulp), fmin/fmax return the other operand for a NaN (llvm.minnum/maxnum, as OpenCL's), clamp is
    fmin(fmax(x, lo), hi), the scalar isfinite/isnan/isinf return 1 or 0. Transcendental functions (exp, log, pow,
    sin, ...) stay PoCL's: they are expensive either way, and their intrinsics would become calls into libm.
-   Other drivers (GPUs) inline their builtins themselves and never see this file's definitions. */
+   Other drivers (GPUs) inline their builtins themselves and never see this file's definitions. A build with
+   -DCLRENDER_BUILTIN_CALLS keeps PoCL's builtins, for measuring the difference (benchmarks/ab_pass.py). */
 #ifndef CLRENDER_BUILTINS_H
 #define CLRENDER_BUILTINS_H
 

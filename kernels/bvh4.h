@@ -49,14 +49,12 @@ BVH_INLINE bool bvh4_traverse(__global const float4* nodes, __global const float
             float4 tf = bvh4_min(bvh4_min((n[fx] - ox) * ix, (n[fy] - oy) * iy), (n[fz] - oz) * iz) * 1.0000004f;
             int4 m = (tn <= tf) & (tn <= (float4)(hit->t));
             uint4 ref = as_uint4(n[6]);
-#ifndef BVH4_NO_SINGLE
             /* One child hit (the commonest case): go there without the stack. */
             if (m.s0 + m.s1 + m.s2 + m.s3 == -1) {
                 uint4 r = m ? ref : (uint4)(0u);
                 cur = r.s0 | r.s1 | r.s2 | r.s3;
                 continue;
             }
-#endif
             int base = sp;
             if (m.s0) { stack[sp] = ref.s0; stack_t[sp] = tn.s0; ++sp; }
             if (m.s1) { stack[sp] = ref.s1; stack_t[sp] = tn.s1; ++sp; }
