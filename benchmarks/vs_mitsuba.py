@@ -326,12 +326,12 @@ def twin_cornell_mi(d: Path, spp: int, res: int = 256) -> dict:
 class Clrender:
     name = "clrender"
 
-    def __init__(self, xml: Path):
+    def __init__(self, xml: Path, device: str | None = None):
         import clrender
         from clrender.renderer import Renderer
 
-        self.xml = xml
-        self.renderer = Renderer(clrender.load_scene(xml))
+        self.xml, self.device = xml, device
+        self.renderer = Renderer(clrender.load_scene(xml), device=device)
         self.renderer.render(spp=1)  # build + first launch
 
     def render(self, spp: int, seed: int):
@@ -339,14 +339,16 @@ class Clrender:
         return film.image.astype(np.float64), film.stats.seconds
 
     def process_cmd(self, spp: int, out: Path):
-        return [sys.executable, "-m", "clrender.cli", "render", str(self.xml), "--spp", str(spp), "-q", "-o", str(out)]
+        dev = ["--device", str(self.device)] if self.device is not None else []
+        return [sys.executable, "-m", "clrender.cli", "render", str(self.xml), "--spp", str(spp), "-q", "-o", str(out),
+                *dev]
 
     def count_rays(self, spp: int, seed: int) -> dict:
         """Rays one render of these samples traces, from a second program built with -DCLRENDER_COUNT_RAYS (the
         timed program has no counting code), on the same packed scene."""
         from clrender.renderer import Renderer
 
-        rc = Renderer(self.renderer.scene, buffers=self.renderer.buffers, count_rays=True)
+        rc = Renderer(self.renderer.scene, device=self.device, buffers=self.renderer.buffers, count_rays=True)
         cam, closest, shadow = rc.render(spp=spp, seed=seed).stats.rays
         total = cam + closest + shadow
         return {"camera": cam, "closest": closest, "shadow": shadow, "total": total,
@@ -354,13 +356,11 @@ class Clrender:
 
 
 class Mitsuba:
-    name = "mitsuba llvm_ad_rgb"
-
-    def __init__(self, xml: Path):
+    def __init__(self, xml: Path, variant: str = "llvm_ad_rgb"):
         import mitsuba as mi
 
-        mi.set_variant("llvm_ad_rgb")
-        self.mi, self.xml = mi, xml
+        mi.set_variant(variant)
+        self.mi, self.xml, self.variant, self.name = mi, xml, variant, f"mitsuba {variant}"
         self.scene = mi.load_file(str(xml))
         self.render(1, 0)  # JIT warm-up
 
@@ -374,7 +374,7 @@ class Mitsuba:
         return np.array(img, np.float64), time.perf_counter() - t0
 
     def process_cmd(self, spp: int, out: Path):
-        code = ("import mitsuba as mi; mi.set_variant('llvm_ad_rgb'); "
+        code = (f"import mitsuba as mi; mi.set_variant({self.variant!r}); "
                 f"s = mi.load_file({str(self.xml)!r}); img = mi.render(s, spp={spp}); "
                 f"mi.util.write_bitmap({str(out)!r}, img)")
         return [sys.executable, "-c", code]
@@ -384,7 +384,8 @@ def relmse(img, ref):
     return float(np.mean((img - ref) ** 2 / (ref * ref + 1e-2)))
 
 
-def bench_twin(t: dict, d: Path, spp: int, repeat: int, ref_spp: int, say, count_rays: bool = True) -> dict:
+def bench_twin(t: dict, d: Path, spp: int, repeat: int, ref_spp: int, say, count_rays: bool = True,
+               device: str | None = None, variant: str = "llvm_ad_rgb") -> dict:
     if "xml" in t:  # one Mitsuba 3 file, read by both
         (d / "scene.xml").write_text(t["xml"])
         files = {"clrender": d / "scene.xml", "mitsuba": d / "scene.xml"}
@@ -393,7 +394,7 @@ def bench_twin(t: dict, d: Path, spp: int, repeat: int, ref_spp: int, say, count
         files["clrender"].write_text(scene_xml(t, "nori"))
         files["mitsuba"].write_text(scene_xml(t, "mitsuba"))
     say(f"{t['name']}: loading, building, warming up")
-    rs = [Clrender(files["clrender"]), Mitsuba(files["mitsuba"])]
+    rs = [Clrender(files["clrender"], device), Mitsuba(files["mitsuba"], variant)]
     say(f"{t['name']}: reference ({ref_spp} spp, Mitsuba)")
     ref, _ = rs[1].render(ref_spp, 12345)
     n = t["camera"]["width"] * t["camera"]["height"]
@@ -437,7 +438,7 @@ def bench_twin(t: dict, d: Path, spp: int, repeat: int, ref_spp: int, say, count
     out["twin"] = {"files": "one Mitsuba 3 XML" if "xml" in t else "Nori XML (clrender) + Mitsuba 3 XML",
                    "width": t["camera"]["width"], "height": t["camera"]["height"],
                    **({"triangles": t["triangles"]} if "triangles" in t else {})}
-    a, b = out["clrender"], out["mitsuba llvm_ad_rgb"]
+    a, b = out["clrender"], out[rs[1].name]
     out["ratios"] = {"samples_per_second": a["samples_per_second"] / b["samples_per_second"],
                      "time_to_equal_error": b["time_x_error"] / a["time_x_error"],
                      "whole_process": b["process_seconds"] / a["process_seconds"]}
@@ -506,8 +507,10 @@ def plot(doc: dict, path: Path) -> Path:
         return left + (W - left - right) * (np.log2(np.clip(q, lo, hi)) - np.log2(lo)) / np.log2(hi / lo)
 
     trial = "  (--quick: a trial)" if doc.get("quick") else ""
-    g.text((10, 8), f"clrender / Mitsuba 3 llvm_ad_rgb (> 1: clrender faster)  {doc['spp']} spp, medians of "
-                    f"{doc['repeat']}, {doc['cpu']}, {doc['date'][:16]}{trial}", fill="black", font=f)
+    variant = doc.get("mitsuba_variant", "llvm_ad_rgb")
+    where = doc.get("clrender_device") or doc["cpu"]
+    g.text((10, 8), f"clrender / Mitsuba 3 {variant} (> 1: clrender faster)  {doc['spp']} spp, medians of "
+                    f"{doc['repeat']}, {where}, {doc['date'][:16]}{trial}", fill="black", font=f)
     for k, (_, label, colour) in enumerate(PLOT_BARS):
         x = 10 + k * 190
         g.rectangle([x, 32, x + 12, 44], fill=colour)
@@ -534,6 +537,13 @@ def plot(doc: dict, path: Path) -> Path:
     return path
 
 
+def _device_name(spec) -> str:
+    from clrender.device.context import choose_device
+
+    plat, dev = choose_device(spec)
+    return f"{plat.name.strip()} / {dev.name.strip()}"
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--spp", type=int, help=f"default {FULL['spp']}")
@@ -545,6 +555,9 @@ def main(argv=None):
                          "writes ...-quick.json/png")
     ap.add_argument("--no-count-rays", action="store_true", help="skip clrender's ray-counting render")
     ap.add_argument("--only", nargs="*", metavar="TWIN", help="twins to run: " + ", ".join(TWINS))
+    ap.add_argument("--device", help="clrender's OpenCL device (index, cpu, gpu or name substring; default PoCL)")
+    ap.add_argument("--mitsuba-variant", default="llvm_ad_rgb",
+                    help="Mitsuba 3 variant to race (default llvm_ad_rgb; cuda_ad_rgb beside a GPU device)")
     ap.add_argument("--json", help="default: benchmarks/results/vs_mitsuba-<date>.json (the plot: same name, .png)")
     args = ap.parse_args(argv)
     for k, v in (QUICK if args.quick else FULL).items():
@@ -567,14 +580,17 @@ def main(argv=None):
                 continue
             d = Path(tmp) / name
             results[name] = bench_twin(make(d, args.spp, args.res), d, args.spp, args.repeat, args.reference_spp,
-                                       say, count_rays=not args.no_count_rays)
+                                       say, count_rays=not args.no_count_rays, device=args.device,
+                                       variant=args.mitsuba_variant)
     from clrender.bench import git_revision
 
     doc = {"date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"), "git_revision": git_revision(),
            "cpu": cpu_name(), "cores": os.cpu_count(), "load_average_before": load_before,
            "load_average": os.getloadavg(), "spp": args.spp, "repeat": args.repeat,
-           "reference_spp": args.reference_spp, "res": args.res, "quick": args.quick, "results": results}
-    suffix = "-quick" if args.quick else ""
+           "reference_spp": args.reference_spp, "res": args.res, "quick": args.quick,
+           "mitsuba_variant": args.mitsuba_variant, "clrender_device": _device_name(args.device),
+           "results": results}
+    suffix = ("-quick" if args.quick else "") + ("" if args.mitsuba_variant == "llvm_ad_rgb" else f"-{args.mitsuba_variant}")
     out = Path(args.json) if args.json else \
         ROOT / "benchmarks" / "results" / f"vs_mitsuba-{dt.date.today()}{suffix}.json"
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -583,7 +599,7 @@ def main(argv=None):
     print(f"{'twin':18s} {'renderer':22s} {'samples/s':>10s} {'rays/s':>8s} {'rays/spl':>8s} {'render s':>9s} "
           f"{'relMSE':>9s} {'process s':>9s}")
     for name, r in results.items():
-        for k in ("clrender", "mitsuba llvm_ad_rgb"):
+        for k in ("clrender", f"mitsuba {args.mitsuba_variant}"):
             v = r[k]
             rays = "-" if v["rays_per_second"] is None else f"{v['rays_per_second'] / 1e6:.2f}M"
             per = "-" if v["rays_per_sample"] is None else f"{v['rays_per_sample']:.2f}"
