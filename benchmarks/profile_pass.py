@@ -45,6 +45,8 @@ def main(argv=None):
     ap.add_argument("--scene", help="a scene XML instead of the Cornell twin")
     ap.add_argument("--label", default="")
     ap.add_argument("--json")
+    ap.add_argument("--embree", action="store_true",
+                    help="also cast the recorded rays with Embree (embreex, one thread) against the same triangles")
     ap.add_argument("--bvh", action="append", default=[], metavar="KEY=VALUE",
                     help="a build_bvh option (e.g. traversal_cost=2), for trying builds")
     args = ap.parse_args(argv)
@@ -131,6 +133,10 @@ def main(argv=None):
             times[name].append(time.perf_counter() - t0)
     med = {k: statistics.median(v) for k, v in times.items()}
     rays = n_closest + n_shadow
+    ht = np.zeros(n * CAP, np.float32)
+    cl.enqueue_nd_range_kernel(queue, k_cast, gsize, (LOCAL_SIZE,))   # hit_t as cast finds it (boxes rewrote none)
+    cl.enqueue_copy(queue, ht, hit_t)
+    _HIT_T["t"] = ht
     shares = {
         "traversal (boxes)": med["boxes"],
         "primitive tests (cast - boxes)": med["cast"] - med["boxes"],
@@ -150,6 +156,8 @@ def main(argv=None):
         "cast_rays_per_second": rays / med["cast"], "pass_samples_per_second": n / med["pass"],
         "shares_of_pass": {k: v / med["pass"] for k, v in shares.items()},
     }
+    if args.embree:
+        res["embree"] = embree_cast(scene, rec, kind, counts, n, queue, args.repeat, res["cores"])
     date = dt.date.today().isoformat()
     path = Path(args.json) if args.json else (
         ROOT / "benchmarks" / "results" / f"profile_pass-{date}{'-' + args.label if args.label else ''}.json")
@@ -162,7 +170,77 @@ def main(argv=None):
     print(f"pass {n / med['pass'] / 1e6:.3f} M samples/s; cast alone {rays / med['cast'] / 1e6:.2f} M rays/s")
     for k, v in shares.items():
         print(f"  {v / med['pass'] * 100:5.1f} %  {k}")
+    if args.embree:
+        e = res["embree"]
+        print(f"Embree {e['version']}, 1 thread, on the same rays: {e['rays_per_second'] / 1e6:.2f} M rays/s "
+              f"({e['closest_rays_per_second'] / 1e6:.2f} M closest, {e['shadow_rays_per_second'] / 1e6:.2f} M shadow); "
+              f"our cast: {rays / med['cast'] / res['cores'] / 1e6:.2f} M rays/s per core "
+              f"({res['cores']} cores); hits agree on {e['closest_hits_agree'] * 100:.2f} % of closest rays")
     print(f"-> {path}")
+
+
+def embree_cast(scene, rec, kind, counts, n, queue, repeat, cores) -> dict:
+    """The recorded rays cast by Embree through embreex (rtcIntersect1/rtcOccluded1 per ray, one thread) against
+    the scene's triangles: closest-hit rays as INTERSECT, shadow rays as OCCLUDED, each with its tmax. Only
+    triangle scenes (the Cornell twin's spheres are meshes). Medians of `repeat`; also how often Embree's hit
+    distance agrees with ours (to 1e-3 relative), a check that both cast the same rays."""
+    import pyopencl as cl
+    from embreex import rtcore_scene
+    from embreex.mesh_construction import TriangleMesh
+
+    tris = []
+    for sh in scene.shapes:
+        m = getattr(sh, "mesh", None)
+        if m is None:
+            raise SystemExit("--embree: only scenes of triangle meshes")
+        tris.append(np.asarray(m.positions, np.float32)[np.asarray(m.faces)])
+    es = rtcore_scene.EmbreeScene()
+    TriangleMesh(es, np.ascontiguousarray(np.concatenate(tris), np.float32))
+    recs = np.zeros((n * CAP, 2, 4), np.float32)
+    cl.enqueue_copy(queue, recs, rec)
+    kinds = np.zeros(n * CAP, np.uint32)
+    cl.enqueue_copy(queue, kinds, kind)
+    valid = (np.arange(CAP)[None, :] < counts[:, :1]).reshape(-1)
+    o, d, tmax = recs[:, 0, :3], recs[:, 1, :3], recs[:, 1, 3]
+    closest, shadow = valid & (kinds == 0), valid & (kinds == 1)
+    if np.any(recs[valid, 0, 3] != 0.0):
+        print("  (some rays have tmin > 0: Embree casts them from 0)")
+    sets = {k: (np.ascontiguousarray(o[m]), np.ascontiguousarray(d[m]), np.ascontiguousarray(np.minimum(tmax[m], 1e30)))
+            for k, m in (("closest", closest), ("shadow", shadow))}
+    times = {"closest": [], "shadow": []}
+    for _ in range(repeat):
+        for k, (oo, dd, tt) in sets.items():
+            t0 = time.perf_counter()
+            es.run(oo, dd, dists=tt.copy(), query="INTERSECT" if k == "closest" else "OCCLUDED", output=None)
+            times[k].append(time.perf_counter() - t0)
+    out = es.run(sets["closest"][0], sets["closest"][1], dists=sets["closest"][2].copy(), output=1)
+    ours = np.zeros(n * CAP, np.float32)   # cast_rays' hit_t is in the same rows
+    med = {k: statistics.median(v) for k, v in times.items()}
+    nc, ns = int(closest.sum()), int(shadow.sum())
+    return {"version": _embree_version(), "threads": 1,
+            "closest_seconds": med["closest"], "shadow_seconds": med["shadow"],
+            "closest_rays_per_second": nc / med["closest"], "shadow_rays_per_second": ns / med["shadow"],
+            "rays_per_second": (nc + ns) / (med["closest"] + med["shadow"]),
+            "closest_hits_agree": float(np.mean(_agree(np.where(out["geomID"] >= 0, out["tfar"], -1.0),
+                                                       _HIT_T["t"][closest]))),
+            "note": f"ours on {cores} cores; Embree one thread: compare per core"}
+
+
+def _embree_version() -> str:
+    """'4 (embreex 4.4.0.post1)': the Embree major version from the library embreex's wheel bundles."""
+    import re
+    from importlib.metadata import files, version
+
+    libs = [str(f) for f in files("embreex") or () if "libembree" in str(f)]
+    m = re.search(r"libembree(\d+)", libs[0]) if libs else None
+    return f"{m.group(1) if m else '?'} (embreex {version('embreex')})"
+
+
+_HIT_T = {}   # main() leaves cast_rays' hit t per recorded ray here (-1: no hit)
+
+
+def _agree(a, b):
+    return np.abs(a - b) <= 1e-3 * np.maximum(np.abs(b), 1e-3)
 
 
 if __name__ == "__main__":
