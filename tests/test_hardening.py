@@ -111,3 +111,27 @@ def test_cpu_and_gpu_mean_one_kind_of_device(monkeypatch):
     with pytest.raises(context.DeviceError, match="no GPU"):
         context.choose_device("gpu")
     assert context.choose_device("oclgrind")[1] is sim
+
+
+def test_a_successful_build_says_nothing_unless_asked(ctx, monkeypatch, capfd):
+    """A build log of a successful build (NVIDIA's driver writes one for our kernels) is not shown on every
+    render as pyopencl's CompilerWarning or the compiler's stderr; PYOPENCL_COMPILER_OUTPUT=1 shows both."""
+    import warnings
+
+    import pyopencl as cl
+
+    from clrender.device.program import build_program
+
+    def build(tag):
+        src = f'#warning "clrender test warning {tag}"\n__kernel void k(__global int* a) {{ a[0] = 1; }}'
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            build_program(ctx, src, with_types=False, use_cache=False)
+        return [w for w in seen if issubclass(w.category, cl.CompilerWarning)], capfd.readouterr().err
+
+    monkeypatch.delenv("PYOPENCL_COMPILER_OUTPUT", raising=False)
+    quiet, err = build("quiet")
+    assert quiet == [] and "warning" not in err
+    monkeypatch.setenv("PYOPENCL_COMPILER_OUTPUT", "1")
+    loud, err = build("loud")
+    assert loud or "clrender test warning loud" in err

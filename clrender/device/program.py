@@ -16,7 +16,6 @@ import warnings
 from pathlib import Path
 
 from ..errors import DeviceError
-from .intel_cpu import is_intel_cpu_runtime
 
 
 @functools.lru_cache(maxsize=None)
@@ -61,8 +60,9 @@ def build_options(defines: dict | None = None, fast_math: bool = False) -> list[
 def _compiler_stderr():
     """Hold back what the driver's compiler prints on file descriptor 2 during a build.
 
-    It is passed on after a successful build; after a failure the error (with the build log) says it all,
-    and after a Ctrl-C the compiler's "1 error generated." would only confuse."""
+    It is passed on after a successful build only when the user asked for build logs (``PYOPENCL_COMPILER_OUTPUT=1``,
+    pyopencl's own switch); after a failure the error (with the build log) says it all, and after a Ctrl-C the
+    compiler's "1 error generated." would only confuse."""
     try:
         sys.stderr.flush()
         saved = os.dup(2)
@@ -78,11 +78,15 @@ def _compiler_stderr():
         finally:
             os.dup2(saved, 2)
             os.close(saved)
-            if ok:
+            if ok and _want_build_logs():
                 held.seek(0)
                 text = held.read()
                 if text:
                     os.write(2, text)
+
+
+def _want_build_logs() -> bool:
+    return os.environ.get("PYOPENCL_COMPILER_OUTPUT", "") not in ("", "0")
 
 
 _PROGRAMS: dict = {}
@@ -120,9 +124,11 @@ def build_program(ctx, source: str, defines: dict | None = None, fast_math: bool
         return prg
     try:
         with warnings.catch_warnings(), _compiler_stderr():
-            # Intel's CPU runtime logs every successful build ("Compilation started ... Done."), which
-            # pyopencl would print as a CompilerWarning on every render; a failed build still raises.
-            if is_intel_cpu_runtime(ctx.devices[0].platform.name):
+            # A successful build's log (NVIDIA's driver writes one for our kernels; Intel's CPU runtime logs
+            # "Compilation started ... Done." every time) would reach the user as a CompilerWarning on every
+            # render, telling them nothing they can act on: shown only with PYOPENCL_COMPILER_OUTPUT=1, where
+            # pyopencl prints the log itself. A failed build still raises, with its log.
+            if not _want_build_logs():
                 warnings.simplefilter("ignore", cl.CompilerWarning)
             prg = cl.Program(ctx, source).build(options=opts)
     except cl.RuntimeError as exc:
