@@ -45,6 +45,8 @@ def main(argv=None):
     ap.add_argument("--scene", help="a scene XML instead of the Cornell twin")
     ap.add_argument("--label", default="")
     ap.add_argument("--json")
+    ap.add_argument("--packets", action="store_true",
+                    help="also cast the rays as packets of 8 (the k-th ray of 8 neighbouring pixels; 8-wide BVH only)")
     ap.add_argument("--embree", action="store_true",
                     help="also cast the recorded rays with Embree (embreex, one thread) against the same triangles")
     ap.add_argument("--bvh", action="append", default=[], metavar="KEY=VALUE",
@@ -119,16 +121,29 @@ def main(argv=None):
     KernelArgs(k_setup).set(cam=r._camera, filter_cdf=r._filter, acc0=acc[0], acc1=acc[1], sample=u32(SAMPLE),
                             seed=u32(0))
     kernels = {"pass": k_pass, "cast": k_cast, "boxes": k_boxes, "setup": k_setup}
+    gsize8 = (-(-(-(-n // 8)) // LOCAL_SIZE) * LOCAL_SIZE,)
+    hit_t8 = cl.Buffer(ctx, rw, size=n * CAP * 4)
+    if args.packets:
+        k_pk = cl.Kernel(build_program(ctx, src, defines={**r.defines, "PROFILE_PACKETS": 1}), "cast_packets")
+        KernelArgs(k_pk).set_scene(r._scene_bufs).set(rec=rec, kind=kind, count=count, cap=u32(CAP),
+                                                      n_pixels=u32(n), hit_t=hit_t8, out=out)
+        kernels["packets"] = k_pk
+        for name, kname, gs in (("camera rays", "cast_rays", gsize), ("camera packets", "cast_packets", gsize8)):
+            kc = cl.Kernel(build_program(ctx, src, defines={**r.defines, "PROFILE_PACKETS": 1,
+                                                            "PROFILE_FIRST_ONLY": 1}), kname)
+            KernelArgs(kc).set_scene(r._scene_bufs).set(rec=rec, kind=kind, count=count, cap=u32(CAP),
+                                                        n_pixels=u32(n), hit_t=hit_t8, out=out)
+            kernels[name] = kc
     # cast first fills hit_t (the boxes-only build reads it); then one untimed launch of each to warm up.
-    for k in kernels.values():
-        cl.enqueue_nd_range_kernel(queue, k, gsize, (LOCAL_SIZE,))
+    for name, k in kernels.items():
+        cl.enqueue_nd_range_kernel(queue, k, gsize8 if "packets" in name else gsize, (LOCAL_SIZE,))
         queue.finish()
     times = {name: [] for name in kernels}
     load0 = os.getloadavg()
     for _ in range(args.repeat):
         for name, k in kernels.items():
             t0 = time.perf_counter()
-            cl.enqueue_nd_range_kernel(queue, k, gsize, (LOCAL_SIZE,))
+            cl.enqueue_nd_range_kernel(queue, k, gsize8 if "packets" in name else gsize, (LOCAL_SIZE,))
             queue.finish()
             times[name].append(time.perf_counter() - t0)
     med = {k: statistics.median(v) for k, v in times.items()}
@@ -137,6 +152,14 @@ def main(argv=None):
     cl.enqueue_nd_range_kernel(queue, k_cast, gsize, (LOCAL_SIZE,))   # hit_t as cast finds it (boxes rewrote none)
     cl.enqueue_copy(queue, ht, hit_t)
     _HIT_T["t"] = ht
+    if args.packets:  # the packets must find what cast_rays found: closest t, and hit / no hit for shadow rays
+        h8 = np.zeros(n * CAP, np.float32)
+        cl.enqueue_copy(queue, h8, hit_t8)
+        cm, sm = valid & (kinds == 0), valid & (kinds == 1)
+        agree_c = np.abs(h8[cm] - ht[cm]) <= 1e-4 * np.maximum(np.abs(ht[cm]), 1e-3)
+        agree_s = (h8[sm] >= 0) == (ht[sm] >= 0)
+        print(f"packets agree with single rays: {agree_c.mean() * 100:.3f} % of closest, "
+              f"{agree_s.mean() * 100:.3f} % of shadow rays")
     shares = {
         "traversal (boxes)": med["boxes"],
         "primitive tests (cast - boxes)": med["cast"] - med["boxes"],
