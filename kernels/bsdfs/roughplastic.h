@@ -10,35 +10,18 @@
 #include "common.h"
 #include "../texture.h"
 #include "warp.h"
-
-/* Microfacet distribution D(m) (isotropic), with Mitsuba's cut-off of negligible values. */
-INLINE float rp_d(float3 m, float alpha, uint ggx) {
-    float c = m.z;
-    if (c <= 0.0f) return 0.0f;
-    float c2 = c * c, a2 = alpha * alpha, xy2 = (m.x * m.x + m.y * m.y) / a2;
-    float d;
-    if (ggx) {
-        float t = xy2 + c2;
-        d = 1.0f / (M_PI_F_ * a2 * t * t);
-    } else {
-        float e = exp(-xy2 / c2);
-        d = e > 0.0f ? e / (M_PI_F_ * a2 * c2 * c2) : 0.0f;
-    }
-    return d * c > 1e-20f ? d : 0.0f;
-}
-
-/* Smith's masking G1(v, m): exact for GGX, the rational fit for Beckmann; 0 when v sees the facet's back. */
-INLINE float rp_g1(float3 v, float3 m, float alpha, uint ggx) {
-    if (dot3(v, m) * v.z <= 0.0f) return 0.0f;
-    float xy2 = alpha * alpha * (v.x * v.x + v.y * v.y);
-    if (xy2 == 0.0f) return 1.0f;
-    float tan2 = xy2 / (v.z * v.z);
-    if (ggx) return 2.0f / (1.0f + sqrt(1.0f + tan2));
-    float a = 1.0f / sqrt(tan2);
-    return a >= 1.6f ? 1.0f : (3.535f * a + 2.181f * a * a) / (1.0f + 2.276f * a + 2.577f * a * a);
-}
+#include "distribution.h"
 
 INLINE bool rp_visible(__global const Bsdf* b) { return b->p.roughplastic.sample_visible && b->p.roughplastic.ggx; }
+
+/* The isotropic specular lobe's distribution (D and G1 of distribution.h, as Mitsuba's rough plastic uses them). */
+INLINE MfDist rp_dist(__global const Bsdf* b) {
+    MfDist d;
+    d.type = b->p.roughplastic.ggx ? MF_GGX : MF_BECKMANN;
+    d.ax = d.ay = b->p.roughplastic.alpha;
+    d.visible = rp_visible(b);
+    return d;
+}
 
 /* A microfacet normal: GGX visible normals of wi, or D(m) cos(m) for both distributions. */
 INLINE float3 rp_sample_normal(float3 wi, float alpha, uint ggx, bool visible, float2 u) {
@@ -79,12 +62,12 @@ INLINE float rp_prob_specular(__global const Bsdf* b, float t_i) {
 INLINE float3 roughplastic_eval(__global const Bsdf* b, const BsdfQuery* q) {
     float3 wi = q->wi, wo = q->wo;
     if (wi.z <= 0.0f || wo.z <= 0.0f) return (float3)(0.0f);
-    float alpha = b->p.roughplastic.alpha, eta = b->p.roughplastic.eta;
-    uint ggx = b->p.roughplastic.ggx;
+    float eta = b->p.roughplastic.eta;
+    MfDist dist = rp_dist(b);
     float3 h = normalize3(wi + wo);
     float cos_t;
     float F = fresnel_dielectric(dot3(wi, h), 1.0f, eta, &cos_t);
-    float spec = rp_d(h, alpha, ggx) * F * rp_g1(wi, h, alpha, ggx) * rp_g1(wo, h, alpha, ggx) / (4.0f * wi.z * wo.z);
+    float spec = mf_d(dist, h) * F * mf_g1(dist, wi, h) * mf_g1(dist, wo, h) / (4.0f * wi.z * wo.z);
     float3 d = param_color(q, b->p.roughplastic.diffuse, b->p.roughplastic.diffuse_tex);
     float r = b->p.roughplastic.int_refl;
     d = b->p.roughplastic.nonlinear ? d / ((float3)(1.0f) - d * r) : d / (1.0f - r);
@@ -95,13 +78,12 @@ INLINE float3 roughplastic_eval(__global const Bsdf* b, const BsdfQuery* q) {
 INLINE float roughplastic_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     float3 wi = q->wi, wo = q->wo;
     if (wi.z <= 0.0f || wo.z <= 0.0f) return 0.0f;
-    float alpha = b->p.roughplastic.alpha;
-    uint ggx = b->p.roughplastic.ggx;
+    MfDist dist = rp_dist(b);
     float ps = rp_prob_specular(b, rp_trans(b, wi.z));
     float3 h = normalize3(wi + wo);
     float spec;
-    if (rp_visible(b)) spec = rp_d(h, alpha, ggx) * rp_g1(wi, h, alpha, ggx) / (4.0f * wi.z);
-    else spec = rp_d(h, alpha, ggx) * h.z / (4.0f * dot3(wo, h));
+    if (dist.visible) spec = mf_d(dist, h) * mf_g1(dist, wi, h) / (4.0f * wi.z);
+    else spec = mf_d(dist, h) * h.z / (4.0f * dot3(wo, h));
     return ps * spec + (1.0f - ps) * wo.z * INV_PI;
 }
 
