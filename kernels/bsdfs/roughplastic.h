@@ -23,22 +23,12 @@ INLINE MfDist rp_dist(__global const Bsdf* b) {
     return d;
 }
 
-/* A microfacet normal: GGX visible normals of wi, or D(m) cos(m) for both distributions. */
-INLINE float3 rp_sample_normal(float3 wi, float alpha, uint ggx, bool visible, float2 u) {
-    if (visible) {
-        float3 vh = normalize3((float3)(alpha * wi.x, alpha * wi.y, wi.z));
-        float len2 = vh.x * vh.x + vh.y * vh.y;
-        float3 t1 = len2 > 0.0f ? (float3)(-vh.y, vh.x, 0.0f) / sqrt(len2) : (float3)(1.0f, 0.0f, 0.0f);
-        float3 t2 = cross3(vh, t1);
-        float r = sqrt(u.x);
-        float2 sc = sin_cos(2.0f * M_PI_F_ * u.y);
-        float p1 = r * sc.y, p2 = r * sc.x;
-        float s = 0.5f * (1.0f + vh.z);
-        p2 = (1.0f - s) * sqrt(maxf(0.0f, 1.0f - p1 * p1)) + s * p2;
-        float3 nh = p1 * t1 + p2 * t2 + sqrt(maxf(0.0f, 1.0f - p1 * p1 - p2 * p2)) * vh;
-        return normalize3((float3)(alpha * nh.x, alpha * nh.y, maxf(1e-6f, nh.z)));
-    }
-    float tan2 = ggx ? alpha * alpha * u.x / (1.0f - u.x) : -alpha * alpha * log(1.0f - u.x);
+/* A microfacet normal: GGX visible normals of wi (distribution.h's sampler), else D(m) cos(m) for both
+   distributions, drawn here because mf_sample maps u to the opposite azimuth (the same density, other images). */
+INLINE float3 rp_sample_normal(MfDist d, float3 wi, float2 u) {
+    if (d.visible) return mf_sample(d, wi, u);
+    float a2 = d.ax * d.ax;
+    float tan2 = d.type == MF_GGX ? a2 * u.x / (1.0f - u.x) : -a2 * log(1.0f - u.x);
     float cos_t = 1.0f / sqrt(1.0f + tan2);
     float sin_t = safe_sqrt(1.0f - cos_t * cos_t);
     float2 sc = sin_cos(2.0f * M_PI_F_ * u.y);
@@ -78,12 +68,10 @@ INLINE float3 roughplastic_eval(__global const Bsdf* b, const BsdfQuery* q) {
 INLINE float roughplastic_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     float3 wi = q->wi, wo = q->wo;
     if (wi.z <= 0.0f || wo.z <= 0.0f) return 0.0f;
-    MfDist dist = rp_dist(b);
     float ps = rp_prob_specular(b, rp_trans(b, wi.z));
     float3 h = normalize3(wi + wo);
-    float spec;
-    if (dist.visible) spec = mf_d(dist, h) * mf_g1(dist, wi, h) / (4.0f * wi.z);
-    else spec = mf_d(dist, h) * h.z / (4.0f * dot3(wo, h));
+    /* dwo = 4 (wo.h) dh: the Jacobian of reflecting wi about h */
+    float spec = mf_pdf(rp_dist(b), wi, h) / (4.0f * dot3(wo, h));
     return ps * spec + (1.0f - ps) * wo.z * INV_PI;
 }
 
@@ -93,8 +81,7 @@ INLINE float3 roughplastic_sample(__global const Bsdf* b, BsdfQuery* q, float2 u
     if (q->wi.z <= 0.0f) { q->wo = reflect_local(q->wi); return (float3)(0.0f); }
     float ps = rp_prob_specular(b, rp_trans(b, q->wi.z));
     if (u.x < ps) {
-        float3 m = rp_sample_normal(q->wi, b->p.roughplastic.alpha, b->p.roughplastic.ggx, rp_visible(b),
-                                    (float2)(u.x / ps, u.y));
+        float3 m = rp_sample_normal(rp_dist(b), q->wi, (float2)(u.x / ps, u.y));
         q->wo = 2.0f * dot3(q->wi, m) * m - q->wi;
     } else {
         q->wo = square_to_cosine_hemisphere((float2)((u.x - ps) / (1.0f - ps), u.y));
