@@ -325,12 +325,17 @@ def check_invariants(bvh, lo, hi, max_leaf):
     assert bvh.depth <= 64
 
 
+def random_tree(n, max_leaf):
+    """(lo, hi, bvh) of n random triangles and n // 3 spheres (the seed follows n and max_leaf)."""
+    rng = np.random.default_rng(n * 10 + max_leaf)
+    lo, hi = primitive_bounds(*random_soup(rng, n), random_spheres(rng, n // 3))
+    return lo, hi, build_bvh(lo, hi, max_leaf_size=max_leaf)
+
+
 @pytest.mark.parametrize("n", [0, 1, 2, 3, 5, 33, 100, 2000])
 @pytest.mark.parametrize("max_leaf", [1, 4, 8])
 def test_build_invariants_random(n, max_leaf):
-    rng = np.random.default_rng(n * 10 + max_leaf)
-    lo, hi = primitive_bounds(*random_soup(rng, n), random_spheres(rng, n // 3))
-    bvh = build_bvh(lo, hi, max_leaf_size=max_leaf)
+    lo, hi, bvh = random_tree(n, max_leaf)
     check_invariants(bvh, lo, hi, max_leaf)
 
 
