@@ -59,13 +59,10 @@ def main(argv=None):
     from clrender.pack import DEFAULT_BVH_WIDTH, pack_scene
     from clrender.renderer import Renderer
 
-    tmp = tempfile.TemporaryDirectory()
-    if args.scene:
-        xml = Path(args.scene)
-    else:
-        from vs_mitsuba import cornell_twin_xml
+    from vs_mitsuba import scene_or_cornell_twin
 
-        xml = cornell_twin_xml(Path(tmp.name))
+    tmp = tempfile.TemporaryDirectory()
+    xml = scene_or_cornell_twin(args.scene, Path(tmp.name))
     scene = clrender.load_scene(xml)
     runs = []
     for text in args.variants:

@@ -71,13 +71,10 @@ def main(argv=None):
         return worker(sys.argv[2], sys.argv[3], int(sys.argv[4]))
     args = ap.parse_args(argv)
     tmp = tempfile.TemporaryDirectory()
-    if args.scene:
-        xml = str(Path(args.scene).resolve())
-    else:
-        sys.path.insert(0, str(ROOT / "benchmarks"))
-        from vs_mitsuba import cornell_twin_xml
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from vs_mitsuba import scene_or_cornell_twin
 
-        xml = str(cornell_twin_xml(Path(tmp.name)))
+    xml = str(scene_or_cornell_twin(args.scene, Path(tmp.name)).resolve())
     names = ["A", "B"]
     procs, info = {}, {}
     for name, root in zip(names, args.trees):

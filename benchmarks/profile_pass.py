@@ -33,7 +33,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from vs_mitsuba import cpu_name  # noqa: E402
+from vs_mitsuba import cpu_name, scene_or_cornell_twin  # noqa: E402
 
 CAP = 64          # recorded rays per pixel (more are counted as dropped; a path that long is very rare)
 SAMPLE = 3        # the sample number every timed pass renders
@@ -61,12 +61,7 @@ def main(argv=None):
     from clrender.renderer import LOCAL_SIZE, Renderer
 
     tmp = tempfile.TemporaryDirectory()
-    if args.scene:
-        xml = Path(args.scene)
-    else:
-        from vs_mitsuba import cornell_twin_xml
-
-        xml = cornell_twin_xml(Path(tmp.name))
+    xml = scene_or_cornell_twin(args.scene, Path(tmp.name))
     scene = clrender.load_scene(xml)
     from clrender.pack import pack_scene
 

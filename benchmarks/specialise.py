@@ -89,13 +89,10 @@ def main(argv=None):
     from clrender.pack import pack_scene
     from clrender.renderer import LOCAL_SIZE, MAX_LAUNCH_PIXELS, render_defines
 
-    tmp = tempfile.TemporaryDirectory()
-    if args.scene:
-        xml = Path(args.scene)
-    else:
-        from vs_mitsuba import cornell_twin_xml
+    from vs_mitsuba import scene_or_cornell_twin
 
-        xml = cornell_twin_xml(Path(tmp.name))
+    tmp = tempfile.TemporaryDirectory()
+    xml = scene_or_cornell_twin(args.scene, Path(tmp.name))
     scene = clrender.load_scene(xml)
     buffers = pack_scene(scene)
     variants = {"full": render_defines(scene, dataclasses.replace(buffers, plugins=None)),

@@ -466,6 +466,12 @@ def cornell_twin_xml(folder: Path, spp: int = 64) -> Path:
     return xml
 
 
+def scene_or_cornell_twin(scene: str | None, folder: Path) -> Path:
+    """The scene XML of an A/B or profiling tool: `scene` when given (its --scene), else the Cornell twin written
+    into `folder` (which must outlive the run)."""
+    return Path(scene) if scene else cornell_twin_xml(folder)
+
+
 def cpu_name() -> str:
     """The CPU's model name (for results files): /proc/cpuinfo, else what platform knows."""
     try:

@@ -325,12 +325,17 @@ def check_invariants(bvh, lo, hi, max_leaf):
     assert bvh.depth <= 64
 
 
+def random_tree(n, max_leaf):
+    """(lo, hi, bvh) of n random triangles and n // 3 spheres (the seed follows n and max_leaf)."""
+    rng = np.random.default_rng(n * 10 + max_leaf)
+    lo, hi = primitive_bounds(*random_soup(rng, n), random_spheres(rng, n // 3))
+    return lo, hi, build_bvh(lo, hi, max_leaf_size=max_leaf)
+
+
 @pytest.mark.parametrize("n", [0, 1, 2, 3, 5, 33, 100, 2000])
 @pytest.mark.parametrize("max_leaf", [1, 4, 8])
 def test_build_invariants_random(n, max_leaf):
-    rng = np.random.default_rng(n * 10 + max_leaf)
-    lo, hi = primitive_bounds(*random_soup(rng, n), random_spheres(rng, n // 3))
-    bvh = build_bvh(lo, hi, max_leaf_size=max_leaf)
+    lo, hi, bvh = random_tree(n, max_leaf)
     check_invariants(bvh, lo, hi, max_leaf)
 
 
@@ -376,16 +381,23 @@ def test_primitive_packing():
     assert (lo[3] < sp[0, :3] - sp[0, 3] + 1e-6).all() and (hi[3] >= (sp[0, :3] + sp[0, 3]).astype(np.float32)).all()
 
 
-def test_leaf_blocks_layout():
-    # Word 10 s + r c + l of the device table is row r of lane l of the block of c primitives at s; rows
-    # 0..8 the vertices, row 9 the id, exactly the words of the 3-row table, for leaves of 1..9 primitives.
-    rng = np.random.default_rng(1)
+def random_leaves(seed):
+    """40 triangles and 5 spheres in a random primitive order, cut into leaves of 1..9 primitives: (v0, v1, v2,
+    spheres, order, first, count, perm), perm a random order of the leaves (they may come in any order)."""
+    rng = np.random.default_rng(seed)
     v0, v1, v2 = random_soup(rng, 40)
     sp = random_spheres(rng, 5)
     order = rng.permutation(45)
     count = np.array([1, 2, 3, 4, 5, 6, 7, 8, 9])
     first = np.concatenate([[0], np.cumsum(count)[:-1]])
-    perm = rng.permutation(len(count))                     # leaves may come in any order
+    perm = rng.permutation(len(count))
+    return v0, v1, v2, sp, order, first, count, perm
+
+
+def test_leaf_blocks_layout():
+    # Word 10 s + r c + l of the device table is row r of lane l of the block of c primitives at s; rows
+    # 0..8 the vertices, row 9 the id, exactly the words of the 3-row table, for leaves of 1..9 primitives.
+    v0, v1, v2, sp, order, first, count, perm = random_leaves(1)
     words = pack_leaf_blocks(v0, v1, v2, sp, order, first[perm], count[perm]).reshape(-1).view(np.uint32)
     rows = pack_primitives(v0, v1, v2, sp, order).reshape(-1, 3, 4).view(np.uint32)
     want = np.concatenate([rows[:, 0, :3], rows[:, 1, :3], rows[:, 2, :3], rows[:, 0, 3:]], axis=1)
@@ -404,13 +416,7 @@ def test_leaf_refs_find_the_vertices():
     # pack_scene's id words: a triangle's leaf reference pos << 4 | lane << 2 | (c - 1) leads back to its own
     # vertices as kernels/shapes/mesh.h mesh_triangle reads them (block at pos - lane, rows of c words);
     # spheres keep their ids.
-    rng = np.random.default_rng(2)
-    v0, v1, v2 = random_soup(rng, 40)
-    sp = random_spheres(rng, 5)
-    order = rng.permutation(45)
-    count = np.array([1, 2, 3, 4, 5, 6, 7, 8, 9])
-    first = np.concatenate([[0], np.cumsum(count)[:-1]])
-    perm = rng.permutation(len(count))
+    v0, v1, v2, sp, order, first, count, perm = random_leaves(2)
     refs = leaf_refs(first[perm], count[perm])
     tri = order < 40
     tri_ref = np.empty(40, np.uint32)

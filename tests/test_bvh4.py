@@ -6,7 +6,7 @@ import pytest
 from clrender.accel.bvh import LEAF_FLAG, build_bvh
 from clrender.accel.bvh4 import (EMPTY_HI, EMPTY_LO, NODE_ROWS, Bvh4Unsupported, collapse_bvh4, decode_leaf)
 from clrender.accel.primitives import primitive_bounds
-from test_bvh import check_trace, icosphere, make_tracer, random_rays, random_soup, random_spheres
+from test_bvh import check_trace, icosphere, make_tracer, random_rays, random_soup, random_spheres, random_tree
 
 
 # -------------------------------------------------------------------------------------- host invariants
@@ -57,9 +57,7 @@ def check_invariants4(b4, lo, hi, order, max_leaf, width=4):
 @pytest.mark.parametrize("n", [0, 1, 2, 3, 5, 33, 100, 2000])
 @pytest.mark.parametrize("max_leaf", [1, 4, 8])
 def test_collapse_invariants_random(n, max_leaf):
-    rng = np.random.default_rng(n * 10 + max_leaf)
-    lo, hi = primitive_bounds(*random_soup(rng, n), random_spheres(rng, n // 3))
-    bvh = build_bvh(lo, hi, max_leaf_size=max_leaf)
+    lo, hi, bvh = random_tree(n, max_leaf)
     b4 = collapse_bvh4(bvh)
     check_invariants4(b4, lo, hi, bvh.order, max_leaf)
     assert b4.node_count <= bvh.node_count and b4.depth <= max(bvh.depth, 1)

@@ -313,6 +313,27 @@ def checker_spec(name, v1, v2):
     return PluginSpec("texture", "checkerboard_color", name, props, [], None)
 
 
+@pytest.mark.parametrize("d, name, article", [
+    ({"type": "blendbsdf", "a": {"type": "plastic"}, "b": {"type": "plastic"}}, "weight", "a"),
+    ({"type": "mask", "a": {"type": "plastic"}}, "opacity", "an"),
+])
+def test_fraction_parameter_errors(d, name, article):
+    """blendbsdf's weight and mask's opacity: a number in [0, 1] or a texture that stays within it, not both."""
+    with pytest.raises(SceneError) as e:
+        create(spec_from_dict({**d, name: 1.5}))
+    assert str(e.value) == f"{name} must be within [0, 1], got 1.5"
+    spec = spec_from_dict({**d, name: 0.5})
+    spec.children.append(checker_spec(name, (0.2,) * 3, (0.4,) * 3))
+    with pytest.raises(SceneError) as e:
+        create(spec)
+    assert str(e.value) == f"{name} given both as a number and as a texture"
+    spec = spec_from_dict(d)
+    spec.children.append(checker_spec(name, (0.2,) * 3, (1.2,) * 3))
+    with pytest.raises(SceneError) as e:
+        create(spec)
+    assert str(e.value) == f"{article} {name} texture must stay within [0, 1]"
+
+
 def test_textured_parameters(ctx, queue):
     """A textured diffuse_reflectance (plastic), blend weight and mask opacity read the texture at the query's uv:
     each cell equals the BSDF made with that cell's constant, and the row asks for uvs (BSDF_UV). (The ETH

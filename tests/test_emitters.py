@@ -22,6 +22,7 @@ from clrender.errors import SceneError
 from clrender.loader import load_scene
 from clrender.pack import pack_scene
 from clrender.testing.chi2 import bin_directions, chi2_test, expected_from_pdf, integration_directions
+from icosphere import icosphere
 
 LOCAL = 64
 
@@ -252,33 +253,6 @@ def unequal_triangles():
         local = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.3, 0.9, 0.0]]) - [0.43, 0.3, 0.0]
         tris.append(c + size * local @ frame.T)
     return np.array(tris)
-
-
-def icosphere(level):
-    t = (1 + 5 ** 0.5) / 2
-    v = np.array([(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
-                  (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)], float)
-    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
-         (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11),
-         (6, 2, 10), (8, 6, 7), (9, 8, 1)]
-    verts = list(v / np.linalg.norm(v, axis=1, keepdims=True))
-    faces = f
-    for _ in range(level):
-        cache, nf = {}, []
-
-        def mid(a, b):
-            key = (min(a, b), max(a, b))
-            if key not in cache:
-                m = verts[a] + verts[b]
-                verts.append(m / np.linalg.norm(m))
-                cache[key] = len(verts) - 1
-            return cache[key]
-
-        for a, b, c in faces:
-            ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
-            nf += [(a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca)]
-        faces = nf
-    return np.array(verts), np.array(faces)
 
 
 def quad(c, u, v):

@@ -48,9 +48,14 @@ CORNELL = """\
 """
 
 
-def err(text: str, **kw) -> SceneError:
+def err(text: str, line: int | None = None, col: int | None = None, *fragments: str, **kw) -> SceneError:
+    """The SceneError of parsing `text`; when given, checked to be at `line` (and `col`) and to say `fragments`."""
     with pytest.raises(SceneError) as e:
         parse_string(text, **kw)
+    if line is not None:
+        at(e.value, line, col)
+    for fragment in fragments:
+        assert fragment in str(e.value), str(e.value)
     return e.value
 
 
@@ -130,8 +135,7 @@ def test_test_root_and_texture():
 def test_leading_whitespace_before_declaration_keeps_positions():
     text = "\n\n   <?xml version='1.0'?>\n<scene>\n  <bsdf type='diffuse'>\n    <float name='a' value='x'/>"
     text += "</bsdf></scene>"
-    e = err(text)
-    at(e, 6, 28)  # the value's first character
+    err(text, 6, 28)  # the value's first character
 
 
 def test_spaces_around_equals_and_comments():
@@ -172,10 +176,8 @@ def test_missing_file(tmp_path):
 
 
 def test_malformed_xml():
-    e = err("<scene>\n  <bsdf type='diffuse'>\n  </bsdfx>\n</scene>", filename="bad.xml")
-    at(e, 3, 5)  # expat points at the mismatched name
-    assert str(e).startswith("bad.xml:3:5: malformed XML")
-    assert "mismatched tag" in str(e)
+    e = err("<scene>\n  <bsdf type='diffuse'>\n  </bsdfx>\n</scene>", 3, 5, "mismatched tag", filename="bad.xml")
+    assert str(e).startswith("bad.xml:3:5: malformed XML")  # expat points at the mismatched name
 
 
 def test_malformed_xml_unclosed_attribute():
@@ -184,36 +186,25 @@ def test_malformed_xml_unclosed_attribute():
 
 
 def test_root_must_be_scene_or_test():
-    e = err("\n<bsdf type='diffuse'/>")
-    at(e, 2, 1)
-    assert "<scene>" in str(e) and "<test" in str(e)
-    e = err("<test type='ztest'/>")
-    at(e, 1, 13)
-    assert "ttest" in str(e) and "chi2test" in str(e)
+    err("\n<bsdf type='diffuse'/>", 2, 1, "<scene>", "<test")
+    err("<test type='ztest'/>", 1, 13, "ttest", "chi2test")
 
 
 def test_unknown_tag():
-    e = err("<scene>\n  <bsdf type='diffuse'>\n    <colour name='albedo' value='1'/>\n  </bsdf>\n</scene>")
-    at(e, 3, 5)
-    assert "unknown tag <colour>" in str(e)
-    assert "<color>" in str(e) and "<emitter>" in str(e)  # lists what is expected
+    err("<scene>\n  <bsdf type='diffuse'>\n    <colour name='albedo' value='1'/>\n  </bsdf>\n</scene>", 3, 5,
+        "unknown tag <colour>", "<color>", "<emitter>")  # lists what is expected
 
 
 def test_unknown_tag_in_transform_and_op_outside_transform():
-    e = err("<scene><camera type='p'><transform name='toWorld'>\n <shift value='1'/></transform></camera></scene>")
-    at(e, 2, 2)
-    assert "<translate>" in str(e) and "<lookat>" in str(e)
-    e = err("<scene><camera type='p'>\n<translate value='1,2,3'/></camera></scene>")
-    at(e, 2, 1)
-    assert "only allowed inside <transform>" in str(e)
+    err("<scene><camera type='p'><transform name='toWorld'>\n <shift value='1'/></transform></camera></scene>", 2, 2,
+        "<translate>", "<lookat>")
+    err("<scene><camera type='p'>\n<translate value='1,2,3'/></camera></scene>", 2, 1,
+        "only allowed inside <transform>")
 
 
 def test_children_of_properties_and_default_placement():
-    e = err("<scene><mesh type='obj'><float name='a' value='1'>\n  <bsdf type='d'/></float></mesh></scene>")
-    at(e, 2, 3)
-    e = err("<scene><mesh type='obj'>\n<default name='a' value='1'/></mesh></scene>")
-    at(e, 2, 1)
-    assert "root" in str(e)
+    err("<scene><mesh type='obj'><float name='a' value='1'>\n  <bsdf type='d'/></float></mesh></scene>", 2, 3)
+    err("<scene><mesh type='obj'>\n<default name='a' value='1'/></mesh></scene>", 2, 1, "root")
 
 
 @pytest.mark.parametrize("element, missing", [
@@ -225,22 +216,18 @@ def test_children_of_properties_and_default_placement():
     ("<camera type='p'><transform name='t'><lookat origin='0 0 0' target='0 0 1'/></transform></camera>", "up"),
 ])
 def test_missing_attribute(element, missing):
-    e = err(f"<scene>\n{element}\n</scene>")
-    at(e, 2)
-    assert f"missing the required attribute '{missing}'" in str(e)
+    err(f"<scene>\n{element}\n</scene>", 2, None, f"missing the required attribute '{missing}'")
 
 
 def test_unexpected_attribute():
-    e = err("<scene>\n  <bsdf type='diffuse'>\n    <float name='a' vaule='1'/>\n  </bsdf>\n</scene>")
-    at(e, 3, 21)  # points at the offending attribute's name
-    assert "unexpected attribute 'vaule' in <float>" in str(e) and "'value'" in str(e)
-    e = err("<scene version='0.5'/>")
-    at(e, 1, 8)
-    assert "'version'" in str(e)
-    e = err("<scene><bsdf type='diffuse' name='x'/></scene>")  # only <texture> has a name
-    assert "unexpected attribute 'name'" in str(e)
-    e = err("<scene><camera type='p'><transform name='t' value='1'/></camera></scene>")
-    assert "unexpected attribute 'value' in <transform>" in str(e)
+    # the location is the offending attribute's name
+    err("<scene>\n  <bsdf type='diffuse'>\n    <float name='a' vaule='1'/>\n  </bsdf>\n</scene>", 3, 21,
+        "unexpected attribute 'vaule' in <float>", "'value'")
+    err("<scene version='0.5'/>", 1, 8, "'version'")
+    err("<scene><bsdf type='diffuse' name='x'/></scene>", None, None,  # only <texture> has a name
+        "unexpected attribute 'name'")
+    err("<scene><camera type='p'><transform name='t' value='1'/></camera></scene>", None, None,
+        "unexpected attribute 'value' in <transform>")
 
 
 @pytest.mark.parametrize("prop, col, fragment", [
@@ -252,9 +239,7 @@ def test_unexpected_attribute():
     ("<boolean name='b' value='yes'/>", 26, "true or false"),
 ])
 def test_bad_number(prop, col, fragment):
-    e = err(f"<scene>\n<mesh type='sphere'>\n{prop}\n</mesh>\n</scene>")
-    at(e, 3, col)
-    assert fragment in str(e)
+    err(f"<scene>\n<mesh type='sphere'>\n{prop}\n</mesh>\n</scene>", 3, col, fragment)
 
 
 def test_wrong_component_count_is_checked_by_the_getter():
@@ -273,36 +258,27 @@ def test_wrong_component_count_is_checked_by_the_getter():
 
 
 def test_duplicate_property():
-    e = err("<scene>\n<mesh type='sphere'>\n  <float name='radius' value='1'/>\n"
-            "  <point name='center' value='0 0 0'/>\n  <float name='radius' value='2'/>\n</mesh>\n</scene>")
-    at(e, 5, 3)
-    assert "property 'radius' given twice (first at line 3)" in str(e)
+    err("<scene>\n<mesh type='sphere'>\n  <float name='radius' value='1'/>\n"
+        "  <point name='center' value='0 0 0'/>\n  <float name='radius' value='2'/>\n</mesh>\n</scene>", 5, 3,
+        "property 'radius' given twice (first at line 3)")
 
 
 def test_duplicate_property_of_different_kind():
-    e = err("<scene><mesh type='sphere'><float name='radius' value='1'/>\n"
-            "<integer name='radius' value='2'/></mesh></scene>")
-    at(e, 2, 1)
-    assert "given twice" in str(e)
+    err("<scene><mesh type='sphere'><float name='radius' value='1'/>\n"
+        "<integer name='radius' value='2'/></mesh></scene>", 2, 1, "given twice")
 
 
 def test_undefined_define():
-    e = err("<scene>\n<sampler type='independent'>\n  <integer name='sampleCount' value='$spp'/>\n"
-            "</sampler>\n</scene>", defines={"other": "1"})
-    at(e, 3, 38)
-    assert "'$spp'" in str(e) and "-D spp=value" in str(e)
+    err("<scene>\n<sampler type='independent'>\n  <integer name='sampleCount' value='$spp'/>\n</sampler>\n</scene>",
+        3, 38, "'$spp'", "-D spp=value", defines={"other": "1"})
 
 
 def test_text_content_is_an_error():
-    e = err("<scene>\n  <bsdf type='diffuse'>\n\n     oops\n  </bsdf>\n</scene>")
-    at(e, 4, 6)
-    assert "'oops'" in str(e) and "<bsdf>" in str(e)
+    err("<scene>\n  <bsdf type='diffuse'>\n\n     oops\n  </bsdf>\n</scene>", 4, 6, "'oops'", "<bsdf>")
 
 
 def test_duplicate_default():
-    e = err("<scene>\n<default name='a' value='1'/>\n<default name='a' value='2'/>\n</scene>")
-    at(e, 3, 1)
-    assert "twice" in str(e)
+    err("<scene>\n<default name='a' value='1'/>\n<default name='a' value='2'/>\n</scene>", 3, 1, "twice")
 
 
 def test_columns_count_characters_and_crlf(tmp_path):

@@ -14,7 +14,6 @@ non-delta parts only). A texture weight reads the texture's first channel. Bsdf 
 """
 import numpy as np
 
-from ..errors import SceneError
 from ..scene.registry import register
 from ..textures.texture import param
 from .composite import Composite
@@ -28,14 +27,7 @@ class BlendBsdf(Composite):
 
     def __init__(self, props, children, spec):
         self.read_children(spec, children, (2,), ("weight",))
-        self.texture = self.textures.get("weight")
-        if self.texture is not None and props.has("weight"):
-            raise SceneError("weight given both as a number and as a texture", props.location("weight"))
-        self.weight = float(props.get_float("weight", 0.5))
-        if not 0 <= self.weight <= 1:
-            raise SceneError(f"weight must be within [0, 1], got {self.weight}", props.location("weight"))
-        if self.texture is not None and self.texture.max_value() > 1:
-            raise SceneError("a weight texture must stay within [0, 1]", getattr(self.texture.spec, "location", None))
+        self.weight, self.texture = self.read_fraction(props, "weight")
 
     def fill(self, p, row, textures):
         p["first"], p["second"] = self.child_offsets

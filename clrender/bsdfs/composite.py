@@ -51,6 +51,21 @@ class Composite(Bsdf):
             raise SceneError(f"composite BSDFs (twosided, blendbsdf, mask) nested {depth} deep; at most {levels} "
                              f"levels are supported", where)
 
+    def read_fraction(self, props, name: str):
+        """(value, texture) of a parameter in [0, 1], default 0.5: a number, or the nested texture `name` (read by
+        read_children) whose values stay within [0, 1]; not both."""
+        texture = self.textures.get(name)
+        if texture is not None and props.has(name):
+            raise SceneError(f"{name} given both as a number and as a texture", props.location(name))
+        value = float(props.get_float(name, 0.5))
+        if not 0 <= value <= 1:
+            raise SceneError(f"{name} must be within [0, 1], got {value}", props.location(name))
+        if texture is not None and texture.max_value() > 1:
+            article = "an" if name[0] in "aeiou" else "a"
+            raise SceneError(f"{article} {name} texture must stay within [0, 1]",
+                             getattr(texture.spec, "location", None))
+        return value, texture
+
     def pack_rows(self, textures) -> list:
         rows, offsets = [None], []
         for c in self.bsdfs:

@@ -13,7 +13,6 @@ opacity(_tex), child (row offset).
 """
 import numpy as np
 
-from ..errors import SceneError
 from ..scene.registry import register
 from ..textures.texture import param
 from .composite import Composite
@@ -28,15 +27,7 @@ class Mask(Composite):
 
     def __init__(self, props, children, spec):
         self.read_children(spec, children, (1,), ("opacity",))
-        self.texture = self.textures.get("opacity")
-        if self.texture is not None and props.has("opacity"):
-            raise SceneError("opacity given both as a number and as a texture", props.location("opacity"))
-        self.opacity = float(props.get_float("opacity", 0.5))
-        if not 0 <= self.opacity <= 1:
-            raise SceneError(f"opacity must be within [0, 1], got {self.opacity}", props.location("opacity"))
-        if self.texture is not None and self.texture.max_value() > 1:
-            raise SceneError("an opacity texture must stay within [0, 1]",
-                             getattr(self.texture.spec, "location", None))
+        self.opacity, self.texture = self.read_fraction(props, "opacity")
 
     def fill(self, p, row, textures):
         p["child"] = self.child_offsets[0]

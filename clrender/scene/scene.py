@@ -25,26 +25,31 @@ class Scene:
     def __init__(self, props, children, spec):
         self.location = spec.location
         self.nori_dialect = spec.dialect
-        self.shapes = []
-        self.emitters = []
         self.camera = self.integrator = self.sampler = None
-        for c in children:
-            tag = c.spec.tag
-            if tag == "mesh":
-                self.shapes.append(c)
-            elif tag == "emitter":
-                if getattr(c, "is_area", False):
-                    raise SceneError("an area emitter must be nested in a <mesh>", c.spec.location)
-                self.emitters.append(c)
-            else:
-                if getattr(self, tag) is not None:
-                    raise SceneError(f"a scene can have only one <{tag}>", c.spec.location)
-                setattr(self, tag, c)
+        self._take_children(children, "mesh", {"camera": "camera", "integrator": "integrator", "sampler": "sampler"},
+                            "a scene can have only one <{tag}>")
         if self.camera is None:
             raise SceneError("no camera was specified: add a <camera type=\"perspective\">", spec.location)
         if self.integrator is None:
             raise SceneError("no integrator was specified: add e.g. <integrator type=\"normals\"/>",
                              spec.location)
+
+    def _take_children(self, children, shape_tag: str, slots: dict, twice: str) -> None:
+        """Shapes (`shape_tag`) and scene-level emitters into lists, each single object into its attribute
+        (slots: tag -> attribute; a second one is the error `twice`); other children are passed over."""
+        self.shapes, self.emitters = [], []
+        for c in children:
+            tag = c.spec.tag
+            if tag == shape_tag:
+                self.shapes.append(c)
+            elif tag == "emitter":
+                if getattr(c, "is_area", False):
+                    raise SceneError(f"an area emitter must be nested in a <{shape_tag}>", c.spec.location)
+                self.emitters.append(c)
+            elif tag in slots:
+                if getattr(self, slots[tag]) is not None:
+                    raise SceneError(twice.format(tag=tag), c.spec.location)
+                setattr(self, slots[tag], c)
 
     @property
     def sample_count(self) -> int:
@@ -85,23 +90,10 @@ class MitsubaScene(Scene):
     def __init__(self, props, children, spec):
         self.location = spec.location
         self.nori_dialect = "upstream"   # Mitsuba's camera convention is upstream Nori's
-        self.shapes, self.emitters = [], []
         self.camera = self.integrator = None
-        for c in children:
-            tag = c.spec.tag
-            if tag == "shape":
-                self.shapes.append(c)
-            elif tag == "emitter":
-                if getattr(c, "is_area", False):
-                    raise SceneError("an area emitter must be nested in a <shape>", c.spec.location)
-                self.emitters.append(c)
-            elif tag in ("sensor", "integrator"):
-                slot = "camera" if tag == "sensor" else tag
-                if getattr(self, slot) is not None:
-                    raise SceneError(f"clrender renders one <{tag}> per scene; this is a second one",
-                                     c.spec.location)
-                setattr(self, slot, c)
-            # bsdfs and textures at the top level are only declared for references
+        # bsdfs and textures at the top level are only declared for references: _take_children passes them over
+        self._take_children(children, "shape", {"sensor": "camera", "integrator": "integrator"},
+                            "clrender renders one <{tag}> per scene; this is a second one")
         if self.camera is None:
             raise SceneError('no sensor was specified: add e.g. <sensor type="perspective"> with a <film '
                              'type="hdrfilm"> (Mitsuba 3 cannot render a scene without one either)', spec.location)
