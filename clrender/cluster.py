@@ -18,8 +18,8 @@ content hash) for every later task of that scene (the worker side: cluster_worke
 
 Samples are numbered globally and the counter-based RNG makes a sample's value independent of where it is
 drawn, so any split gives the single-process image up to the float rounding of the sums. Dask reruns the
-task of a worker that died; a worker whose device fails is reported by name and its task moves to the
-other workers.
+task of a worker that died (and the client sends a shipped scene again if that worker held its last copy);
+a worker whose device fails is reported by name and its task moves to the other workers.
 """
 from __future__ import annotations
 
@@ -258,21 +258,24 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
     spp = int(spp if spp is not None else scene_spp)
     if spp < 1:
         raise ValueError("spp must be at least 1")
-    try:
-        client.wait_for_workers(1, timeout=60)
-    except TimeoutError:
-        raise ClusterError(f"no Dask worker joined {what} within 60 s (start some with `dask worker ADDRESS`)") \
-            from None
+    _wait_for_a_worker(client, what)
     threads, threads_at = _threads(client), time.perf_counter()
     say(f"{what}: {len(client.scheduler_info()['workers'])} workers, {threads} threads")
     link = _dashboard(client)
     say(f"Dask dashboard: {link}" if link else "no Dask dashboard (it needs bokeh: pip install bokeh)")
     plan = device if device is not None else (usable_device_specs() if local else None)
     plan = plan if plan != [None] else None
-    if files == "ship":
-        # On every worker (copied worker to worker), so no single dead worker takes it with it; workers
-        # that join later fetch it from a peer.
-        payload = client.scatter(payload, broadcast=True, hash=False)
+    shipped = payload if files == "ship" else None
+
+    def send_scene():
+        # Broadcast, but Dask's active memory manager soon drops the copies that no waiting task needs, down
+        # to one: a dead worker can still take the scene with it (then it is sent again, see below).
+        _wait_for_a_worker(client, what)
+        return client.scatter(shipped, broadcast=True, hash=False)
+
+    if shipped is not None:
+        payload = send_scene()
+    lost_in_a_row = 0                  # scene losses since the last finished task
     plan_tasks = TaskPlan(width, height, spp, start_sample, threads, n_tasks, bands)
     acc = Accumulator(width, height)
     n_pixels = width * height
@@ -282,7 +285,7 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
 
         bar = tqdm(total=spp * n_pixels, unit="sample", unit_scale=True, dynamic_ncols=True, leave=True,
                    desc=f"rendering on {len(client.scheduler_info()['workers'])} workers")
-    pending: dict = {}                 # future -> task
+    pending: dict = {}                 # future -> (task, the scene future it depends on or None)
     failures: dict[int, int] = {}      # task index -> device failures
     bad_workers: set[str] = set()
     held: dict[int, dict] = {}         # finished results waiting for their turn in the fixed order
@@ -296,7 +299,7 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
         f = client.submit(render_task, payload, index, pixels, s0, cnt, seed, plan, pure=False,
                           key=f"clrender-{key[:12]}-{seed}-{s0}-{pixels[0]}-{os.urandom(4).hex()}",
                           workers=workers, allow_other_workers=False)
-        pending[f] = task
+        pending[f] = task, (payload if shipped is not None else None)
 
     def fail(msg):
         client.cancel(list(pending))
@@ -324,9 +327,18 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
                 except Exception:  # a timeout, or futures cancelled under us (looked at one by one below)
                     pass
                 for f in [f for f in pending if f.done()]:
-                    task = pending.pop(f)
+                    task, sent = pending.pop(f)
+                    r = None
                     if f.status == "finished":
-                        r = f.result()
+                        try:
+                            r = f.result()
+                        except Exception:
+                            # the worker holding the result died before we fetched it, and Dask could not
+                            # compute it again (its scene went too): the status says what became of it
+                            if f.status == "finished":
+                                raise
+                    if r is not None:
+                        lost_in_a_row = 0
                         f.release()
                         if r["version"] != __version__:
                             fail(f"worker {r['worker']} runs clrender {r['version']}, this client "
@@ -339,6 +351,18 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
                             bar.update(r["count"] * (task[1][1] - task[1][0]))
                         if on_result is not None:
                             on_result(r, client)
+                        continue
+                    if f.status == "cancelled" and not flag.requested and sent is not None \
+                            and sent.status != "finished":
+                        # the scheduler forgot the scattered scene (its last copy was on a worker that died)
+                        # and every task that needed it: not the task's fault. Send the scene again, once.
+                        if sent is payload:
+                            lost_in_a_row += 1
+                            if lost_in_a_row > MAX_DEVICE_FAILURES:
+                                fail(f"the cluster lost the scene data {lost_in_a_row} times without finishing "
+                                     "a task in between (its workers keep dying)")
+                            payload = send_scene()
+                        submit(task)
                         continue
                     if f.status == "cancelled" and not flag.requested:
                         # not by us: the scheduler forgot it (its workers went away); hand it out again
@@ -397,6 +421,14 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
     film = acc.film(meta)
     film.stats = stats
     return film
+
+
+def _wait_for_a_worker(client, what):
+    try:
+        client.wait_for_workers(1, timeout=60)
+    except TimeoutError:
+        raise ClusterError(f"no Dask worker joined {what} within 60 s (start some with `dask worker ADDRESS`)") \
+            from None
 
 
 def _add(acc, r, added):

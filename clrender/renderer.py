@@ -8,6 +8,7 @@ clFinish, so Python's signal handler runs while the device works).
 """
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass
 
@@ -62,15 +63,22 @@ class RenderStats:
 
 
 class _SigintFlag(SigintHandler):
-    """First Ctrl-C: ask the loop to stop after the pass in flight. Second: abort."""
+    """First Ctrl-C: ask the loop to stop after the pass in flight (and say so, if `notice` is given: a pass
+    can take seconds, and a Ctrl-C that seems ignored gets pressed again). Second: abort."""
 
-    def __init__(self):
+    def __init__(self, notice: str | None = None):
         self.requested = False
+        self.notice = notice
 
     def _handle(self, signum, frame):
         if self.requested:
             raise Interrupted("aborted by a second Ctrl-C")
         self.requested = True
+        if self.notice:
+            try:  # os.write, not print: the handler may run inside a write to sys.stderr (the progress bar)
+                os.write(2, self.notice.encode())
+            except OSError:
+                pass
 
 
 class Renderer:
@@ -176,7 +184,9 @@ class Renderer:
 
             bar = tqdm(total=spp, unit="spp", desc="rendering", dynamic_ncols=True, leave=True)
         t_start = time.perf_counter()
-        with _SigintFlag() as flag:
+        notice = None if bar is None else \
+            "\nclrender: Ctrl-C: stopping after the pass in flight (Ctrl-C again aborts)\n"
+        with _SigintFlag(notice) as flag:
             try:
                 while done < spp:
                     batch = min(per_pass, spp - done)
@@ -192,11 +202,14 @@ class Renderer:
                     dt = time.perf_counter() - t0
                     done += batch
                     stats.passes += 1
+                    # Decided before the bar shows the pass: a Ctrl-C pressed after seeing it lets the next
+                    # pass run (it is the pass in flight for whoever pressed), whatever the timing.
+                    stop = flag.requested
                     if bar is not None:
                         bar.update(batch)
                     if on_pass is not None:
                         on_pass(done)
-                    if flag.requested:
+                    if stop:
                         stats.interrupted = True
                         break
                     launches = -(-(p1 - p0) // self.launch_pixels)

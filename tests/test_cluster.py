@@ -99,6 +99,27 @@ def test_killed_worker_task_is_rerun_and_image_unchanged(client, tmp_path):
     client.wait_for_workers(2, timeout=60)  # the nanny restarts it for the tests that follow
 
 
+def test_scene_data_lost_with_the_workers_is_sent_again(client, small):
+    """Dask keeps a scattered scene on as few as one worker (its memory manager drops the broadcast copies
+    no waiting task needs), so a killed worker may take the last copy with it; here every worker dies, so
+    it always does. The scene must be sent again to the restarted workers, not the render fail."""
+    path, _, ref = small
+    pids = client.run(os.getpid)
+    killed = []
+
+    def kill_all(result, c):
+        if not killed:
+            for pid in pids.values():
+                os.kill(pid, signal.SIGKILL)
+            killed.extend(pids)
+
+    film = clrender.render(str(path), spp=12, seed=SEED, cluster=client, tasks=6, on_result=kill_all)
+    assert killed
+    assert_same_film(film, ref)
+    assert not set(killed) & set(client.scheduler_info()["workers"])
+    client.wait_for_workers(2, timeout=60)
+
+
 def test_failing_device_is_reported_by_name_and_its_task_moves(client, small):
     path, _, ref = small
     victim = sorted(client.scheduler_info()["workers"])[0]

@@ -68,25 +68,47 @@ def test_ctrl_c_during_the_kernel_build(tmp_path):
 
 
 def test_second_ctrl_c_during_a_long_pass(tmp_path):
-    scene = _scene(tmp_path, w=2048, h=2048)  # one pass takes seconds
+    """Each step waits for what the renderer says, never for a guessed time: the first Ctrl-C goes in once
+    the bar shows the first pass (the second pass is then the one in flight), the second once the first was
+    acknowledged (two presses the renderer had no time to tell apart would count as one). The abort is
+    timed to the renderer's "aborted" line (the exit after it frees the process's memory and threads: on a
+    loaded machine that takes a second or more), against the pass it must not wait for: the pass in flight
+    does at least the first pass's work, in 64 launches sized to 0.1-0.2 s each."""
+    scene = _scene(tmp_path, w=2048, h=2048)  # 64 launches a pass: one pass takes seconds
     out = tmp_path / "o.exr"
     proc = subprocess.Popen([sys.executable, "-m", "clrender.cli", "render", str(scene), "-o", str(out),
                              "--spp", "100000", "--progress"], stderr=subprocess.PIPE, text=True)
     seen = ""
-    start = time.time()
-    # Wait for the progress bar's first count ("| 1/100000"): the passes have begun (not the warm-up launch).
-    while not re.search(r"\| [1-9][0-9]*/100000", seen) and time.time() - start < 300:
-        c = proc.stderr.read(1)
-        if not c:
-            break
-        seen += c
-    time.sleep(0.3)
-    proc.send_signal(signal.SIGINT)
-    time.sleep(0.1)
-    proc.send_signal(signal.SIGINT)
-    last = time.time()
-    _, err = proc.communicate(timeout=120)
+
+    def read_until(pattern):
+        nonlocal seen
+        while not re.search(pattern, seen):
+            c = proc.stderr.read(1)
+            if not c:
+                return None
+            seen += c
+        return time.time()
+
+    try:
+        t_bar = read_until(r"\| 0/100000")   # the passes begin (after the warm-up launch)
+        t_pass = read_until(r"\| 1/100000")  # the first pass is done
+        assert t_bar and t_pass, seen
+        first_pass = t_pass - t_bar
+        proc.send_signal(signal.SIGINT)
+        t1 = time.time()
+        t_ack = read_until(r"Ctrl-C again aborts")
+        assert t_ack, seen
+        proc.send_signal(signal.SIGINT)
+        t2 = time.time()
+        t_abort = read_until(r"aborted")
+        _, err = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    err = seen + err
     assert proc.returncode == 130, err
-    assert time.time() - last < 2.0, "the second Ctrl-C waited for the pass in flight"
-    assert "aborted" in err and "Traceback" not in err
+    prompt = max(2.0, first_pass / 2)
+    assert t_ack - t1 < prompt, f"the first Ctrl-C waited for the pass in flight ({t_ack - t1:.1f} s)\n{err}"
+    assert t_abort, f"the second Ctrl-C did not abort\n{err}"
+    assert t_abort - t2 < prompt, f"the second Ctrl-C waited for the pass in flight ({t_abort - t2:.1f} s)\n{err}"
+    assert "Traceback" not in err
     assert not out.exists()
