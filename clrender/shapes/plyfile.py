@@ -226,21 +226,12 @@ def _read_binary(data: bytes, here: SourceLocation):
     polygons: list | np.ndarray = []
     for name, count, props in elements:
         rec, off = _uniform_records(buf, off, count, props, endian, name, here)
-        if rec is not None:
-            if name == "vertex":
-                vertex = rec
-            elif name == "face":
-                for iname in _INDEX_NAMES:
-                    if iname in (rec.dtype.names or ()):
-                        polygons = rec[iname]
-                        break
-            continue
-        lists, off = _walk_records(buf, off, count, props, endian, name, here)
+        if rec is None:   # lists of different lengths: {list property: [index arrays]}
+            rec, off = _walk_records(buf, off, count, props, endian, name, here)
+        elif name == "vertex":
+            vertex = rec
         if name == "face":
-            for iname in _INDEX_NAMES:
-                if iname in lists:
-                    polygons = lists[iname]
-                    break
+            polygons = next((rec[i] for i in _INDEX_NAMES if i in _field_names(rec)), polygons)
     if vertex is None:
         raise SceneError("PLY file has no vertex element", here)
     return vertex, polygons
