@@ -154,8 +154,9 @@ __kernel void cast_packets(SCENE_ARGS, __global const float4* rec, __global cons
         float8 okx = pk_pick(Ox, Oy, Oz, kx), oky = pk_pick(Ox, Oy, Oz, ky), okz = pk_pick(Ox, Oy, Oz, kz);
         float8 Sz = 1.0f / pk_pick(Dx, Dy, Dz, kz);
         float8 Sx = pk_pick(Dx, Dy, Dz, kx) * Sz, Sy = pk_pick(Dx, Dy, Dz, ky) * Sz;
-        int sp = 0;
-        stack[0] = 0u; stack_t[0] = tmin; sp = 1;
+        stack[0] = 0u;                      /* the root */
+        stack_t[0] = tmin;
+        int sp = 1;
         while (sp > 0) {
             --sp;
             uint cur = stack[sp];
@@ -228,7 +229,7 @@ __kernel void cast_packets(SCENE_ARGS, __global const float4* rec, __global cons
                 }
             }
         }
-        float th[8], tv[8];
+        float th[8];
         vstore8(T, 0, th);
         int hl[8];
         vstore8(hit, 0, hl);
@@ -240,7 +241,6 @@ __kernel void cast_packets(SCENE_ARGS, __global const float4* rec, __global cons
                 acc += r;
             }
         }
-        (void)tv;
     }
     out[g] = acc;
 }

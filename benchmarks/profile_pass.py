@@ -116,14 +116,15 @@ def main(argv=None):
     KernelArgs(k_setup).set(cam=r._camera, filter_cdf=r._filter, acc0=acc[0], acc1=acc[1], sample=u32(SAMPLE),
                             seed=u32(0))
     kernels = {"pass": k_pass, "cast": k_cast, "boxes": k_boxes, "setup": k_setup}
-    gsize8 = (-(-(-(-n // 8)) // LOCAL_SIZE) * LOCAL_SIZE,)
-    hit_t8 = cl.Buffer(ctx, rw, size=n * CAP * 4)
+    packets = -(-n // 8)                                    # work-items of cast_packets: 8 pixels each
+    gsize8 = (-(-packets // LOCAL_SIZE) * LOCAL_SIZE,)
     if args.packets:
+        hit_t8 = cl.Buffer(ctx, rw, size=n * CAP * 4)
         k_pk = cl.Kernel(build_program(ctx, src, defines={**r.defines, "PROFILE_PACKETS": 1}), "cast_packets")
         KernelArgs(k_pk).set_scene(r._scene_bufs).set(rec=rec, kind=kind, count=count, cap=u32(CAP),
                                                       n_pixels=u32(n), hit_t=hit_t8, out=out)
         kernels["packets"] = k_pk
-        for name, kname, gs in (("camera rays", "cast_rays", gsize), ("camera packets", "cast_packets", gsize8)):
+        for name, kname in (("camera rays", "cast_rays"), ("camera packets", "cast_packets")):
             kc = cl.Kernel(build_program(ctx, src, defines={**r.defines, "PROFILE_PACKETS": 1,
                                                             "PROFILE_FIRST_ONLY": 1}), kname)
             KernelArgs(kc).set_scene(r._scene_bufs).set(rec=rec, kind=kind, count=count, cap=u32(CAP),
@@ -146,12 +147,11 @@ def main(argv=None):
     ht = np.zeros(n * CAP, np.float32)
     cl.enqueue_nd_range_kernel(queue, k_cast, gsize, (LOCAL_SIZE,))   # hit_t as cast finds it (boxes rewrote none)
     cl.enqueue_copy(queue, ht, hit_t)
-    _HIT_T["t"] = ht
     if args.packets:  # the packets must find what cast_rays found: closest t, and hit / no hit for shadow rays
         h8 = np.zeros(n * CAP, np.float32)
         cl.enqueue_copy(queue, h8, hit_t8)
         cm, sm = valid & (kinds == 0), valid & (kinds == 1)
-        agree_c = np.abs(h8[cm] - ht[cm]) <= 1e-4 * np.maximum(np.abs(ht[cm]), 1e-3)
+        agree_c = _agree(h8[cm], ht[cm], 1e-4)
         agree_s = (h8[sm] >= 0) == (ht[sm] >= 0)
         print(f"packets agree with single rays: {agree_c.mean() * 100:.3f} % of closest, "
               f"{agree_s.mean() * 100:.3f} % of shadow rays")
@@ -175,7 +175,9 @@ def main(argv=None):
         "shares_of_pass": {k: v / med["pass"] for k, v in shares.items()},
     }
     if args.embree:
-        res["embree"] = embree_cast(scene, rec, kind, counts, n, queue, args.repeat, res["cores"])
+        recs = np.zeros((n * CAP, 2, 4), np.float32)
+        cl.enqueue_copy(queue, recs, rec)
+        res["embree"] = embree_cast(scene, recs, kinds, valid, ht, args.repeat, res["cores"])
     date = dt.date.today().isoformat()
     path = Path(args.json) if args.json else (
         ROOT / "benchmarks" / "results" / f"profile_pass-{date}{'-' + args.label if args.label else ''}.json")
@@ -197,12 +199,12 @@ def main(argv=None):
     print(f"-> {path}")
 
 
-def embree_cast(scene, rec, kind, counts, n, queue, repeat, cores) -> dict:
-    """The recorded rays cast by Embree through embreex (rtcIntersect1/rtcOccluded1 per ray, one thread) against
-    the scene's triangles: closest-hit rays as INTERSECT, shadow rays as OCCLUDED, each with its tmax. Only
-    triangle scenes (the Cornell twin's spheres are meshes). Medians of `repeat`; also how often Embree's hit
-    distance agrees with ours (to 1e-3 relative), a check that both cast the same rays."""
-    import pyopencl as cl
+def embree_cast(scene, recs, kinds, valid, ours, repeat, cores) -> dict:
+    """The recorded rays (``recs``: per row (o, tmin), (d, tmax); ``kinds``; ``valid`` rows) cast by Embree through
+    embreex (rtcIntersect1/rtcOccluded1 per ray, one thread) against the scene's triangles: closest-hit rays as
+    INTERSECT, shadow rays as OCCLUDED, each with its tmax. Only triangle scenes (the Cornell twin's spheres are
+    meshes). Medians of `repeat`; also how often Embree's hit distance agrees with ``ours`` (cast_rays' hit t per
+    row, -1 for none; to 1e-3 relative), a check that both cast the same rays."""
     from embreex import rtcore_scene
     from embreex.mesh_construction import TriangleMesh
 
@@ -214,11 +216,6 @@ def embree_cast(scene, rec, kind, counts, n, queue, repeat, cores) -> dict:
         tris.append(np.asarray(m.positions, np.float32)[np.asarray(m.faces)])
     es = rtcore_scene.EmbreeScene()
     TriangleMesh(es, np.ascontiguousarray(np.concatenate(tris), np.float32))
-    recs = np.zeros((n * CAP, 2, 4), np.float32)
-    cl.enqueue_copy(queue, recs, rec)
-    kinds = np.zeros(n * CAP, np.uint32)
-    cl.enqueue_copy(queue, kinds, kind)
-    valid = (np.arange(CAP)[None, :] < counts[:, :1]).reshape(-1)
     o, d, tmax = recs[:, 0, :3], recs[:, 1, :3], recs[:, 1, 3]
     closest, shadow = valid & (kinds == 0), valid & (kinds == 1)
     if np.any(recs[valid, 0, 3] != 0.0):
@@ -232,7 +229,6 @@ def embree_cast(scene, rec, kind, counts, n, queue, repeat, cores) -> dict:
             es.run(oo, dd, dists=tt.copy(), query="INTERSECT" if k == "closest" else "OCCLUDED", output=None)
             times[k].append(time.perf_counter() - t0)
     out = es.run(sets["closest"][0], sets["closest"][1], dists=sets["closest"][2].copy(), output=1)
-    ours = np.zeros(n * CAP, np.float32)   # cast_rays' hit_t is in the same rows
     med = {k: statistics.median(v) for k, v in times.items()}
     nc, ns = int(closest.sum()), int(shadow.sum())
     return {"version": _embree_version(), "threads": 1,
@@ -240,7 +236,7 @@ def embree_cast(scene, rec, kind, counts, n, queue, repeat, cores) -> dict:
             "closest_rays_per_second": nc / med["closest"], "shadow_rays_per_second": ns / med["shadow"],
             "rays_per_second": (nc + ns) / (med["closest"] + med["shadow"]),
             "closest_hits_agree": float(np.mean(_agree(np.where(out["geomID"] >= 0, out["tfar"], -1.0),
-                                                       _HIT_T["t"][closest]))),
+                                                       ours[closest]))),
             "note": f"ours on {cores} cores; Embree one thread: compare per core"}
 
 
@@ -254,11 +250,8 @@ def _embree_version() -> str:
     return f"{m.group(1) if m else '?'} (embreex {version('embreex')})"
 
 
-_HIT_T = {}   # main() leaves cast_rays' hit t per recorded ray here (-1: no hit)
-
-
-def _agree(a, b):
-    return np.abs(a - b) <= 1e-3 * np.maximum(np.abs(b), 1e-3)
+def _agree(a, b, rel=1e-3):
+    return np.abs(a - b) <= rel * np.maximum(np.abs(b), 1e-3)
 
 
 if __name__ == "__main__":
