@@ -73,8 +73,13 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--json")
     args = ap.parse_args(argv)
-    cache = tempfile.mkdtemp(prefix="pocl-vec-")
-    os.environ["POCL_CACHE_DIR"] = cache      # before PoCL starts: its binaries are what we inspect
+    with tempfile.TemporaryDirectory(prefix="pocl-vec-") as cache:
+        # before PoCL starts: its binaries (in a cache of their own, removed afterwards) are what we inspect
+        os.environ["POCL_CACHE_DIR"] = cache
+        run(args, cache)
+
+
+def run(args, cache: str) -> None:
     import pyopencl as cl
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
