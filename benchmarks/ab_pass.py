@@ -16,6 +16,7 @@ import json
 import statistics
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -53,6 +54,9 @@ def main(argv=None):
     ap.add_argument("--spp", type=int, default=2)
     ap.add_argument("--rounds", type=int, default=15)
     ap.add_argument("--json")
+    ap.add_argument("--clock", choices=("wall", "cpu"), default="wall",
+                    help="cpu: the process's CPU seconds (every thread) per render instead of the render's wall "
+                         "time, steadier on a machine that other jobs share (PoCL's idle threads sleep)")
     args = ap.parse_args(argv)
 
     import clrender
@@ -73,9 +77,11 @@ def main(argv=None):
         runs.append(dict(label=label, renderer=r, seconds=[], mean=float(img.mean()), stats=buffers.stats))
     for _ in range(args.rounds):
         for run in runs:
-            run["seconds"].append(run["renderer"].render(spp=args.spp, start_sample=1000).stats.seconds)
+            c0 = time.process_time()
+            wall = run["renderer"].render(spp=args.spp, start_sample=1000).stats.seconds
+            run["seconds"].append(wall if args.clock == "wall" else time.process_time() - c0)
     base = runs[0]["seconds"]
-    out = {"scene": str(xml) if args.scene else "vs_mitsuba cornell_spheres twin", "spp": args.spp,
+    out = {"scene": str(xml) if args.scene else "vs_mitsuba cornell_spheres twin", "spp": args.spp, "clock": args.clock,
            "rounds": args.rounds, "variants": []}
     print(f"{'variant':28s} {'median s':>9s} {'speed vs ' + runs[0]['label']:>18s} {'image mean':>11s} bvh nodes")
     for run in runs:

@@ -49,6 +49,8 @@ def main(argv=None):
                     help="also cast the rays as packets of 8 (the k-th ray of 8 neighbouring pixels; 8-wide BVH only)")
     ap.add_argument("--embree", action="store_true",
                     help="also cast the recorded rays with Embree (embreex, one thread) against the same triangles")
+    ap.add_argument("--mitsuba", action="store_true",
+                    help="also cast the recorded rays with Mitsuba 3 (llvm_ad_rgb: Embree packets, all cores)")
     ap.add_argument("--bvh", action="append", default=[], metavar="KEY=VALUE",
                     help="a build_bvh option (e.g. traversal_cost=2), for trying builds")
     args = ap.parse_args(argv)
@@ -134,13 +136,20 @@ def main(argv=None):
     for name, k in kernels.items():
         cl.enqueue_nd_range_kernel(queue, k, gsize8 if "packets" in name else gsize, (LOCAL_SIZE,))
         queue.finish()
-    times = {name: [] for name in kernels}
+    timed = {name: (lambda k=k, g=(gsize8 if "packets" in name else gsize):
+                    (cl.enqueue_nd_range_kernel(queue, k, g, (LOCAL_SIZE,)), queue.finish()))
+             for name, k in kernels.items()}
+    if args.mitsuba:   # Mitsuba's casts take turns with our kernels, so both see the same machine
+        recs = np.zeros((n * CAP, 2, 4), np.float32)
+        cl.enqueue_copy(queue, recs, rec)
+        mi_calls, mi_info = mitsuba_casts(scene, recs, kinds, valid)
+        timed.update(mi_calls)
+    times = {name: [] for name in timed}
     load0 = os.getloadavg()
     for _ in range(args.repeat):
-        for name, k in kernels.items():
+        for name, call in timed.items():
             t0 = time.perf_counter()
-            cl.enqueue_nd_range_kernel(queue, k, gsize8 if "packets" in name else gsize, (LOCAL_SIZE,))
-            queue.finish()
+            call()
             times[name].append(time.perf_counter() - t0)
     med = {k: statistics.median(v) for k, v in times.items()}
     rays = n_closest + n_shadow
@@ -178,6 +187,14 @@ def main(argv=None):
         recs = np.zeros((n * CAP, 2, 4), np.float32)
         cl.enqueue_copy(queue, recs, rec)
         res["embree"] = embree_cast(scene, recs, kinds, valid, ht, args.repeat, res["cores"])
+    if args.mitsuba:
+        nc, ns = int((valid & (kinds == 0)).sum()), int((valid & (kinds == 1)).sum())
+        t_hit = mi_info.pop("t_hit")
+        res["mitsuba"] = {**mi_info, "closest_seconds": med["mi closest"], "shadow_seconds": med["mi shadow"],
+                          "closest_rays_per_second": nc / med["mi closest"],
+                          "shadow_rays_per_second": ns / med["mi shadow"],
+                          "rays_per_second": (nc + ns) / (med["mi closest"] + med["mi shadow"]),
+                          "closest_hits_agree": float(np.mean(_agree(t_hit, ht[valid & (kinds == 0)])))}
     date = dt.date.today().isoformat()
     path = Path(args.json) if args.json else (
         ROOT / "benchmarks" / "results" / f"profile_pass-{date}{'-' + args.label if args.label else ''}.json")
@@ -196,7 +213,73 @@ def main(argv=None):
               f"({e['closest_rays_per_second'] / 1e6:.2f} M closest, {e['shadow_rays_per_second'] / 1e6:.2f} M shadow); "
               f"our cast: {rays / med['cast'] / res['cores'] / 1e6:.2f} M rays/s per core "
               f"({res['cores']} cores); hits agree on {e['closest_hits_agree'] * 100:.2f} % of closest rays")
+    if args.mitsuba:
+        m = res["mitsuba"]
+        print(f"Mitsuba {m['version']} {m['variant']} ({m['threads']} threads) on the same rays: "
+              f"{m['rays_per_second'] / 1e6:.2f} M rays/s ({m['closest_rays_per_second'] / 1e6:.2f} M closest, "
+              f"{m['shadow_rays_per_second'] / 1e6:.2f} M shadow); our cast {rays / med['cast'] / 1e6:.2f} M rays/s: "
+              f"x{rays / med['cast'] / m['rays_per_second']:.2f}; hits agree on {m['closest_hits_agree'] * 100:.2f} %")
     print(f"-> {path}")
+
+
+def _scene_triangles(scene, flag: str) -> np.ndarray:
+    """(n, 3, 3) float32: every triangle of a scene made only of meshes (the Cornell twin's spheres are meshes)."""
+    tris = []
+    for sh in scene.shapes:
+        m = getattr(sh, "mesh", None)
+        if m is None:
+            raise SystemExit(f"{flag}: only scenes of triangle meshes")
+        tris.append(np.asarray(m.positions, np.float32)[np.asarray(m.faces)])
+    return np.concatenate(tris)
+
+
+def mitsuba_casts(scene, recs, kinds, valid):
+    """The recorded rays as Mitsuba 3's llvm_ad_rgb variant casts them against the same triangles: closest-hit rays
+    through Scene.ray_intersect_preliminary (hit distance and primitive, no surface record: what our cast does),
+    shadow rays through Scene.ray_test, each one wavefront of all the pass's rays of that kind, evaluated and
+    waited for (Dr.Jit's own threads, one per core, with Embree's packets inside). Returns the two casts as
+    callables for the timing loop (each warmed once: the JIT compiles its kernel then) and what to report,
+    with the hit distances (-1 for none) under "t_hit"."""
+    os.environ.setdefault("DRJIT_LIBLLVM_PATH", "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1")
+    import drjit as dr
+    import mitsuba as mi
+    mi.set_variant("llvm_ad_rgb")
+    tris = _scene_triangles(scene, "--mitsuba")
+    nt = len(tris)
+    mesh = mi.Mesh("twin", vertex_count=3 * nt, face_count=nt, has_vertex_normals=False)
+    params = mi.traverse(mesh)
+    params["vertex_positions"] = mi.Float(tris.reshape(-1))
+    params["faces"] = mi.UInt32(np.arange(3 * nt, dtype=np.uint32))
+    params.update()
+    mscene = mi.load_dict({"type": "scene", "twin": mesh})
+
+    def rays(m):
+        o, d, tmax = recs[m, 0, :3], recs[m, 1, :3], np.minimum(recs[m, 1, 3], 1e30)
+        r = mi.Ray3f(o=mi.Point3f(*(mi.Float(np.ascontiguousarray(o[:, i])) for i in range(3))),
+                     d=mi.Vector3f(*(mi.Float(np.ascontiguousarray(d[:, i])) for i in range(3))))
+        r.maxt = mi.Float(np.ascontiguousarray(tmax))
+        dr.eval(r)
+        return r
+
+    closest, shadow = rays(valid & (kinds == 0)), rays(valid & (kinds == 1))
+
+    def run(out):
+        dr.eval(out)
+        dr.sync_thread()
+        return out
+
+    def cast_closest():
+        return run(mscene.ray_intersect_preliminary(closest).t)
+
+    def cast_shadow():
+        return run(mscene.ray_test(shadow))
+
+    t_hit = np.asarray(cast_closest())
+    cast_shadow()
+    return ({"mi closest": cast_closest, "mi shadow": cast_shadow},
+            {"version": mi.__version__, "variant": "llvm_ad_rgb", "threads": int(dr.thread_count()),
+             "t_hit": np.where(np.isfinite(t_hit), t_hit, -1.0),
+             "note": "Mitsuba's threads and ours share the same cores, taking turns: compare totals"})
 
 
 def embree_cast(scene, recs, kinds, valid, ours, repeat, cores) -> dict:
@@ -208,14 +291,8 @@ def embree_cast(scene, recs, kinds, valid, ours, repeat, cores) -> dict:
     from embreex import rtcore_scene
     from embreex.mesh_construction import TriangleMesh
 
-    tris = []
-    for sh in scene.shapes:
-        m = getattr(sh, "mesh", None)
-        if m is None:
-            raise SystemExit("--embree: only scenes of triangle meshes")
-        tris.append(np.asarray(m.positions, np.float32)[np.asarray(m.faces)])
     es = rtcore_scene.EmbreeScene()
-    TriangleMesh(es, np.ascontiguousarray(np.concatenate(tris), np.float32))
+    TriangleMesh(es, np.ascontiguousarray(_scene_triangles(scene, "--embree"), np.float32))
     o, d, tmax = recs[:, 0, :3], recs[:, 1, :3], recs[:, 1, 3]
     closest, shadow = valid & (kinds == 0), valid & (kinds == 1)
     if np.any(recs[valid, 0, 3] != 0.0):

@@ -178,13 +178,13 @@ class Tracer:
         self.kernel, self.width = kernel, width
 
 
-def make_tracer(ctx, width):
+def make_tracer(ctx, width, defines=None):
     import pyopencl as cl
 
     from clrender.device.program import build_program
 
     src = TRACE_SRC if width == 2 else TRACE_SRC.replace('#include "bvh.h"', f'#include "bvh{width}.h"')
-    return Tracer(cl.Kernel(build_program(ctx, src), "trace"), width)
+    return Tracer(cl.Kernel(build_program(ctx, src, defines=defines), "trace"), width)
 
 
 def wide_nodes(bvh, width):
@@ -197,10 +197,12 @@ def wide_nodes(bvh, width):
     return _Nodes(collapse_bvh4(bvh, ENUMS[f"BVH{width}_STACK_SIZE"], width=width).nodes)
 
 
-@pytest.fixture(scope="module", params=[2, 4, 8], ids=["bvh2", "bvh4", "bvh8"])
+@pytest.fixture(scope="module", params=[(2, None), (4, None), (8, None), (8, {"BVH_PORTABLE_BITS": 1})],
+                ids=["bvh2", "bvh4", "bvh8", "bvh8-portable"])
 def trace_kernel(ctx, request):
-    """Every traversal test below runs against the 2-, 4- and 8-wide kernels."""
-    return make_tracer(ctx, request.param)
+    """Every traversal test below runs against the 2-, 4- and 8-wide kernels; the 8-wide one also with the
+    portable child masks that devices other than PoCL on x86 use (kernels/bvh8.h bvh8_bits)."""
+    return make_tracer(ctx, *request.param)
 
 
 def device_trace(ctx, queue, kernel, bvh, prims, o, d, tmin, tmax):
