@@ -132,4 +132,3 @@ def test_renders_agree_for_both_widths():
     # whenever the timing of the first pass changed, e.g. with another test run before it).
     same = np.all(np.abs(ia - ib) <= 1e-5 * np.maximum(np.abs(ia), np.abs(ib)) + 1e-7, axis=-1)
     assert same.mean() > 0.999, f"only {same.mean():.4f} of the pixels agree"
-
