@@ -90,6 +90,29 @@ __kernel void cast_rays(SCENE_ARGS, __global const float4* rec, __global const u
     out[pix] = acc;
 }
 
+#ifdef BVH_COUNT_VISITS
+/* cast_rays' queries, counting what each visits (bvh8.h BVH_VISIT): per pixel, summed over its rays of each
+   kind, (nodes, leaves, leaf blocks, rays) for closest-hit rays in visits[2 pix] and any-hit ones in
+   visits[2 pix + 1]. */
+__kernel void count_visits(SCENE_ARGS, __global const float4* rec, __global const uint* kind,
+                           __global const uint2* count, uint cap, uint n_pixels, __global uint4* visits) {
+    uint pix = get_global_id(0);
+    if (pix >= n_pixels) return;
+    SCENE_INIT(sd);
+    uint4 v[2] = {(uint4)(0u), (uint4)(0u)};
+    for (uint k = 0u; k < count[pix].x; ++k) {
+        uint i = pix * cap + k;
+        float4 a = rec[2 * i], b = rec[2 * i + 1];
+        uint any = kind[i] == 0u ? 0u : 1u;
+        Hit h;
+        BVH_TRAVERSE(sd.nodes, sd.prims, a.xyz, b.xyz, a.w, b.w, &h, any != 0u);
+        v[any] += (uint4)(h.nodes, h.leaves, h.blocks, 1u);
+    }
+    visits[2 * pix] = v[0];
+    visits[2 * pix + 1] = v[1];
+}
+#endif
+
 #ifdef PROFILE_PACKETS
 /* The recorded rays as packets of 8: the k-th ray of 8 neighbouring pixels (the same bounce of 8 paths, as a
    packet integrator would trace them), one ray per float8 lane, through the 8-wide nodes one child at a time

@@ -51,6 +51,8 @@ def main(argv=None):
                     help="also cast the recorded rays with Embree (embreex, one thread) against the same triangles")
     ap.add_argument("--mitsuba", action="store_true",
                     help="also cast the recorded rays with Mitsuba 3 (llvm_ad_rgb: Embree packets, all cores)")
+    ap.add_argument("--visits", action="store_true",
+                    help="also count the nodes, leaves and leaf blocks each recorded ray visits (8-wide BVH)")
     ap.add_argument("--bvh", action="append", default=[], metavar="KEY=VALUE",
                     help="a build_bvh option (e.g. traversal_cost=2), for trying builds")
     args = ap.parse_args(argv)
@@ -102,6 +104,22 @@ def main(argv=None):
     n_closest = int(((kinds == 0) & valid).sum())
     n_shadow = int(((kinds == 1) & valid).sum())
     n_camera = int((counts[:, 0] > 0).sum())
+
+    visits = None
+    if args.visits:
+        if r.buffers.bvh_width != 8:
+            raise SystemExit("--visits: counts the 8-wide traversal only")
+        vb = cl.Buffer(ctx, rw, size=n * 32)
+        k_v = cl.Kernel(build_program(ctx, src, defines={**r.defines, "BVH_COUNT_VISITS": 1}), "count_visits")
+        KernelArgs(k_v).set_scene(r._scene_bufs).set(rec=rec, kind=kind, count=count, cap=u32(CAP),
+                                                    n_pixels=u32(n), visits=vb)
+        cl.enqueue_nd_range_kernel(queue, k_v, gsize, (LOCAL_SIZE,))
+        v = np.zeros((n, 2, 4), np.uint32)
+        cl.enqueue_copy(queue, v, vb)
+        tot = v.astype(np.float64).sum(axis=0)
+        visits = {kname: {"rays": int(t[3]), "nodes_per_ray": t[0] / max(t[3], 1),
+                          "leaves_per_ray": t[1] / max(t[3], 1), "leaf_blocks_per_ray": t[2] / max(t[3], 1)}
+                  for kname, t in (("closest", tot[0]), ("shadow", tot[1]))}
 
     def cast_kernel(p):
         k = cl.Kernel(p, "cast_rays")
@@ -183,6 +201,8 @@ def main(argv=None):
         "cast_rays_per_second": rays / med["cast"], "pass_samples_per_second": n / med["pass"],
         "shares_of_pass": {k: v / med["pass"] for k, v in shares.items()},
     }
+    if visits is not None:
+        res["visits"] = visits
     if args.embree:
         recs = np.zeros((n * CAP, 2, 4), np.float32)
         cl.enqueue_copy(queue, recs, rec)
@@ -213,6 +233,10 @@ def main(argv=None):
               f"({e['closest_rays_per_second'] / 1e6:.2f} M closest, {e['shadow_rays_per_second'] / 1e6:.2f} M shadow); "
               f"our cast: {rays / med['cast'] / res['cores'] / 1e6:.2f} M rays/s per core "
               f"({res['cores']} cores); hits agree on {e['closest_hits_agree'] * 100:.2f} % of closest rays")
+    if visits is not None:
+        for kname, v in visits.items():
+            print(f"visits per {kname} ray: {v['nodes_per_ray']:.2f} nodes, {v['leaves_per_ray']:.2f} leaves, "
+                  f"{v['leaf_blocks_per_ray']:.2f} leaf blocks ({v['rays']} rays)")
     if args.mitsuba:
         m = res["mitsuba"]
         print(f"Mitsuba {m['version']} {m['variant']} ({m['threads']} threads) on the same rays: "

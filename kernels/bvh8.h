@@ -54,9 +54,13 @@ BVH_INLINE bool bvh8_traverse(__global const float4* nodes, __global const float
     uint cur = 0u;
     bool found = false;
     hit->t = tmax;
+#ifdef BVH_COUNT_VISITS
+    hit->nodes = 0u; hit->leaves = 0u; hit->blocks = 0u;
+#endif
     for (;;) {
         if (!(cur & BVH_LEAF_BIT)) {
             __global const float8* n = rows + 7u * cur;
+            BVH_VISIT(hit, nodes);
             float8 tn = bvh8_max(bvh8_max((n[nx] - ox) * ix, (n[ny] - oy) * iy), bvh8_max((n[nz] - oz) * iz, tmin8));
             float8 tf = bvh8_min(bvh8_min((n[fx] - ox) * ix, (n[fy] - oy) * iy), (n[fz] - oz) * iz) * 1.0000004f;
             int8 m = (tn <= tf) & (tn <= (float8)(hit->t));
@@ -111,6 +115,7 @@ BVH_INLINE bool bvh8_traverse(__global const float4* nodes, __global const float
             }
         } else {
             uint count = ((cur >> BVH4_COUNT_SHIFT) & (BVH4_MAX_LEAF_COUNT - 1u)) + 1u;
+            BVH_VISIT(hit, leaves);
             if (bvh_isect_leaf(prims, cur & BVH4_FIRST_MASK, count, &ray, tmin, hit, any_hit)) {
                 found = true;
                 if (any_hit) return true;

@@ -22,7 +22,16 @@ typedef struct {
     float u;      /* barycentric weight of v1 (triangles; 0 for spheres) */
     float v;      /* barycentric weight of v2 */
     uint prim;    /* the primitive's id word: a triangle's leaf reference, or sphere id | 0x80000000 */
+#ifdef BVH_COUNT_VISITS
+    uint nodes, leaves, blocks;   /* benchmarks/profile_pass.py --visits: what one query visited (8-wide only) */
+#endif
 } Hit;
+
+#ifdef BVH_COUNT_VISITS
+#define BVH_VISIT(hit, field) ((hit)->field += 1u)
+#else
+#define BVH_VISIT(hit, field) ((void)0)
+#endif
 
 BVH_INLINE float bvh_min(float a, float b) { return a < b ? a : b; }
 
@@ -135,6 +144,7 @@ BVH_INLINE bool bvh_isect_leaf(__global const float4* prims, uint first, uint co
     for (uint b = first; b < end; b += 4u) {
         uint c = end - b < 4u ? end - b : 4u;
         __global const float* q = words + 10u * b;
+        BVH_VISIT(hit, blocks);
 #ifdef BVH_LEAF_SCALAR
         /* benchmarks only (benchmarks/ab_pass.py): the same blocks, one primitive at a time */
         for (uint l = 0u; l < c; ++l) {
