@@ -37,6 +37,9 @@ def cmd_render(args) -> int:
     from .output import output_paths
     from .renderer import Interrupted, Renderer
 
+    if (args.cluster or args.sample_range) and args.partial_every is not None:
+        print("clrender: error: --partial-every is not supported with --cluster or --sample-range yet", file=sys.stderr)
+        return 2
     if (args.cluster or args.sample_range) and args.emitter_selection != "uniform":
         print("clrender: error: --emitter-selection power is not supported with --cluster or --sample-range yet",
               file=sys.stderr)
@@ -62,8 +65,15 @@ def cmd_render(args) -> int:
           f"{st['emitters']} emitters; BVH {st['bvh_build_seconds']:.2f} s; load {time.perf_counter() - t0:.2f} s; "
           f"device {renderer.device_name}", file=sys.stderr)
     progress = not args.quiet and (args.progress or sys.stderr.isatty())
+
+    def write_partial(film):
+        film.write_exr(out)
+        film.write_png(png)
+
+    partial = None if args.partial_every is None else (args.partial_every, write_partial)
     try:
-        film = renderer.render(spp=args.spp, seed=args.seed, time_limit=args.time_limit, progress=progress)
+        film = renderer.render(spp=args.spp, seed=args.seed, time_limit=args.time_limit, progress=progress,
+                               partial=partial)
     except Interrupted:
         print("clrender: aborted (second Ctrl-C); nothing written", file=sys.stderr)
         _exit_now(args, 130)
@@ -188,6 +198,10 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     r.add_argument("--device", help="OpenCL device: index, cpu, gpu or name substring (default: PoCL CPU)")
     r.add_argument("--time-limit", type=_seconds, metavar="SEC", help="stop after about SEC seconds")
+    r.add_argument("--partial-every", type=_seconds, metavar="SEC",
+                   help="while rendering, write the image so far over the output every SEC seconds (atomically, "
+                        "its EXR metadata giving the samples done), to look at a long render or keep its work if "
+                        "the process dies")
     r.add_argument("-D", "--define", action="append", metavar="NAME=VALUE", help="set $NAME in the scene")
     r.add_argument("--emitter-selection", choices=("uniform", "power"), default="uniform",
                    help="how light sampling picks an emitter in a Mitsuba scene: uniformly (default, as Mitsuba) or "

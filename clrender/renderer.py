@@ -133,11 +133,14 @@ class Renderer:
         return int(fixed + per_pixel * self.n_pixels + (0 if self.count_rays else 16))
 
     def render(self, spp: int | None = None, seed: int = 0, time_limit: float | None = None,
-               progress: bool = False, on_pass=None, start_sample: int = 0, pixels=None) -> Film:
+               progress: bool = False, on_pass=None, start_sample: int = 0, pixels=None,
+               partial=None) -> Film:
         """Render `spp` samples per pixel (default: the scene's sampler), numbered from `start_sample`.
 
         ``pixels=(first, stop)`` renders only that range of pixel indices (row-major; a band of rows for a
-        cluster task): the Film is full-size with zeros elsewhere."""
+        cluster task): the Film is full-size with zeros elsewhere. ``partial=(seconds, callback)`` hands
+        ``callback`` the Film so far (its metadata: the samples done, ``partial`` True) after the first pass that
+        ends at least `seconds` after the previous one (or the start), between passes."""
         import pyopencl as cl
 
         spp = int(spp if spp is not None else self.scene.sample_count)
@@ -184,6 +187,7 @@ class Renderer:
 
             bar = tqdm(total=spp, unit="spp", desc="rendering", dynamic_ncols=True, leave=True)
         t_start = time.perf_counter()
+        last_partial = t_start
         notice = None if bar is None else \
             "\nclrender: Ctrl-C: stopping after the pass in flight (Ctrl-C again aborts)\n"
         with _SigintFlag(notice) as flag:
@@ -209,6 +213,12 @@ class Renderer:
                         bar.update(batch)
                     if on_pass is not None:
                         on_pass(done)
+                    if partial is not None and not stop and done < spp and \
+                            time.perf_counter() - last_partial >= partial[0]:
+                        stats.seconds = time.perf_counter() - t_start
+                        partial[1](self._film(done, seed, start_sample, stats, (acc0, acc1, bad, rays),
+                                              (d_acc0, d_acc1, d_bad, d_rays), p0, p1, partial=True))
+                        last_partial = time.perf_counter()
                     if stop:
                         stats.interrupted = True
                         break
@@ -226,6 +236,17 @@ class Renderer:
                 if bar is not None:
                     bar.close()
         stats.seconds = time.perf_counter() - t_start
+        return self._film(done, seed, start_sample, stats, (acc0, acc1, bad, rays), (d_acc0, d_acc1, d_bad, d_rays),
+                          p0, p1)
+
+    def _film(self, done, seed, start_sample, stats, host, dev, p0, p1, partial=False) -> Film:
+        """The Film of the `done` samples per pixel accumulated on the device so far (pixels p0:p1)."""
+        import copy
+
+        import pyopencl as cl
+
+        acc0, acc1, bad, rays = host
+        d_acc0, d_acc1, d_bad, d_rays = dev
         # Only the rendered range: a band of a 4K film need not download the whole film.
         cl.enqueue_copy(self.queue, acc0[p0:p1], d_acc0, src_offset=p0 * acc0.itemsize * 4)
         cl.enqueue_copy(self.queue, acc1[p0:p1], d_acc1, src_offset=p0 * acc1.itemsize * 4)
@@ -233,6 +254,7 @@ class Renderer:
         if self.count_rays:
             cl.enqueue_copy(self.queue, rays, d_rays)
         self.queue.finish()
+        stats = copy.copy(stats) if partial else stats
         stats.samples = done * (p1 - p0)
         stats.dropped = int(bad.sum())
         meta = {
@@ -241,6 +263,8 @@ class Renderer:
             "interrupted": stats.interrupted, "dropped_samples": stats.dropped, "start_sample": start_sample,
             "nori_dialect": getattr(self.scene, "nori_dialect", "upstream"),
         }
+        if partial:
+            meta["partial"] = True
         if self.count_rays:
             tot = rays[:, :3].astype(np.uint64).sum(axis=0)
             stats.rays = (int(tot[0]), int(tot[1]), int(tot[2]))

@@ -170,3 +170,54 @@ def test_outputs_and_metadata(scene_dir, tmp_path):
     png = np.asarray(Image.open(out.with_suffix(".png")))
     assert png.shape == (H, W, 3)
     assert not list(out.parent.glob(".*")), "no temporary files may be left behind"
+
+
+def test_partial_films_are_the_renders_of_their_samples(scene_dir, monkeypatch):
+    """render(partial=(seconds, cb)) hands cb the film so far between passes: each is exactly the render of the
+    samples it says it holds (the same numbered samples, so a fresh render of that many spp agrees), marked
+    partial; the last pass gets none, and the final film is the whole render."""
+    scene = clrender.load_scene(write_scene(scene_dir, filt=""))
+    r = render_mod.Renderer(scene)
+    monkeypatch.setattr(render_mod, "TARGET_LAUNCH_SECONDS", 1e-9)  # one sample per pass
+    films = []
+    final = r.render(spp=4, seed=7, partial=(0.0, films.append))
+    assert [f.spp for f in films] == [1, 2, 3]
+    assert all(f.metadata["partial"] is True for f in films) and "partial" not in final.metadata
+    for f in films + [final]:
+        ref = r.render(spp=f.spp, seed=7)
+        np.testing.assert_allclose(f.sum_wl, ref.sum_wl, rtol=1e-5, atol=1e-6)
+        assert f.stats.samples == f.spp * W * H
+    assert final.spp == 4
+    none = []
+    r.render(spp=3, seed=7, partial=(1e9, none.append))
+    assert none == [], "no partial film before its interval has passed"
+
+
+def test_cli_partial_every_writes_the_image_so_far(scene_dir, tmp_path, monkeypatch):
+    """--partial-every SEC: during the render, the output holds the image so far (EXR metadata: its samples and
+    partial); at the end, the whole render."""
+    from clrender.cli import main
+
+    monkeypatch.setattr(render_mod, "TARGET_LAUNCH_SECONDS", 1e-9)
+    out = tmp_path / "img.exr"
+    seen = []
+    real = render_mod.Renderer.render
+
+    def spy(self, *a, **k):
+        cb = k["partial"][1]
+
+        def wrapped(film):
+            cb(film)
+            seen.append(read_exr(out)[1])
+        return real(self, *a, **{**k, "partial": (k["partial"][0], wrapped)})
+
+    monkeypatch.setattr(render_mod.Renderer, "render", spy)
+    assert main(["render", str(write_scene(scene_dir)), "-o", str(out), "--spp", "3", "-q",
+                 "--partial-every", "0.000001"]) == 0
+    assert [h["clrender.spp"] for h in seen] == ["1", "2"] and all(h["clrender.partial"] == "True" for h in seen)
+    header = read_exr(out)[1]
+    assert header["clrender.spp"] == "3" and "clrender.partial" not in header
+    assert not list(tmp_path.glob(".*")), "no temporary files may be left behind"
+    with pytest.raises(SystemExit) as e:
+        main(["render", str(write_scene(scene_dir)), "--partial-every", "0"])
+    assert e.value.code == 2
