@@ -133,3 +133,21 @@ def test_thin_lens_needs_its_aperture():
 
     with pytest.raises(SceneError, match="aperture_radius"):
         sensor("", kind="thinlens")
+
+
+@pytest.mark.parametrize("xform, ok", [
+    ('<scale value="2"/>', False), ('<scale x="1.001"/>', False), ('<scale y="0.999"/>', False),
+    ('<matrix value="1 0.01 0 0  0 1 0 0  0 0 1 0  0 0 0 1"/>', False),     # shear
+    ('<scale x="1.0001"/>', True), ('<scale x="-1"/>', True), ('<rotate y="1" angle="30"/><translate x="2"/>', True),
+])
+def test_scaled_sensor_is_refused_as_in_mitsuba(xform, ok):
+    """Mitsuba 3.9.1 refuses a sensor to_world whose axes are not orthonormal within 1e-3 (checked with
+    mi.load_dict for each of these); clrender rendered such a camera with another field of view."""
+    from clrender.errors import SceneError
+
+    inner = f'<transform name="to_world">{xform}</transform>'
+    if ok:
+        sensor(inner)
+    else:
+        with pytest.raises(SceneError, match="to_world scales or shears"):
+            sensor(inner)

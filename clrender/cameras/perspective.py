@@ -168,6 +168,14 @@ class MitsubaPerspectiveCamera(PerspectiveCamera):
         if not np.all(np.isfinite(m)) or np.linalg.norm(m[:3, 2]) < 1e-12:
             raise SceneError("sensor to_world is not finite or maps the viewing direction (+z) to zero",
                              props.location("to_world"))
+        # Mitsuba refuses a scaled or sheared camera (its columns must be orthonormal within 1e-3; mirrors are
+        # fine); read as written it would change the field of view and the clip distances.
+        gram = m[:3, :3].T @ m[:3, :3]
+        if np.abs(gram - np.eye(3)).max() > 1e-3:
+            raise SceneError(f"the sensor's to_world scales or shears (its axes' lengths: "
+                             f"{np.sqrt(np.diag(gram)).round(4).tolist()}); a sensor's to_world may only rotate, "
+                             f"mirror and translate, as in Mitsuba (write the fov instead of a scale)",
+                             props.location("to_world"))
         self.width, self.height = film.crop_width, film.crop_height
         self.filter = film.filter
         self.mirror_x = True
