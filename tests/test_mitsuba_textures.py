@@ -7,6 +7,7 @@ import pyopencl as cl
 import pytest
 from PIL import Image
 
+from clrender import plugins  # noqa: F401  (registers the plugins)
 from clrender.device.program import build_program
 from clrender.errors import SceneError
 from clrender.scene import registry
@@ -261,3 +262,70 @@ def test_blend_of_a_mirror_and_diffuse_in_a_furnace(tmp_path):
     film = clrender.render(clrender.load_scene(tmp_path / "s.xml"), spp=256, seed=4)
     res = compare_mean_to_value(film, 0.9)
     assert res.passed, (res.message, film.image.mean(axis=(0, 1)))
+
+
+# ---------------------------------------------------------------------------------------------------- 16-bit PNGs
+def write_png16(path, img):
+    """A 16-bit RGB PNG (colour type 2, depth 16), its rows filtered None, Sub and Up in turn."""
+    import struct
+    import zlib
+
+    h, w, _ = img.shape
+    data = img.astype(">u2").tobytes()
+    stride, rows = w * 6, []
+    prev = bytes(stride)
+    for y in range(h):
+        row = np.frombuffer(data[y * stride:(y + 1) * stride], np.uint8).astype(np.int32)
+        kind = y % 3
+        if kind == 1:   # Sub: minus the byte one pixel (6 bytes) to the left
+            out = row - np.concatenate([np.zeros(6, np.int32), row[:-6]])
+        elif kind == 2:   # Up: minus the byte above
+            out = row - np.frombuffer(prev, np.uint8).astype(np.int32)
+        else:
+            out = row
+        rows.append(bytes([kind]) + (out % 256).astype(np.uint8).tobytes())
+        prev = row.astype(np.uint8).tobytes()
+
+    def chunk(kind, payload):
+        return struct.pack(">I", len(payload)) + kind + payload + struct.pack(">I", zlib.crc32(kind + payload))
+
+    ihdr = struct.pack(">IIBBBBB", w, h, 16, 2, 0, 0, 0)
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(b"".join(rows)))
+                     + chunk(b"IEND", b""))
+
+
+def test_16_bit_pngs_keep_their_precision(tmp_path):
+    """A 16-bit PNG is read at 16 bits (Pillow alone gives 8: a colour one lost its low bytes, a grey one was an
+    error), sRGB-decoded unless raw, and kept as half floats as Mitsuba 3.9.1 keeps it."""
+    from clrender.textures.imagefile import read_image, srgb_to_linear
+
+    img = np.random.default_rng(11).integers(0, 65536, size=(7, 5, 3)).astype(np.uint16)
+    img[0, 0] = [0x1234, 0x00ff, 0xff01]         # low bytes that 8 bits would lose
+    write_png16(tmp_path / "c.png", img)
+    v = img / 65535.0
+    np.testing.assert_array_equal(read_image(tmp_path / "c.png", raw=True), v.astype(np.float16).astype(np.float32))
+    np.testing.assert_array_equal(read_image(tmp_path / "c.png"), srgb_to_linear(v).astype(np.float16).astype(np.float32))
+    Image.fromarray(img[..., 0]).save(tmp_path / "g.png")      # Pillow writes mode I;16 as 16-bit grey
+    np.testing.assert_array_equal(read_image(tmp_path / "g.png", raw=True),
+                                  np.repeat(v[..., :1], 3, -1).astype(np.float16).astype(np.float32))
+
+
+def test_16_bit_pngs_match_mitsuba(tmp_path):
+    mi = pytest.importorskip("mitsuba", reason="Mitsuba 3 (pip install mitsuba==3.9.1) checks 16-bit PNG textures")
+    mi.set_variant("scalar_rgb")
+    rng = np.random.default_rng(12)
+    mi.Bitmap(rng.integers(0, 65536, size=(5, 7, 3)).astype(np.uint16), mi.Bitmap.PixelFormat.RGB).write(
+        str(tmp_path / "rgb.png"))
+    mi.Bitmap(rng.integers(0, 65536, size=(5, 7, 4)).astype(np.uint16), mi.Bitmap.PixelFormat.RGBA).write(
+        str(tmp_path / "rgba.png"))
+    uv = rng.uniform(0.01, 0.99, size=(100, 2))
+    si = mi.SurfaceInteraction3f()
+    for name in ("rgb.png", "rgba.png"):
+        for raw in (False, True):
+            theirs = mi.load_dict({"type": "bitmap", "filename": str(tmp_path / name), "raw": raw})
+            want = []
+            for u in uv:
+                si.uv = mi.Point2f(*u)
+                want.append(np.array(theirs.eval(si)))
+            np.testing.assert_allclose(bitmap(tmp_path / name, raw=raw).eval(uv), want, atol=1e-6,
+                                       err_msg=f"{name} raw={raw}")
