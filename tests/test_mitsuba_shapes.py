@@ -147,3 +147,64 @@ def test_default_bsdf_is_black_on_emitters_as_in_mitsuba():
     assert np.all(shape("mitsuba", True).bsdf.albedo == 0)
     assert np.all(shape("mitsuba", False).bsdf.albedo == 0.5)
     assert np.all(shape("nori", True).bsdf.albedo == 0.5)
+
+
+def test_sphere_frame_quaternion():
+    """p.sphere.rot turns a vector as the sphere's to_world (rotation, or mirror) does: checked on random frames,
+    half turns (w = 0) and mirrors (w's sign bit)."""
+    from clrender.scene.transform import Transform
+    from clrender.shapes.sphere import frame_quaternion
+
+    def turn(q, v):   # as kernels/shapes/sphere.h reads the row, forwards
+        u, w = q[:3].astype(np.float64), abs(float(q[3]))
+        r = v + 2 * w * np.cross(u, v) + 2 * np.cross(u, np.cross(u, v))
+        return -r if np.signbit(q[3]) else r
+
+    rng = np.random.default_rng(5)
+    frames = [Transform.rotate(a, 180.0).matrix[:3, :3] for a in np.eye(3)]
+    frames += [Transform.rotate(rng.normal(size=3), rng.uniform(-360, 360)).matrix[:3, :3] for _ in range(200)]
+    frames += [f @ np.diag([1, 1, -1]) for f in frames]
+    for m in frames:
+        q = frame_quaternion(m)
+        assert abs(np.linalg.norm(q) - 1) < 1e-6 and bool(np.signbit(q[3])) == (np.linalg.det(m) < 0)
+        for v in rng.normal(size=(3, 3)):
+            np.testing.assert_allclose(turn(q, v), m @ v, atol=1e-5)
+
+
+@pytest.mark.parametrize("xform, view, expect", [
+    ("", "0, 0, 5", "top"),                                          # unturned: v < 1/2 faces +z
+    ('<rotate x="1" angle="180"/>', "0, 0, 5", "bottom"),
+    ('<scale z="-1"/>', "0, 0, 5", "bottom"),                        # a mirror (inside out: flip_normals below)
+    ('<rotate z="1" angle="90"/>', "5, 0, 0", "right"),              # u in (1/2, 1) faces +x
+], ids=["identity", "half turn", "mirror", "quarter turn"])
+def test_sphere_uv_turns_with_to_world(tmp_path, xform, view, expect):
+    """Mitsuba's sphere takes uv in its own frame, which to_world turns (it was taken in world axes): an emitting
+    sphere whose radiance is red on one half of its uv square and blue on the other, seen from one side, shows one
+    colour only. A mirror turns Mitsuba's sphere inside out, so that one also has flip_normals."""
+    import clrender
+
+    from PIL import Image
+
+    halves = [[(255, 0, 0), (0, 0, 255)]]            # red for u < 1/2 (or v < 1/2), blue beyond
+    img = np.array(halves if expect in ("left", "right") else np.transpose(halves, (1, 0, 2)), np.uint8)
+    Image.fromarray(img).save(tmp_path / "halves.png")
+    flip = '<boolean name="flip_normals" value="true"/>' if "scale" in xform else ""
+    xml = f"""<scene version="3.0.0">
+        <sensor type="perspective"><float name="fov" value="20"/>
+            <transform name="to_world"><lookat origin="{view}" target="0, 0, 0" up="0, 1, 0"/></transform>
+            <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film></sensor>
+        <shape type="sphere">{flip}<transform name="to_world">{xform}</transform>
+            <emitter type="area"><texture type="bitmap" name="radiance"><string name="filename" value="halves.png"/>
+                <string name="filter_type" value="nearest"/><boolean name="raw" value="true"/></texture></emitter>
+        </shape></scene>"""
+    (tmp_path / "s.xml").write_text(xml)
+    film = clrender.render(clrender.load_scene(tmp_path / "s.xml"), spp=16, seed=1)
+    red, blue = film.image[..., 0].sum(), film.image[..., 2].sum()
+    assert red + blue > 20, "the sphere is not in view"
+    if expect in ("top", "left"):
+        assert blue == 0, (red, blue)
+    else:
+        assert red == 0, (red, blue)
+    if flip:   # without flip_normals the mirrored sphere's light faces inward, as in Mitsuba: black from outside
+        (tmp_path / "s.xml").write_text(xml.replace(flip, ""))
+        assert clrender.render(clrender.load_scene(tmp_path / "s.xml"), spp=4, seed=1).image.max() == 0
