@@ -208,3 +208,67 @@ def test_sphere_uv_turns_with_to_world(tmp_path, xform, view, expect):
     if flip:   # without flip_normals the mirrored sphere's light faces inward, as in Mitsuba: black from outside
         (tmp_path / "s.xml").write_text(xml.replace(flip, ""))
         assert clrender.render(clrender.load_scene(tmp_path / "s.xml"), spp=4, seed=1).image.max() == 0
+
+
+# ------------------------------------------------------------------------------- anisotropy follows dp/du
+ANISO_SCENE = """<scene version="3.0.0">
+    <sensor type="perspective"><float name="fov" value="30"/>
+        <transform name="to_world"><lookat origin="0, 0, 4" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="12"/><integer name="height" value="12"/>
+            <rfilter type="box"/></film></sensor>
+    <shape type="rectangle"><transform name="to_world"><scale x="2" y="0.3"/><rotate x="1" angle="150"/>
+        <translate y="2" z="1"/></transform><emitter type="area"><rgb name="radiance" value="20"/></emitter></shape>
+    <emitter type="constant"><rgb name="radiance" value="0.05"/></emitter>
+    {shape}
+</scene>"""
+
+
+def aniso_bsdf(au, av):
+    return (f'<bsdf type="roughconductor"><string name="distribution" value="ggx"/>'
+            f'<float name="alpha_u" value="{au}"/><float name="alpha_v" value="{av}"/></bsdf>')
+
+
+def render_aniso(tmp_path, shape, seed):
+    import clrender
+
+    (tmp_path / "a.xml").write_text(ANISO_SCENE.format(shape=shape))
+    return clrender.render(clrender.load_scene(tmp_path / "a.xml"), spp=256, seed=seed)
+
+
+def test_anisotropy_follows_the_spheres_dp_du(tmp_path):
+    """alpha_u runs along dp/du, which on Mitsuba's sphere points along phi about its own pole (to_world turns it;
+    clrender's frame once ignored it): turning the sphere about its pole changes nothing, tipping the pole does."""
+    from clrender.testing.stats import compare_films
+
+    def sphere(rot):
+        return (f'<shape type="sphere"><transform name="to_world">{rot}<scale value="1.2"/></transform>'
+                f'{aniso_bsdf(0.03, 0.5)}</shape>')
+
+    a = render_aniso(tmp_path, sphere(""), 1)
+    b = render_aniso(tmp_path, sphere('<rotate z="1" angle="70"/>'), 2)
+    c = render_aniso(tmp_path, sphere('<rotate x="1" angle="90"/>'), 3)
+    assert compare_films(a, b).passed, compare_films(a, b).message
+    assert not compare_films(a, c).passed
+
+
+def test_anisotropy_follows_the_meshs_uvs(tmp_path):
+    """On a mesh dp/du comes from its uvs: the same quad with uvs turned a quarter and alpha_u, alpha_v swapped
+    renders the same; with only the uvs turned it does not."""
+    from clrender.testing.stats import compare_films
+
+    def quad(name, uvs):
+        vt = "".join(f"vt {u} {v}\n" for u, v in uvs)
+        (tmp_path / name).write_text("v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n" + vt + "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n")
+
+    quad("u_along_x.obj", [(0, 0), (1, 0), (1, 1), (0, 1)])
+    quad("u_along_y.obj", [(0, 1), (0, 0), (1, 0), (1, 1)])
+
+    def shape(name, au, av):
+        return (f'<shape type="obj"><string name="filename" value="{tmp_path / name}"/><transform name="to_world">'
+                f'<rotate x="1" angle="-30"/><scale value="1.2"/></transform>{aniso_bsdf(au, av)}</shape>')
+
+    a = render_aniso(tmp_path, shape("u_along_x.obj", 0.03, 0.5), 1)
+    b = render_aniso(tmp_path, shape("u_along_y.obj", 0.5, 0.03), 2)
+    c = render_aniso(tmp_path, shape("u_along_y.obj", 0.03, 0.5), 3)
+    assert compare_films(a, b).passed, compare_films(a, b).message
+    assert not compare_films(a, c).passed

@@ -87,8 +87,10 @@ class Distribution:
         self.sample_visible = bool(props.get_bool("sample_visible", True))
 
     def fill(self, p, table) -> bool:
-        """Write alpha_u, alpha_v (+ _tex), distribution, sample_visible; whether a texture is read."""
-        uses = False
+        """Write alpha_u, alpha_v (+ _tex), distribution, sample_visible; whether the BSDF needs the surface's
+        parametrisation: a texture is read, or the roughness is anisotropic (alpha_u runs along dp/du, as in
+        Mitsuba: the shape's shading frame follows it then)."""
+        uses = self.alpha_u is not self.alpha_v and self.alpha_u != self.alpha_v
         for name, (v, tex) in (("alpha_u", self.alpha_u), ("alpha_v", self.alpha_v)):
             p[name] = v
             p[name + "_tex"] = layout.NONE if tex is None else table.add(tex)
