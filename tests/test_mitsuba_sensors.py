@@ -189,3 +189,16 @@ def test_principal_point_offset_is_a_shifted_window(tmp_path):
     a, b, c = (clrender.render(s, spp=64, seed=k) for k, s in enumerate((shifted, window, plain)))
     assert compare_films(a, b).passed, compare_films(a, b).message
     assert not compare_films(a, c).passed      # the shift is seen
+
+
+def test_film_takes_mitsubas_output_options():
+    """Parameters of Mitsuba 3.9.1's hdrfilm that change only how it writes its file are accepted (banner and
+    compensate were once unknown parameters); a pixel format we cannot write is a clear error."""
+    from clrender.errors import SceneError
+
+    film = ('<integer name="width" value="8"/><integer name="height" value="6"/><boolean name="banner" value="false"/>'
+            '<boolean name="compensate" value="true"/><string name="file_format" value="openexr"/>'
+            '<string name="component_format" value="float16"/><string name="pixel_format" value="rgba"/>')
+    assert (sensor("", film).width, sensor("", film).height) == (8, 6)
+    with pytest.raises(SceneError, match="pixel_format 'xyz' is not supported"):
+        sensor("", '<string name="pixel_format" value="xyz"/>')
