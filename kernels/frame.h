@@ -16,6 +16,18 @@ INLINE Frame frame_from_normal(float3 n) {
     f.n = n;
     return f;
 }
+/* Mitsuba's shading frame: n, with its first axis along the tangent dpdu made orthogonal to n (Gram-Schmidt; the
+   axis an anisotropic roughness's alpha_u runs along); the frame above where dpdu is (nearly) along n or zero. */
+INLINE Frame frame_from_tangent(float3 n, float3 dpdu) {
+    float3 s = dpdu - n * dot3(n, dpdu);
+    float l2 = dot3(s, s);
+    if (!(l2 > 1e-12f * dot3(dpdu, dpdu)) || !isfinite(l2)) return frame_from_normal(n);
+    Frame f;
+    f.s = s * (1.0f / sqrt(l2));
+    f.t = cross3(n, f.s);
+    f.n = n;
+    return f;
+}
 INLINE float3 to_local(const Frame* f, float3 v) { return (float3)(dot3(v, f->s), dot3(v, f->t), dot3(v, f->n)); }
 INLINE float3 to_world(const Frame* f, float3 v) { return f->s * v.x + f->t * v.y + f->n * v.z; }
 

@@ -99,6 +99,23 @@ def test_delta_light_errors():
         mitsuba("directional", direction=("vector", [0, 0, 0]))
 
 
+def test_emitter_defaults_are_mitsubas(tmp_path):
+    """Every Mitsuba emitter defaults its strength to 1 (mi.load_dict of each prints UniformSpectrum 1): an area
+    light written without a radiance (once an error here) is seen as exactly 1."""
+    xml = ('<scene version="3.0.0"><sensor type="perspective"><transform name="to_world"><lookat origin="0, 0, 4" '
+           'target="0, 0, 0" up="0, 1, 0"/></transform><film type="hdrfilm"><integer name="width" value="4"/>'
+           '<integer name="height" value="4"/><rfilter type="box"/></film></sensor>'
+           '<shape type="sphere"><float name="radius" value="3"/><emitter type="area"/></shape></scene>')
+    (tmp_path / "s.xml").write_text(xml)
+    scene = clrender.load_scene(tmp_path / "s.xml")
+    film = clrender.render(scene, spp=4, seed=1)
+    np.testing.assert_allclose(film.image, 1.0, rtol=1e-6)
+    for kind, field in (("point", "power"), ("spot", "intensity"), ("directional", "irradiance"),
+                        ("constant", "radiance")):
+        value = getattr(mitsuba(kind), field)
+        np.testing.assert_allclose(value, 4 * np.pi if kind == "point" else 1.0, err_msg=kind)
+
+
 # ---------------------------------------------------------------------------------------------------- envmap
 def sky_image(w=24, h=12):
     """A small lat-long test map: a dim gradient, a bright warm patch and a black band (generated here)."""

@@ -221,6 +221,40 @@ def test_direct_delta_lights_count_once_per_emitter_sample(tmp_path):
 
 # --- aov -----------------------------------------------------------------------------------------------------------
 
+NULL_SCENE = """<scene version="3.0.0"><integrator type="{integrator}"/>
+    <sensor type="perspective"><transform name="to_world"><lookat origin="0, 0, 4" target="0, 0, 0" up="0, 1, 0"/>
+        </transform><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/>
+        <rfilter type="box"/></film></sensor>{extra}
+    <shape type="rectangle"><transform name="to_world"><scale value="3"/></transform>
+        <emitter type="area"><rgb name="radiance" value="2"/></emitter>{bsdf}</shape></scene>"""
+NULL = '<bsdf type="null"/>'
+HALF_MASK = '<bsdf type="mask"><float name="opacity" value="0.5"/><bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf></bsdf>'
+WALL = ('<shape type="rectangle"><transform name="to_world"><scale value="9"/><translate z="-1"/></transform>'
+        '<bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf></shape>')
+DIRECTIONAL = '<emitter type="directional"><vector name="direction" value="0, 0, -1"/></emitter>'
+
+
+@pytest.mark.parametrize("integrator, bsdf, extra, value", [
+    ("path", NULL, "", 0.0),                     # met only a pass-through, no environment: Mitsuba keeps nothing
+    ("path", NULL, DIRECTIONAL, 0.0),            # a directional light is no environment
+    ("path", NULL, '<emitter type="constant"><rgb name="radiance" value="0"/></emitter>', 2.0),
+    ("path", NULL, WALL, 2.0),                   # the path ends on a real surface behind the light
+    ("path", HALF_MASK, "", 1.0),                # kept where the mask's black child was sampled
+    ("path", '<bsdf type="thindielectric"/>', WALL, 2.0),
+    ("direct", NULL, "", 2.0),                   # Mitsuba's direct keeps every camera ray
+], ids=["null", "null, directional", "null, environment", "null, wall behind", "half mask", "thin glass, wall",
+        "direct"])
+def test_null_bsdf_and_paths_that_meet_no_surface(tmp_path, integrator, bsdf, extra, value):
+    """Mitsuba's null BSDF (Blender's exporter puts one on every area light; once an unknown plugin here) passes
+    light straight through. Mitsuba 3.9.1's path keeps a path's radiance only if the scene has an environment or the
+    path met a surface it did not pass straight through (a null or mask pass-through, a thin dielectric's
+    transmission): an emitting null quad against nothing renders black there (each value read off Mitsuba)."""
+    (tmp_path / "s.xml").write_text(NULL_SCENE.format(integrator=integrator, bsdf=bsdf, extra=extra))
+    film = clrender.render(clrender.load_scene(tmp_path / "s.xml"), spp=256, seed=2)
+    res = compare_mean_to_value(film, value, ALPHA)
+    assert res.passed, (res.message, film.image.mean())
+
+
 def test_aovs_of_the_plane(tmp_path):
     """Every pixel sees the plane near X0 (fov 0.05 degrees): depth = |camera - X0| less the near clip distance
     (Mitsuba's camera rays start on the near plane; Nori's default near clip is 1e-4, so make it 0.25 here),

@@ -147,3 +147,128 @@ def test_default_bsdf_is_black_on_emitters_as_in_mitsuba():
     assert np.all(shape("mitsuba", True).bsdf.albedo == 0)
     assert np.all(shape("mitsuba", False).bsdf.albedo == 0.5)
     assert np.all(shape("nori", True).bsdf.albedo == 0.5)
+
+
+def test_sphere_frame_quaternion():
+    """p.sphere.rot turns a vector as the sphere's to_world (rotation, or mirror) does: checked on random frames,
+    half turns (w = 0) and mirrors (w's sign bit)."""
+    from clrender.scene.transform import Transform
+    from clrender.shapes.sphere import frame_quaternion
+
+    def turn(q, v):   # as kernels/shapes/sphere.h reads the row, forwards
+        u, w = q[:3].astype(np.float64), abs(float(q[3]))
+        r = v + 2 * w * np.cross(u, v) + 2 * np.cross(u, np.cross(u, v))
+        return -r if np.signbit(q[3]) else r
+
+    rng = np.random.default_rng(5)
+    frames = [Transform.rotate(a, 180.0).matrix[:3, :3] for a in np.eye(3)]
+    frames += [Transform.rotate(rng.normal(size=3), rng.uniform(-360, 360)).matrix[:3, :3] for _ in range(200)]
+    frames += [f @ np.diag([1, 1, -1]) for f in frames]
+    for m in frames:
+        q = frame_quaternion(m)
+        assert abs(np.linalg.norm(q) - 1) < 1e-6 and bool(np.signbit(q[3])) == (np.linalg.det(m) < 0)
+        for v in rng.normal(size=(3, 3)):
+            np.testing.assert_allclose(turn(q, v), m @ v, atol=1e-5)
+
+
+@pytest.mark.parametrize("xform, view, expect", [
+    ("", "0, 0, 5", "top"),                                          # unturned: v < 1/2 faces +z
+    ('<rotate x="1" angle="180"/>', "0, 0, 5", "bottom"),
+    ('<scale z="-1"/>', "0, 0, 5", "bottom"),                        # a mirror (inside out: flip_normals below)
+    ('<rotate z="1" angle="90"/>', "5, 0, 0", "right"),              # u in (1/2, 1) faces +x
+], ids=["identity", "half turn", "mirror", "quarter turn"])
+def test_sphere_uv_turns_with_to_world(tmp_path, xform, view, expect):
+    """Mitsuba's sphere takes uv in its own frame, which to_world turns (it was taken in world axes): an emitting
+    sphere whose radiance is red on one half of its uv square and blue on the other, seen from one side, shows one
+    colour only. A mirror turns Mitsuba's sphere inside out, so that one also has flip_normals."""
+    import clrender
+
+    from PIL import Image
+
+    halves = [[(255, 0, 0), (0, 0, 255)]]            # red for u < 1/2 (or v < 1/2), blue beyond
+    img = np.array(halves if expect in ("left", "right") else np.transpose(halves, (1, 0, 2)), np.uint8)
+    Image.fromarray(img).save(tmp_path / "halves.png")
+    flip = '<boolean name="flip_normals" value="true"/>' if "scale" in xform else ""
+    xml = f"""<scene version="3.0.0">
+        <sensor type="perspective"><float name="fov" value="20"/>
+            <transform name="to_world"><lookat origin="{view}" target="0, 0, 0" up="0, 1, 0"/></transform>
+            <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film></sensor>
+        <shape type="sphere">{flip}<transform name="to_world">{xform}</transform>
+            <emitter type="area"><texture type="bitmap" name="radiance"><string name="filename" value="halves.png"/>
+                <string name="filter_type" value="nearest"/><boolean name="raw" value="true"/></texture></emitter>
+        </shape></scene>"""
+    (tmp_path / "s.xml").write_text(xml)
+    film = clrender.render(clrender.load_scene(tmp_path / "s.xml"), spp=16, seed=1)
+    red, blue = film.image[..., 0].sum(), film.image[..., 2].sum()
+    assert red + blue > 20, "the sphere is not in view"
+    if expect in ("top", "left"):
+        assert blue == 0, (red, blue)
+    else:
+        assert red == 0, (red, blue)
+    if flip:   # without flip_normals the mirrored sphere's light faces inward, as in Mitsuba: black from outside
+        (tmp_path / "s.xml").write_text(xml.replace(flip, ""))
+        assert clrender.render(clrender.load_scene(tmp_path / "s.xml"), spp=4, seed=1).image.max() == 0
+
+
+# ------------------------------------------------------------------------------- anisotropy follows dp/du
+ANISO_SCENE = """<scene version="3.0.0">
+    <sensor type="perspective"><float name="fov" value="30"/>
+        <transform name="to_world"><lookat origin="0, 0, 4" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="12"/><integer name="height" value="12"/>
+            <rfilter type="box"/></film></sensor>
+    <shape type="rectangle"><transform name="to_world"><scale x="2" y="0.3"/><rotate x="1" angle="150"/>
+        <translate y="2" z="1"/></transform><emitter type="area"><rgb name="radiance" value="20"/></emitter></shape>
+    <emitter type="constant"><rgb name="radiance" value="0.05"/></emitter>
+    {shape}
+</scene>"""
+
+
+def aniso_bsdf(au, av):
+    return (f'<bsdf type="roughconductor"><string name="distribution" value="ggx"/>'
+            f'<float name="alpha_u" value="{au}"/><float name="alpha_v" value="{av}"/></bsdf>')
+
+
+def render_aniso(tmp_path, shape, seed):
+    import clrender
+
+    (tmp_path / "a.xml").write_text(ANISO_SCENE.format(shape=shape))
+    return clrender.render(clrender.load_scene(tmp_path / "a.xml"), spp=256, seed=seed)
+
+
+def test_anisotropy_follows_the_spheres_dp_du(tmp_path):
+    """alpha_u runs along dp/du, which on Mitsuba's sphere points along phi about its own pole (to_world turns it;
+    clrender's frame once ignored it): turning the sphere about its pole changes nothing, tipping the pole does."""
+    from clrender.testing.stats import compare_films
+
+    def sphere(rot):
+        return (f'<shape type="sphere"><transform name="to_world">{rot}<scale value="1.2"/></transform>'
+                f'{aniso_bsdf(0.03, 0.5)}</shape>')
+
+    a = render_aniso(tmp_path, sphere(""), 1)
+    b = render_aniso(tmp_path, sphere('<rotate z="1" angle="70"/>'), 2)
+    c = render_aniso(tmp_path, sphere('<rotate x="1" angle="90"/>'), 3)
+    assert compare_films(a, b).passed, compare_films(a, b).message
+    assert not compare_films(a, c).passed
+
+
+def test_anisotropy_follows_the_meshs_uvs(tmp_path):
+    """On a mesh dp/du comes from its uvs: the same quad with uvs turned a quarter and alpha_u, alpha_v swapped
+    renders the same; with only the uvs turned it does not."""
+    from clrender.testing.stats import compare_films
+
+    def quad(name, uvs):
+        vt = "".join(f"vt {u} {v}\n" for u, v in uvs)
+        (tmp_path / name).write_text("v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n" + vt + "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n")
+
+    quad("u_along_x.obj", [(0, 0), (1, 0), (1, 1), (0, 1)])
+    quad("u_along_y.obj", [(0, 1), (0, 0), (1, 0), (1, 1)])
+
+    def shape(name, au, av):
+        return (f'<shape type="obj"><string name="filename" value="{tmp_path / name}"/><transform name="to_world">'
+                f'<rotate x="1" angle="-30"/><scale value="1.2"/></transform>{aniso_bsdf(au, av)}</shape>')
+
+    a = render_aniso(tmp_path, shape("u_along_x.obj", 0.03, 0.5), 1)
+    b = render_aniso(tmp_path, shape("u_along_y.obj", 0.5, 0.03), 2)
+    c = render_aniso(tmp_path, shape("u_along_y.obj", 0.03, 0.5), 3)
+    assert compare_films(a, b).passed, compare_films(a, b).message
+    assert not compare_films(a, c).passed

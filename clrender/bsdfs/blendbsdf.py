@@ -9,7 +9,8 @@
 ```
 Sampling picks a child with its blend weight. A delta sample keeps the chosen child's weight (MEASURE_DISCRETE);
 a non-delta sample is weighted by the mixture: (1-w) f1 + w f2 over (1-w) pdf1 + w pdf2 (eval and pdf hold the
-non-delta parts only). A texture weight reads the texture's first channel. Bsdf row
+non-delta parts only). A texture weight is read as Mitsuba reads a float texture
+(Texture.float_view: a bitmap's luminance). Bsdf row
 (kernels/bsdfs/blendbsdf.h): p.blendbsdf = weight(_tex), first, second (row offsets of the children).
 """
 import numpy as np

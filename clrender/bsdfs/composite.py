@@ -53,11 +53,15 @@ class Composite(Bsdf):
 
     def read_fraction(self, props, name: str):
         """(value, texture) of a parameter in [0, 1], default 0.5: a number, or the nested texture `name` (read by
-        read_children) whose values stay within [0, 1]; not both."""
+        read_children) whose values stay within [0, 1]; not both. A texture is read as Mitsuba's float lookup reads
+        it (its float view), a colour as its channels' mean."""
+        from .mitsuba_params import float_value
+
         texture = self.textures.get(name)
         if texture is not None and props.has(name):
             raise SceneError(f"{name} given both as a number and as a texture", props.location(name))
-        value = float(props.get_float(name, 0.5))
+        texture = None if texture is None else texture.float_view()
+        value = float_value(props, name, 0.5)
         if not 0 <= value <= 1:
             raise SceneError(f"{name} must be within [0, 1], got {value}", props.location(name))
         if texture is not None and texture.max_value() > 1:

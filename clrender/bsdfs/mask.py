@@ -8,7 +8,8 @@
 ```
 f = opacity f_child plus the transparent part, a delta transmission wo = -wi with weight 1 - opacity (sampled with
 probability 1 - opacity: weight 1, MEASURE_DISCRETE, eta 1). eval and pdf hold opacity times the child's non-delta
-parts. A texture opacity reads the texture's first channel. Bsdf row (kernels/bsdfs/mask.h): p.mask =
+parts. A texture opacity is read as Mitsuba reads a float texture
+(Texture.float_view: a bitmap's luminance). Bsdf row (kernels/bsdfs/mask.h): p.mask =
 opacity(_tex), child (row offset).
 """
 import numpy as np

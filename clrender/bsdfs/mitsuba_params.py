@@ -42,18 +42,20 @@ def color_or_texture(props, textures, name, default=1.0):
     return c, textures.get(name)
 
 
+def float_value(props, name, default, unbounded=False) -> float:
+    """A float parameter that Mitsuba reads as a texture (eval_1): a number, or a colour, whose channels' mean is
+    what Mitsuba's constant colour gives there (checked against Mitsuba 3.9.1)."""
+    if props.has(name) and props.tag(name) in ("rgb", "spectrum", "color"):
+        return float(np.mean(props.get_color(name, unbounded=unbounded)))
+    return float(props.get_float(name, default))
+
+
 def float_or_texture(props, textures, name, default):
-    """(value, texture or None) of a positive float parameter (a texture's first channel is read)."""
+    """(value, texture or None) of a positive float parameter (a texture's float view is read: Mitsuba's eval_1)."""
     _check_single(props, textures, name)
     if name in textures:
-        return 1.0, textures[name]     # the constant is not read
-    if props.has(name) and props.tag(name) in ("rgb", "spectrum", "color"):   # grey, as Mitsuba's float textures
-        c = props.get_color(name, unbounded=True)
-        if not np.all(c == c[0]):
-            raise SceneError(f"{name} is a float parameter; got the colour {c.tolist()}", props.location(name))
-        v = float(c[0])
-    else:
-        v = float(props.get_float(name, default))
+        return 1.0, textures[name].float_view()     # the constant is not read
+    v = float_value(props, name, default, unbounded=True)
     if not (v > 0 and np.isfinite(v)):
         raise SceneError(f"{name} must be positive, got {v}", props.location(name) if props.has(name) else None)
     return v, textures.get(name)
@@ -85,8 +87,10 @@ class Distribution:
         self.sample_visible = bool(props.get_bool("sample_visible", True))
 
     def fill(self, p, table) -> bool:
-        """Write alpha_u, alpha_v (+ _tex), distribution, sample_visible; whether a texture is read."""
-        uses = False
+        """Write alpha_u, alpha_v (+ _tex), distribution, sample_visible; whether the BSDF needs the surface's
+        parametrisation: a texture is read, or the roughness is anisotropic (alpha_u runs along dp/du, as in
+        Mitsuba: the shape's shading frame follows it then)."""
+        uses = self.alpha_u is not self.alpha_v and self.alpha_u != self.alpha_v
         for name, (v, tex) in (("alpha_u", self.alpha_u), ("alpha_v", self.alpha_v)):
             p[name] = v
             p[name + "_tex"] = layout.NONE if tex is None else table.add(tex)

@@ -15,7 +15,7 @@ from ..scene.registry import register
 from .composite import Composite
 
 
-TRANSMITTING = ("dielectric", "thindielectric", "roughdielectric", "mask")
+TRANSMITTING = ("dielectric", "thindielectric", "roughdielectric", "mask", "null")
 
 
 def _descendants(bsdfs):

@@ -133,12 +133,16 @@ class MitsubaPerspectiveCamera(PerspectiveCamera):
         <string name="fov_axis" value="x"/>       <!-- x (default), y, diagonal, smaller, larger -->
         <float name="near_clip" value="0.01"/>    <!-- default 0.01 -->
         <float name="far_clip" value="10000"/>    <!-- default 10000 -->
+        <float name="principal_point_offset_x" value="0"/>   <!-- default 0; and _y: perspective only -->
         <transform name="to_world"> ... </transform>
         <film type="hdrfilm"> ... </film>         <!-- default hdrfilm: 768 x 576, gaussian filter -->
         <sampler type="independent"> ... </sampler>   <!-- default independent, 4 samples per pixel -->
     </sensor>
     ```
-    The film's crop window becomes the image; the projection is that of the whole film.
+    The film's crop window becomes the image; the projection is that of the whole film. The principal point offset
+    shifts where each image position looks, by that fraction of the film's width (height), as Mitsuba adds it to
+    its film sample (checked against Mitsuba 3.9.1 with and without a crop window); we add it to the crop window's
+    offset. Blender's Mitsuba exporter writes it, mostly as 0.
     """
     children = ("film", "sampler")
 
@@ -168,19 +172,33 @@ class MitsubaPerspectiveCamera(PerspectiveCamera):
         if not np.all(np.isfinite(m)) or np.linalg.norm(m[:3, 2]) < 1e-12:
             raise SceneError("sensor to_world is not finite or maps the viewing direction (+z) to zero",
                              props.location("to_world"))
+        # Mitsuba refuses a scaled or sheared camera (its columns must be orthonormal within 1e-3; mirrors are
+        # fine); read as written it would change the field of view and the clip distances.
+        gram = m[:3, :3].T @ m[:3, :3]
+        if np.abs(gram - np.eye(3)).max() > 1e-3:
+            raise SceneError(f"the sensor's to_world scales or shears (its axes' lengths: "
+                             f"{np.sqrt(np.diag(gram)).round(4).tolist()}); a sensor's to_world may only rotate, "
+                             f"mirror and translate, as in Mitsuba (write the fov instead of a scale)",
+                             props.location("to_world"))
         self.width, self.height = film.crop_width, film.crop_height
         self.filter = film.filter
         self.mirror_x = True
         self.lens_radius, self.focus_distance = 0.0, 1.0
+        self.principal_point = (0.0, 0.0)
         self.read_lens(props)
 
     def read_lens(self, props) -> None:
-        """A pinhole (thinlens overrides this)."""
+        """A pinhole with its principal point (thinlens overrides this: Mitsuba's has no principal point)."""
+        self.principal_point = tuple(float(props.get_float(f"principal_point_offset_{a}", 0.0)) for a in "xy")
+        if not np.all(np.isfinite(self.principal_point)):
+            raise SceneError(f"principal_point_offset must be finite, got {list(self.principal_point)}",
+                             props.location("principal_point_offset_x") or props.location("principal_point_offset_y"))
 
     def pack_film(self, row) -> None:
         f = self.film
         row["film_width"], row["film_height"] = f.full_width, f.full_height
-        row["crop_x"], row["crop_y"] = f.crop_x, f.crop_y
+        row["crop_x"] = f.crop_x + self.principal_point[0] * f.full_width
+        row["crop_y"] = f.crop_y + self.principal_point[1] * f.full_height
         row["inv_aspect"] = f.full_height / f.full_width
         row["clip_window"] = 0 if f.sample_border else 1
         row["lens_radius"], row["focus_distance"] = self.lens_radius, self.focus_distance

@@ -130,7 +130,8 @@ SHAPE = Kind(
             ("cdf", "uint"),         # emitting meshes: offset of their triangle-area CDF in the `cdf` table
             ("area", "float")),      # emitting shapes: total surface area
     # per shape, set at packing (not capabilities of the plugin): HAS_NORMALS / HAS_UVS: per-vertex data present;
-    # NEEDS_UV: its BSDF reads a texture over the surface (analytic shapes compute uv only then); FLIP_NORMALS:
+    # NEEDS_UV: its BSDF reads a texture over the surface or is anisotropic (analytic shapes compute uv only then;
+    # the shading frame then follows dp/du, as Mitsuba's); FLIP_NORMALS:
     # analytic shapes turned inside out (meshes flip their winding and normals at loading instead)
     param_bytes=16, flags=("HAS_NORMALS", "HAS_UVS", "NEEDS_UV", "FLIP_NORMALS"), dispatch_name="shape", row="s",
     methods=(

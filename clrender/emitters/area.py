@@ -57,7 +57,7 @@ class MitsubaAreaEmitter(AreaEmitter):
     <shape type="obj">
         ...
         <emitter type="area">
-            <rgb name="radiance" value="10, 10, 10"/>   <!-- required; rgb, spectrum (emitter convention) or float -->
+            <rgb name="radiance" value="10, 10, 10"/>   <!-- default 1; rgb, spectrum (emitter convention) or float -->
             <!-- or <texture type="bitmap" name="radiance"> ... </texture> -->
         </emitter>
     </shape>
@@ -72,7 +72,7 @@ class MitsubaAreaEmitter(AreaEmitter):
                 raise SceneError("radiance given both as a colour and as a texture", props.location("radiance"))
             self.radiance = np.ones(3)   # unused: the texture gives the radiance
             return
-        c = np.asarray(props.get_color("radiance", emitter=True), np.float64)
+        c = np.asarray(props.get_color("radiance", np.ones(3), emitter=True), np.float64)
         if np.any(c < 0) or not np.all(np.isfinite(c)):
             raise SceneError(f"radiance must be non-negative and finite, got {c.tolist()}", props.location("radiance"))
         self.radiance = c

@@ -9,7 +9,8 @@
     <integer name="crop_width" value="768"/>
     <integer name="crop_height" value="576"/>
     <boolean name="sample_border" value="false"/> <!-- default false: samples only inside the window -->
-    <string name="pixel_format" value="rgb"/>    <!-- rgb or rgba; file_format, component_format accepted -->
+    <string name="pixel_format" value="rgb"/>    <!-- rgb or rgba; file_format, component_format, banner,
+                                                      compensate accepted -->
     <rfilter type="gaussian"/>                   <!-- default gaussian, stddev 0.5 -->
 </film>
 ```
@@ -55,6 +56,9 @@ class HdrFilm:
             if v not in allowed:
                 raise SceneError(f"{name} '{v}' is not supported; clrender takes {', '.join(allowed)}",
                                  props.location(name))
+        # Mitsuba 3.9.1's hdrfilm also takes these (a watermark switch, compensated summation): no effect here
+        props.get_bool("banner", True)
+        props.get_bool("compensate", False)
         if len(children) > 1:
             raise SceneError("a film takes at most one <rfilter>", children[1].spec.location)
         self.filter = children[0] if children else _default_filter()

@@ -17,16 +17,19 @@ keeps x and y; the image's first row is at t = 0 (no flip), pixel (i, j) covers 
 takes pixel floor(s W), floor(t H); `bilinear` interpolates the four pixels around (s W − ½, t H − ½). Pixel
 indices outside the image wrap: `repeat` modulo the size, `mirror` reflected at the edges (…, 1, 0, 0, 1, …,
 W−1, W−1, W−2, …), `clamp` to the edge. 8-bit images are sRGB-encoded and decoded to linear unless `raw`;
-EXR and HDR are linear. Grey images give three equal channels; alpha is ignored.
+EXR and HDR are linear. Grey images give three equal channels; alpha is ignored. Where a float parameter takes
+the texture (a roughness, a blend weight, an opacity), Mitsuba reads the luminance of the (decoded) colour.
 
 Texture row (kernels/textures/bitmap.h): p.bitmap.dims = (W, H, filter: 0 bilinear / 1 nearest, wrap: 0 repeat /
 1 mirror / 2 clamp); to_uv[0..1].xyz = the rows of the 2-D affine map; the W·H pixels (float4, row by row)
 follow the row in the textures table.
 """
+import copy
 from pathlib import Path
 
 import numpy as np
 
+from ..emitters.emitter import LUMINANCE
 from ..errors import SceneError
 from ..scene.registry import register
 from .imagefile import read_image
@@ -80,6 +83,13 @@ class Bitmap(Texture):
 
     def max_value(self) -> float:
         return float(self.image.max())
+
+    def make_float_view(self) -> "Bitmap":
+        # Mitsuba's bitmap eval_1 is the luminance of eval (linear in the texels, so taken per texel here)
+        view = copy.copy(self)
+        view.image = np.repeat((self.image.astype(np.float64) @ LUMINANCE)[..., None], 3, axis=-1)
+        view.__dict__["_float_view"] = view
+        return view
 
     def eval(self, uv) -> np.ndarray:
         """The colour at uv (..., 2) on the host (the reference the tests hold the kernel to)."""

@@ -13,9 +13,15 @@ Mitsuba's pattern (from its plugin source; checked against Mitsuba 3.9.1's own `
 to_uv(uv), color0 where (frac(s) > ½) == (frac(t) > ½), color1 elsewhere, so [0, ½)² is color0. The colours are
 constants here (Mitsuba also allows nested textures: not supported).
 
+Where a float parameter takes the texture (a roughness, a blend weight, an opacity), Mitsuba 3.9.1's `eval_1`
+gives the mean of color1's channels where `eval` gives color0, and the mean of color0's where it gives color1 (its
+float lookup tests the cells the other way round; checked against Mitsuba's own), and so does clrender.
+
 Texture row (kernels/textures/checkerboard.h): p.checkerboard.c0 = (color0, to_uv a), c1 = (color1, to_uv b),
 uv2 = (to_uv c, d, e, f) for s = a u + b v + c, t = d u + e v + f.
 """
+import copy
+
 import numpy as np
 
 from ..errors import SceneError
@@ -39,6 +45,13 @@ class Checkerboard(Texture):
 
     def max_value(self) -> float:
         return float(max(self.color0.max(), self.color1.max()))
+
+    def make_float_view(self) -> "Checkerboard":
+        view = copy.copy(self)
+        view.color0 = np.full(3, self.color1.mean())
+        view.color1 = np.full(3, self.color0.mean())
+        view.__dict__["_float_view"] = view
+        return view
 
     def eval(self, uv) -> np.ndarray:
         uv = np.asarray(uv, np.float64)

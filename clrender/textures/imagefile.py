@@ -1,8 +1,9 @@
 """Reading the images that bitmap textures and environment maps name: OpenEXR (through the OpenEXR library),
-Radiance RGBE `.hdr` (read here: flat or new-style run-length scanlines) and 8-bit PNG/JPEG (through Pillow).
+Radiance RGBE `.hdr` (read here: flat or new-style run-length scanlines) and 8- or 16-bit PNG, 8-bit JPEG (through
+Pillow).
 
 `read_image(path)` returns (pixels as float32 H x W x 3, linear): EXR and HDR hold linear values already; 8-bit
-images hold sRGB-encoded values, which are decoded unless `raw` (Mitsuba's convention for `bitmap`: 8-bit images
+and 16-bit images hold sRGB-encoded values, which are decoded unless `raw` (Mitsuba's convention for `bitmap`: 8-bit images
 are sRGB unless `raw` is set). Grey images become three equal channels; an alpha channel is dropped.
 """
 from __future__ import annotations
@@ -64,10 +65,45 @@ def _read_8bit(path: Path, raw: bool) -> np.ndarray:
     from PIL import Image
 
     with Image.open(path) as im:
-        if im.mode not in ("L", "LA", "RGB", "RGBA", "P"):
-            raise ValueError(f"only 8-bit grey or RGB images are supported, this one is mode {im.mode}")
-        a = np.asarray(im.convert("RGB"), np.float64) / 255.0
-    return (a if raw else srgb_to_linear(a)).astype(np.float32)
+        wide = True
+        if im.mode == "I;16":                  # 16-bit grey
+            a = np.repeat((np.asarray(im, np.float64) / 65535.0)[..., None], 3, axis=-1)
+        elif im.mode not in ("L", "LA", "RGB", "RGBA", "P"):
+            raise ValueError(f"only 8- or 16-bit grey or RGB images are supported, this one is mode {im.mode}")
+        elif _png16_layout(im) is not None:
+            a = _read_png16(path)
+        else:
+            a, wide = np.asarray(im.convert("RGB"), np.float64) / 255.0, False
+    a = a if raw else srgb_to_linear(a)
+    # Mitsuba keeps a 16-bit image's (decoded) values as half floats (checked against Mitsuba 3.9.1's bitmap)
+    return (a.astype(np.float16) if wide else a).astype(np.float32)
+
+
+#: 16-bit colour PNG sample layouts that Pillow decodes to 8 bits (its high bytes). (16-bit grey + alpha, which
+#: Pillow has no little-endian unpacker for, is read at 8 bits.)
+_PNG16 = ("RGB;16B", "RGBA;16B")
+
+
+def _png16_layout(im):
+    tile = getattr(im, "tile", None)
+    if im.format != "PNG" or not tile or len(tile) != 1:
+        return None
+    return tile[0].args if tile[0].args in _PNG16 else None
+
+
+def _read_png16(path: Path) -> np.ndarray:
+    """A 16-bit colour PNG at full precision, as RGB in [0, 1]. Pillow has no 16-bit colour mode: it unfilters the
+    rows as 16-bit data, then keeps one byte of each sample; reading the file twice, keeping the high bytes
+    (big-endian unpacking) and then the low ones (little-endian unpacking), gives both."""
+    from PIL import Image
+
+    halves = []
+    for order in ("B", "L"):
+        with Image.open(path) as im:
+            im.tile = [im.tile[0]._replace(args=_png16_layout(im)[:-1] + order)]
+            im.load()
+            halves.append(np.asarray(im, np.float64)[..., :3])
+    return (halves[0] * 256.0 + halves[1]) / 65535.0
 
 
 def _read_rgbe(path: Path) -> np.ndarray:

@@ -3,7 +3,9 @@
 A texture plugin declares its kernel half (`kernel`: <prefix>_eval(t, uv) in kernels/textures/<prefix>.h, reached
 through the generated texture_eval) and its parameters (`PARAMS`, written by `fill`); `max_value()` and a host
 `eval(uv)` serve validation and tests. A BSDF parameter declared as ("name", "texture") holds a constant colour
-and the index of a texture row (NONE: the constant), which `param` fills.
+and the index of a texture row (NONE: the constant), which `param` fills. A float parameter (a roughness, a blend
+weight, an opacity) reads the first channel of `float_view()`, the texture as Mitsuba's float lookup (`eval_1`) sees
+it.
 """
 from __future__ import annotations
 
@@ -32,6 +34,18 @@ class Texture(abc.ABC):
     def texels(self) -> np.ndarray | None:
         """Pixels (N, 4) float32 stored right after the texture's row (TextureTable.add), or None."""
         return None
+
+    def float_view(self) -> "Texture":
+        """The texture whose every channel is the float that Mitsuba's `eval_1` reads where a float parameter takes
+        this texture (one object per texture, so the textures table holds it once)."""
+        view = self.__dict__.get("_float_view")
+        if view is None:
+            view = self.__dict__["_float_view"] = self.make_float_view()
+        return view
+
+    def make_float_view(self) -> "Texture":
+        """See float_view; by default the texture itself (a float reads its first channel)."""
+        return self
 
     @abc.abstractmethod
     def max_value(self) -> float:

@@ -1,4 +1,4 @@
-/* blendbsdf: f = (1-w) f_first + w f_second, w = weight (a constant or a texture's first channel). Sampling picks
+/* blendbsdf: f = (1-w) f_first + w f_second, w = weight (a constant or a texture's float view). Sampling picks
    a child with probability 1-w / w; a delta sample keeps that child's weight; a non-delta one is weighted by the
    mixture's eval and pdf (which hold the non-delta parts only), so weight == f cos / pdf for every sample with
    MEASURE_SOLID_ANGLE. Row: p.blendbsdf = weight(_tex), first, second (offsets of the children's rows).
@@ -30,8 +30,12 @@ INLINE float3 COMPOSITE_FN(blendbsdf_sample)(__global const Bsdf* b, BsdfQuery* 
     float w = blendbsdf_weight(b, q);
     bool second = u.x < w;
     u.x = second ? u.x / w : (u.x - w) / (1.0f - w);   /* uniform again on [0,1) */
-    float3 r = CHILD_FN(sample)(b + (second ? b->p.blendbsdf.second : b->p.blendbsdf.first), q, u);
-    if (q->measure == MEASURE_DISCRETE || is_black(r)) return r;
+    __global const Bsdf* child = b + (second ? b->p.blendbsdf.second : b->p.blendbsdf.first);
+    float3 r = CHILD_FN(sample)(child, q, u);
+    if (q->measure == MEASURE_DISCRETE) return r;
+    /* A black weight is a failed sample, or a direction from a child that reflects nothing there (a black diffuse):
+       that direction is still a sample of the mixture, and the other child's share of it counts. */
+    if (is_black(r) && !(CHILD_FN(pdf)(child, q) > 0.0f)) return r;
     float pdf = COMPOSITE_FN(blendbsdf_pdf)(b, q);
     if (!(pdf > 0.0f)) return (float3)(0.0f);
     return COMPOSITE_FN(blendbsdf_eval)(b, q) * (fabs(q->wo.z) / pdf);

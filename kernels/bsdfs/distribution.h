@@ -20,7 +20,8 @@ typedef struct {
     bool visible;
 } MfDist;
 
-/* A float parameter: the constant, or the first channel of its texture at the query's uv. */
+/* A float parameter: the constant, or the first channel of its texture at the query's uv (the host gives a float
+   parameter the texture's float view: Texture.float_view). */
 INLINE float param_float(const BsdfQuery* q, float value, uint tex) {
     return tex == NONE ? value : texture_eval(q->textures + tex, q->uv).x;
 }

@@ -4,7 +4,8 @@
    leaf_refs), which says where its vertices are in the primitive table, their only copy on the device;
    tri_index holds its vertex indices at the same leaf-order position, for the per-vertex normals and uvs.
    Row: count = the mesh's triangle count; flags SHAPE_HAS_NORMALS (interpolated per-vertex normals shade) and
-   SHAPE_HAS_UVS (per-vertex uvs; otherwise uv = the barycentrics (b1, b2)); emitting meshes: first = offset of
+   SHAPE_HAS_UVS (per-vertex uvs; otherwise uv = the barycentrics (b1, b2)); SHAPE_NEEDS_UV (the BSDF reads uv or
+   is anisotropic: the shading frame then follows dp/du, as Mitsuba's); emitting meshes: first = offset of
    their triangles' leaf references in `tri_refs`, cdf = offset of the triangle-area CDF in the `cdf` table
    (both in the mesh's triangle order), area = total area.
    Sampling picks a triangle by binary search in the CDF (probability area_i / A), rescales the sample and reuses
@@ -56,6 +57,15 @@ INLINE float3 mesh_shading_normal(const SceneData* sd, __global const Shape* s, 
     return l2 > 0.0f ? n * (1.0f / sqrt(l2)) : ng;
 }
 
+/* Mitsuba's dp/du of triangle t: from its uvs, or where it has none (or they are degenerate) its first edge. */
+INLINE float3 mesh_dpdu(const SceneData* sd, __global const Shape* s, const MeshTriangle* t) {
+    float3 dp0 = t->p1 - t->p0, dp1 = t->p2 - t->p0;
+    if (!(s->flags & SHAPE_HAS_UVS)) return dp0;
+    float2 uv0 = sd->uvs[t->i0], duv0 = sd->uvs[t->i1] - uv0, duv1 = sd->uvs[t->i2] - uv0;
+    float det = duv0.x * duv1.y - duv0.y * duv1.x;
+    return det != 0.0f ? (dp0 * duv1.y - dp1 * duv0.y) * (1.0f / det) : dp0;
+}
+
 INLINE bool mesh_surface(const SceneData* sd, __global const Shape* s, const Ray* r, const Hit* h,
                          Intersection* its) {
     MeshTriangle tri = mesh_triangle(sd, h->prim);
@@ -75,11 +85,12 @@ INLINE bool mesh_surface(const SceneData* sd, __global const Shape* s, const Ray
     float w0 = maxf(b0, k * len3(p2 - p1)), w1 = maxf(h->u, k * len3(p0 - p2)), w2 = maxf(h->v, k * len3(p1 - p0));
     float ws = w0 + w1 + w2;
     its->po = ws > 0.0f && ws < INFINITY ? (p0 * w0 + p1 * w1 + p2 * w2) * (1.0f / ws) : its->p;
-    its->sh = frame_from_normal(mesh_shading_normal(sd, s, &tri, b0, h->u, h->v, ng));
+    float3 n = mesh_shading_normal(sd, s, &tri, b0, h->u, h->v, ng);
     if (s->flags & SHAPE_HAS_UVS)
         its->uv = sd->uvs[tri.i0] * b0 + sd->uvs[tri.i1] * h->u + sd->uvs[tri.i2] * h->v;
     else
         its->uv = (float2)(h->u, h->v);
+    its->sh = (s->flags & SHAPE_NEEDS_UV) ? frame_from_tangent(n, mesh_dpdu(sd, s, &tri)) : frame_from_normal(n);
     its->tri = h->prim;
     return true;
 }

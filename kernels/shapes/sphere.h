@@ -1,8 +1,11 @@
 /* Analytic spheres (clrender/shapes/sphere.py): the surface at a hit, and sampling of the visible cap.
 
-   Row: first = the sphere's row of the `spheres` table (centre xyz, radius w); SHAPE_FLIP_NORMALS: normals point
-   inward (Mitsuba's flip_normals; uv is unchanged); SHAPE_NEEDS_UV when its BSDF reads textures (uv = (atan2(n.y, n.x) / 2pi in [0,1), acos(n.z) / pi); otherwise uv is (0, 0): atan2 and acos
-   cost more than the rest of a hit); area = 4 pi r^2.
+   Row: first = the sphere's row of the `spheres` table (centre xyz, radius w); p.sphere.rot = its own frame's
+   rotation (clrender/shapes/sphere.py); SHAPE_FLIP_NORMALS: normals point
+   inward (Mitsuba's flip_normals; uv is unchanged); SHAPE_NEEDS_UV when its BSDF reads textures (uv = (atan2(n.y, n.x) / 2pi in [0,1), acos(n.z) / pi)
+   with n in the sphere's own frame, and the shading frame follows dp/du (along phi there), as Mitsuba's; otherwise
+   uv is (0, 0) and the frame is the normal's: atan2 and acos cost more than the rest of a hit);
+   area = 4 pi r^2.
    Seen from outside (|ref - c| > r): uniform directions in the cone of half-angle asin(r / |ref - c|) about
    c - ref, density 1 / (2 pi (1 - cos theta_max)); the point is the near intersection of that direction with the
    sphere. From inside: uniform by area. */
@@ -17,9 +20,25 @@ INLINE float sphere_one_minus_cos(float r2, float d2) {
     return sin2 / (1.0f + cosm);
 }
 
-/* uv of the unit normal n (only where SHAPE_NEEDS_UV: atan2 and acos cost more than the rest of a hit). */
+/* v turned by the sphere's rotation rot (inverse: backwards), mirrored where w's sign bit says so. */
+INLINE float3 sphere_turn(float4 q, float3 v, float inverse) {
+    float3 c = cross3(q.xyz, v);
+    v = v + 2.0f * inverse * fabs(q.w) * c + 2.0f * cross3(q.xyz, c);
+    return (as_uint(q.w) >> 31) ? -v : v;
+}
+
+/* Mitsuba's dp/du at the unit normal n (direction only): along phi in the sphere's own frame. */
+INLINE float3 sphere_dpdu(__global const Shape* s, float3 n) {
+    float4 q = s->p.sphere.rot;
+    float3 l = sphere_turn(q, n, -1.0f);
+    return sphere_turn(q, (float3)(-l.y, l.x, 0.0f), 1.0f);
+}
+
+/* uv of the unit normal n (only where SHAPE_NEEDS_UV: atan2 and acos cost more than the rest of a hit), taken in
+   the sphere's own frame: n turned back by the quaternion rot (w's sign bit: a mirrored frame). */
 INLINE float2 sphere_uv(__global const Shape* s, float3 n) {
     if (!(s->flags & SHAPE_NEEDS_UV)) return (float2)(0.0f);
+    n = sphere_turn(s->p.sphere.rot, n, -1.0f);
     float u = atan2(n.y, n.x) * INV_TWOPI;
     return (float2)(u < 0.0f ? u + 1.0f : u, acos(clampf(n.z, -1.0f, 1.0f)) * INV_PI);
 }
@@ -34,7 +53,7 @@ INLINE bool sphere_surface(const SceneData* sd, __global const Shape* s, const R
     its->po = its->p;
     float3 nf = (s->flags & SHAPE_FLIP_NORMALS) ? -n : n;
     its->ng = nf;
-    its->sh = frame_from_normal(nf);
+    its->sh = (s->flags & SHAPE_NEEDS_UV) ? frame_from_tangent(nf, sphere_dpdu(s, n)) : frame_from_normal(nf);
     its->uv = sphere_uv(s, n);
     its->tri = NONE;
     return true;
