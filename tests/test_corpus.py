@@ -6,6 +6,7 @@ failures, that nothing is left at the `-o` path (no image, no PNG, no temporary 
 """
 import os
 import struct
+import zlib
 from dataclasses import dataclass, field
 
 import pytest
@@ -40,6 +41,28 @@ def cam(op):
 
 def mesh(kind, name, extra=""):
     return scene(body=f'<mesh type="{kind}"><string name="filename" value="{name}"/>{extra}</mesh>')
+
+
+def mitsuba(body):
+    """A small Mitsuba 3 scene; `body` is on line 4."""
+    return ('<scene version="3.0.0">\n'
+            '  <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,3" target="0,0,0" up="0,1,0"/>'
+            '</transform>\n'
+            '    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>\n'
+            f'  {body}\n</scene>\n')
+
+
+def bitmap(name):
+    return mitsuba('<shape type="sphere"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">'
+                   f'<string name="filename" value="{name}"/></texture></bsdf></shape>')
+
+
+def png_header_only(width, height):
+    """A PNG that claims width x height 8-bit RGB pixels (and holds one byte of them)."""
+    def chunk(tag, data):
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data))
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(b"\0")) + chunk(b"IEND", b""))
 
 
 def ply(fmt, nverts, nfaces, body, extra_header=""):
@@ -163,6 +186,17 @@ case("number-empty", scene().replace('name="radius" value="1"', 'name="radius" v
 case("number-garbage", scene().replace('name="radius" value="1"', 'name="radius" value="1,,x"'),
      ("s.xml:7:", "bad number 'x'"))
 case("number-too-many", scene().replace('origin="0,0,3"', 'origin="0,0,3,4"'), ("s.xml:5:", "needs 3"))
+# finite in double precision but not in the single precision the device computes in (used to pass the check:
+# a sphere of radius 1e39 exhausted the memory in the BVH build, a camera translated by 1e39 rendered black)
+case("number-radius-beyond-float", scene(body='<mesh type="sphere"><float name="radius" value="1e39"/></mesh>'),
+     ("s.xml:7:", "radius", "too large", "single precision"))
+case("number-translate-beyond-float", cam('<translate value="-4e38,0,0"/><lookat origin="0,0,3" target="0,0,0" '
+                                          'up="0,1,0"/>'), ("s.xml:5:", "-4e38", "too large"))
+case("number-albedo-beyond-float", scene(body='<mesh type="sphere"><bsdf type="diffuse"><color name="albedo" '
+                                              'value="0.5, 1e39, 0.5"/></bsdf></mesh>'), ("s.xml:7:", "albedo"))
+case("number-sphere-extent-beyond-float", scene(body='<mesh type="sphere"><point name="center" value="3e38,0,0"/>'
+                                                     '<float name="radius" value="3e38"/></mesh>'),
+     ("s.xml:7:", "sphere", "single-precision"))
 case("number-hex", scene().replace('name="radius" value="1"', 'name="radius" value="0x10"'), ("s.xml:7:", "0x10"))
 case("boolean-yes", scene(integrator='<integrator type="ao"><boolean name="x" value="yes"/></integrator>'),
      ("s.xml:2:", "boolean"))
@@ -226,6 +260,12 @@ case("obj-two-corner-face", {"s.xml": mesh("obj", "b.obj"), "b.obj": TRI + "f 1 
 case("obj-binary-garbage", {"s.xml": mesh("obj", "b.obj"), "b.obj": bytes(range(256)) * 20}, ("s.xml:7:", "b.obj"))
 case("obj-all-degenerate", {"s.xml": mesh("obj", "b.obj"), "b.obj": "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n"},
      ("s.xml:7:", "degenerate"))
+case("obj-vertex-beyond-float", {"s.xml": mesh("obj", "b.obj"), "b.obj": "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n"},
+     ("s.xml:7:", "b.obj", "single-precision"))
+case("obj-scaled-beyond-float", {"s.xml": mesh("obj", "b.obj", '<transform name="toWorld"><scale value="1e10"/>'
+                                                               '</transform>'),
+                                 "b.obj": "v 0 0 0\nv 1e30 0 0\nv 0 1e30 0\nf 1 2 3\n"},
+     ("s.xml:7:", "b.obj", "world space"))
 case("obj-short-vertex", {"s.xml": mesh("obj", "b.obj"), "b.obj": "v 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"},
      ("s.xml:7:", "b.obj:1"))
 
@@ -270,6 +310,18 @@ case("ply-ascii-short-line", {"s.xml": mesh("ply", "m.ply"),
                               "m.ply": ply("ascii", 3, 1, b" 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")},  # found by fuzzing
      ("s.xml:7:", "m.ply", "do not match the header"))
 case("ply-dev-zero", mesh("ply", "/dev/zero"), ("s.xml:7:", "device file"))
+
+# ---- images (bitmap textures, environment maps; Mitsuba scenes) ---------------------------------------------------
+# Each of the first three used to escape as a traceback or an unlocated "out of memory".
+case("image-png-decompression-bomb", {"s.xml": bitmap("t.png"), "t.png": png_header_only(100000, 100000)},
+     ("s.xml:4:", "t.png", "cannot read image"))
+case("image-exr-corrupt", {"s.xml": bitmap("t.exr"), "t.exr": b"v/1\x01" + bytes(60)},
+     ("s.xml:4:", "t.exr", "cannot read image"))
+case("image-hdr-lying-resolution", {"s.xml": bitmap("t.hdr"),
+                                    "t.hdr": b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1000000 +X 1000000\n" + bytes(8)},
+     ("s.xml:4:", "t.hdr", "1000000 x 1000000"))
+case("image-is-a-folder", {"s.xml": bitmap("sub"), "sub/x": ""}, ("s.xml:4:", "not a regular file"))
+case("image-missing", bitmap("nowhere.png"), ("s.xml:4:", "nowhere.png", "not found"))
 
 # ---- several broken meshes: one error names them all ------------------------------------------------------------
 case("meshes-two-missing", scene(body='<mesh type="obj"><string name="filename" value="a.obj"/></mesh>\n'
@@ -361,10 +413,10 @@ def test_corpus_is_big_and_covers_every_category():
     assert len(C) >= 100
     assert len({c.id for c in C}) == len(C)
     prefixes = {c.id.split("-")[0] for c in C}
-    for cat in ("xml", "number", "plugin", "obj", "ply", "meshes", "option", "output", "film", "legal"):
+    for cat in ("xml", "number", "plugin", "obj", "ply", "meshes", "image", "option", "output", "film", "legal"):
         assert sum(c.id.split("-")[0] == cat for c in C) >= 2, cat
-    assert prefixes <= {"xml", "number", "boolean", "plugin", "obj", "ply", "meshes", "option", "output", "film",
-                        "legal"}
+    assert prefixes <= {"xml", "number", "boolean", "plugin", "obj", "ply", "meshes", "image", "option", "output",
+                        "film", "legal"}
 
 
 @pytest.mark.parametrize("c", C, ids=[c.id for c in C])

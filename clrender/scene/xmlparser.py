@@ -49,6 +49,8 @@ _OP_ATTRS = {
 _XML_WS = b" \t\r\n"
 _VAR = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
 _NUM_SPLIT = re.compile(r"[\s,]+")
+#: the largest finite float32: the device computes in float, where a larger number becomes infinite
+FLOAT_MAX = float(np.finfo(np.float32).max)
 _INT = re.compile(r"[+-]?[0-9]+")
 _ATTR = re.compile(rb"""([^\s=/<>"']+)\s*=\s*("[^"]*"|'[^']*')""")
 _DECL_ENCODING = re.compile(rb"""encoding\s*=\s*["']([A-Za-z0-9._-]+)["']""")
@@ -281,6 +283,10 @@ class _Builder:
                 what = "not a number" if math.isnan(values[-1]) else "infinite (or too large for a float)"
                 raise SceneError(f"number '{t}' in attribute {attr}=\"{text}\" of {tag} is {what}; "
                                  f"every number in a scene must be finite", self.attr_loc(el, attr))
+            if abs(values[-1]) > FLOAT_MAX:
+                raise SceneError(f"number '{t}' in attribute {attr}=\"{text}\" of {tag} is too large: the "
+                                 f"renderer computes in single precision, whose numbers stop at about "
+                                 f"{FLOAT_MAX:.4g}", self.attr_loc(el, attr))
         if counts is not None and len(values) not in counts:
             want = " or ".join(str(c) for c in counts)
             raise SceneError(f"attribute {attr}=\"{text}\" of {tag} needs {want} "

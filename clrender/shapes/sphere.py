@@ -15,6 +15,7 @@ import numpy as np
 from ..device import dispatch
 from ..errors import SceneError
 from ..scene.registry import register
+from ..scene.xmlparser import FLOAT_MAX
 from .shape import Shape
 
 
@@ -29,7 +30,15 @@ class Sphere(Shape):
             raise SceneError(f"sphere center must be finite, got {self.center}", props.location("center"))
         if not (self.radius > 0 and np.isfinite(self.radius)):
             raise SceneError(f"sphere radius must be a positive number, got {self.radius}", spec.location)
+        self._check_extent(spec)
         self._attach(children, spec)
+
+    def _check_extent(self, spec) -> None:
+        # Its bounding box is float32 on the device: a box with an infinite side breaks the BVH build.
+        if float(np.abs(self.center).max()) + self.radius > FLOAT_MAX:
+            raise SceneError(f"sphere (center {self.center.tolist()}, radius {self.radius:g}) reaches beyond "
+                             f"{FLOAT_MAX:.4g}, the largest single-precision number the renderer computes with",
+                             spec.location)
 
     def area(self) -> float:
         return 4.0 * np.pi * self.radius ** 2
@@ -79,6 +88,7 @@ class MitsubaSphere(Sphere):
                              "non-uniform scales and shears)", props.location("to_world") or spec.location)
         self.center = lin @ center + m[:3, 3]
         self.radius = radius * float(scales.mean())
+        self._check_extent(spec)
         self._attach(children, spec)
 
     def fill(self, ctx, index, row):

@@ -17,6 +17,7 @@ from ..device import dispatch
 from ..device.layout import NONE
 from ..errors import SceneError
 from ..scene.transform import Transform
+from ..scene.xmlparser import FLOAT_MAX
 from .shape import Shape
 
 log = logging.getLogger("clrender")
@@ -73,7 +74,13 @@ class TriangleMesh(Shape):
                 raise
             # The error names the mesh file (and line); add where the scene asked for that file.
             raise SceneError(f"in mesh {e}", where) from None
-        mesh = mesh.transformed(to_world.matrix)
+        with np.errstate(over="ignore", invalid="ignore"):
+            mesh = mesh.transformed(to_world.matrix)
+        if not np.isfinite(mesh.positions[mesh.faces]).all():
+            # float32 on the device: a vertex beyond its range would be infinite and the triangle dropped silently
+            raise SceneError(f"mesh '{filename or name}': a vertex lies beyond {FLOAT_MAX:.4g} in world space "
+                             f"(its coordinates mapped by {to_world_name}), the largest single-precision number "
+                             f"the renderer computes with", where or spec.location)
         if prepare is not None:
             mesh = prepare(mesh)
         mesh, dropped = mesh.drop_degenerate()

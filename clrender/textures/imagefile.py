@@ -23,7 +23,8 @@ def srgb_to_linear(x: np.ndarray) -> np.ndarray:
 def read_image(path, raw: bool = False, location=None) -> np.ndarray:
     path = Path(path)
     if not path.is_file():
-        raise SceneError(f"image file '{path}' not found", location)
+        what = "not found" if not path.exists() else "is not a regular file (a folder or a device)"
+        raise SceneError(f"image file '{path}' {what}", location)
     suffix = path.suffix.lower()
     try:
         if suffix == ".exr":
@@ -37,7 +38,9 @@ def read_image(path, raw: bool = False, location=None) -> np.ndarray:
                              ".jpg or .jpeg", location)
     except SceneError:
         raise
-    except (OSError, ValueError, KeyError, IndexError, TypeError) as exc:
+    except MemoryError:
+        raise SceneError(f"image '{path}' is too large for the host memory", location) from None
+    except Exception as exc:  # OpenEXR raises RuntimeError for a corrupt file, Pillow its DecompressionBombError
         raise SceneError(f"cannot read image '{path}': {exc}", location) from None
     if not np.all(np.isfinite(img)):
         raise SceneError(f"image '{path}' holds NaN or infinite values", location)
@@ -90,6 +93,10 @@ def _read_rgbe(path: Path) -> np.ndarray:
         raise ValueError(f"unsupported resolution line {b' '.join(res).decode(errors='replace')!r} (only -Y H +X W)")
     h, w = int(res[1]), int(res[3])
     buf = np.frombuffer(data, np.uint8, offset=pos)
+    if h < 0 or w < 0 or h * w > 16 * (len(buf) + 1):
+        # a run-length scanline stores at least 127 values of a component in 2 bytes: no more than ~16 pixels
+        # a byte; a larger claim is a corrupt resolution line, not a reason to allocate it
+        raise ValueError(f"the resolution line claims {w} x {h} pixels but only {len(buf)} bytes follow")
     out = np.empty((h, w, 4), np.uint8)
     i = 0
     for y in range(h):
