@@ -266,6 +266,11 @@ case("obj-scaled-beyond-float", {"s.xml": mesh("obj", "b.obj", '<transform name=
                                                                '</transform>'),
                                  "b.obj": "v 0 0 0\nv 1e30 0 0\nv 0 1e30 0\nf 1 2 3\n"},
      ("s.xml:7:", "b.obj", "world space"))
+# A byte order mark used to hide the first vertex: "index 3 is out of range (the file defines 2)", or, with more
+# vertices, a silently different mesh.
+case("legal-obj-utf8-bom", {"s.xml": mesh("obj", "n.obj"), "n.obj": "\ufeffv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"},
+     (), code=0)
+case("obj-utf16", {"s.xml": mesh("obj", "b.obj"), "b.obj": TRI.encode("utf-16")}, ("s.xml:7:", "b.obj:1", "UTF-16"))
 case("obj-short-vertex", {"s.xml": mesh("obj", "b.obj"), "b.obj": "v 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"},
      ("s.xml:7:", "b.obj:1"))
 
