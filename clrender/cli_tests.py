@@ -29,6 +29,12 @@ def add_parsers(sub):
 def cmd_test(args) -> int:
     from .testing.nori import Runner, results_json
 
+    if args.json and args.json != "-":  # before the tests run, not after
+        from pathlib import Path
+
+        from .output import check_writable
+
+        check_writable(Path(args.json))
     runner = Runner(device=args.device, seed=args.seed, plots=not args.no_plots, nori_dialect=args.nori_dialect)
     results = []
     for f in args.files:
@@ -43,6 +49,9 @@ def cmd_test(args) -> int:
         if args.json == "-":
             print(text)
         else:
+            from pathlib import Path
+
+            Path(args.json).parent.mkdir(parents=True, exist_ok=True)  # as render's -o does
             with open(args.json, "w") as fh:
                 fh.write(text + "\n")
     print(f"{n_ok} passed, {n_bad} failed")
@@ -50,15 +59,22 @@ def cmd_test(args) -> int:
 
 
 def cmd_warptest(args) -> int:
+    from .testing.kernels import WARPS
     from .testing.nori import write_histograms
     from .testing.warptest import run_warptest
 
+    from pathlib import Path
+
+    from .output import check_writable
+
+    out = args.plot or f"warptest_{args.warp}.png"
     try:
+        if args.warp in WARPS:  # an unknown warp is reported as such, not as an unwritable plot
+            check_writable(Path(out))  # before the samples are drawn, not after
         result, obs, exp, p = run_warptest(args.warp, args.param, args.samples, device=args.device, seed=args.seed)
     except ValueError as exc:
         print(f"clrender: error: {exc}", file=sys.stderr)
         return 2
-    out = args.plot or f"warptest_{args.warp}.png"
     write_histograms(out, obs, exp, f"{args.warp} {p:g}: {result.message}")
     print(f"{'PASS' if result.passed else 'FAIL'}  warp {args.warp} ({p:g}): {result.message}; histograms: {out}")
     return 0 if result.passed else 1
