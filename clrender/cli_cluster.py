@@ -34,6 +34,9 @@ def parse_sample_range(text: str) -> tuple[int, int]:
     if start < 0 or count < 1:
         raise ClrenderError(f"--sample-range expects START:COUNT with START >= 0 and COUNT >= 1 "
                             f"(e.g. 0:64), got '{text}'")
+    if start + count >= 2**32:  # samples are numbered with 32 bits (Renderer.render's bound)
+        raise ClrenderError(f"--sample-range {text}: START + COUNT must stay below 2^32 = 4294967296, "
+                            f"got {start + count}")
     return start, count
 
 

@@ -342,6 +342,7 @@ for value in ("nan", "inf", "-inf", "-1", "0", "abc", "1e999"):
     case(f"option-time-limit-{value}", scene(), "--time-limit", argv=["--time-limit", value])
 for value in ("0", "-5", "4294967296", "x"):
     case(f"option-spp-{value}", scene(), "--spp", argv=["--spp", value])
+case("option-define-without-name", scene(), "name=value", argv=["-D", "=1"])  # was silently ignored
 case("option-seed-garbage", scene(), "--seed", argv=["--seed", "1.5"])
 case("option-seed-negative", scene(), "--seed", argv=["--seed", "-1"])
 case("option-seed-too-large", scene(), "--seed", argv=["--seed", "4294967296"])
