@@ -313,7 +313,14 @@ case("ply-property-before-element", {"s.xml": mesh("ply", "m.ply"),
      ("s.xml:7:", "m.ply:3"))
 case("ply-ascii-short-line", {"s.xml": mesh("ply", "m.ply"),
                               "m.ply": ply("ascii", 3, 1, b" 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")},  # found by fuzzing
-     ("s.xml:7:", "m.ply", "do not match the header"))
+     ("s.xml:7:", "m.ply:10", "record 0", "calls for 3"))
+# A list whose length does not match its numbers, or a record with extra numbers, used to be read without a word
+case("ply-ascii-list-length-lies", {"s.xml": mesh("ply", "m.ply"),
+                                   "m.ply": ply("ascii", 4, 2, b"0 0 0\n1 0 0\n0 1 0\n1 1 0\n4 0 1 2\n3 0 2 3\n")},
+     ("s.xml:7:", "m.ply:14", "record 0", "calls for 5"))
+case("ply-ascii-extra-number", {"s.xml": mesh("ply", "m.ply"),
+                                "m.ply": ply("ascii", 3, 1, b"0 0 0\n1 0 0 7\n0 1 0\n3 0 1 2\n")},
+     ("s.xml:7:", "m.ply:11", "record 1", "calls for 3"))
 case("ply-dev-zero", mesh("ply", "/dev/zero"), ("s.xml:7:", "device file"))
 
 # ---- images (bitmap textures, environment maps; Mitsuba scenes) ---------------------------------------------------

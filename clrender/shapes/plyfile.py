@@ -92,6 +92,8 @@ def _check_header(data: bytes, path: str) -> None:
     body = len(data) - (nl + 1) if nl >= 0 else 0
     fmt = None
     elements: list[tuple[str, int, int, int]] = []  # name, count, line, bytes per record at least
+    lists: list[list[bool]] = []  # per element, per property: is it a list
+    header_lines = data[:end].count(b"\n") + 1  # the end_header line's number
     for lineno, raw in enumerate(data[:end].decode("ascii", "replace").splitlines(), start=1):
         tok = raw.split()
         here = SourceLocation(path, lineno)
@@ -106,6 +108,7 @@ def _check_header(data: bytes, path: str) -> None:
             if len(tok) != 3 or not tok[2].isdigit():
                 raise SceneError(f"bad PLY element line '{raw.strip()}' (expected 'element NAME COUNT')", here)
             elements.append((tok[1], int(tok[2]), lineno, 0))
+            lists.append([])
         elif tok[0] == "property":
             if not elements:
                 raise SceneError("PLY property before any element", here)
@@ -119,6 +122,7 @@ def _check_header(data: bytes, path: str) -> None:
                                  f"{', '.join(_PLY_TYPES)})", here)
             name, count, line, per = elements[-1]
             elements[-1] = (name, count, line, per + size)
+            lists[-1].append(tok[1] == "list")
         else:
             raise SceneError(f"unknown PLY header line '{raw.strip()}'", here)
     if fmt is None:
@@ -129,6 +133,7 @@ def _check_header(data: bytes, path: str) -> None:
         if need > lines:
             raise SceneError(f"the PLY header declares {need} records but the file has only {lines} lines "
                              "after the header (truncated, or a wrong element count)", SourceLocation(path))
+        _check_ascii_records(data[nl + 1:], elements, lists, header_lines, path)
         return
     offset = 0
     for name, count, line, per in elements:
@@ -137,6 +142,34 @@ def _check_header(data: bytes, path: str) -> None:
             raise SceneError(f"PLY header declares {count} '{name}' records, at least {count * per} bytes, but "
                              f"the file has only {body} bytes after the header (truncated, or a wrong "
                              f"element count)", SourceLocation(path, line))
+
+
+def _check_ascii_records(body: bytes, elements, lists, header_lines: int, path: str) -> None:
+    """Each ASCII record (one a line) must hold exactly the numbers its properties and list lengths call for:
+    the line-based reader would otherwise drop extra numbers, or read a list shorter than its length says,
+    without a word."""
+    lines = body.split(b"\n")
+    at = 0
+    for (name, count, _, _), is_list in zip(elements, lists):
+        n_props = len(is_list)
+        for k in range(at, at + count):
+            tok = lines[k].split()
+            need, want = 0, None
+            for lst in is_list:
+                if lst:
+                    try:
+                        need += 1 + int(tok[need])
+                    except (IndexError, ValueError):
+                        want = f"a list length as number {need + 1}"
+                        break
+                else:
+                    need += 1
+            if want is not None or need != len(tok):
+                props = f"{n_props} propert{'y' if n_props == 1 else 'ies'}"
+                want = want or f"{need} ({props}{', each list as long as its length says' if any(is_list) else ''})"
+                raise SceneError(f"PLY '{name}' record {k - at} holds {len(tok)} numbers where the header calls "
+                                 f"for {want}", SourceLocation(path, header_lines + 1 + k))
+        at += count
 
 
 def _field_names(element) -> list[str]:
