@@ -197,6 +197,10 @@ case("number-albedo-beyond-float", scene(body='<mesh type="sphere"><bsdf type="d
 case("number-sphere-extent-beyond-float", scene(body='<mesh type="sphere"><point name="center" value="3e38,0,0"/>'
                                                      '<float name="radius" value="3e38"/></mesh>'),
      ("s.xml:7:", "sphere", "single-precision"))
+# Finite but too large for the single-precision intersection tests: such a shape used to vanish from the image.
+case("number-sphere-radius-1e20", scene(body='<mesh type="sphere"><point name="center" value="0,0,-1.1e20"/>'
+                                             '<float name="radius" value="1e20"/></mesh>'),
+     ("s.xml:7:", "sphere", "1e+18", "overflow"))
 case("number-hex", scene().replace('name="radius" value="1"', 'name="radius" value="0x10"'), ("s.xml:7:", "0x10"))
 case("boolean-yes", scene(integrator='<integrator type="ao"><boolean name="x" value="yes"/></integrator>'),
      ("s.xml:2:", "boolean"))
@@ -261,11 +265,13 @@ case("obj-binary-garbage", {"s.xml": mesh("obj", "b.obj"), "b.obj": bytes(range(
 case("obj-all-degenerate", {"s.xml": mesh("obj", "b.obj"), "b.obj": "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n"},
      ("s.xml:7:", "degenerate"))
 case("obj-vertex-beyond-float", {"s.xml": mesh("obj", "b.obj"), "b.obj": "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n"},
-     ("s.xml:7:", "b.obj", "single-precision"))
+     ("s.xml:7:", "b.obj", "beyond"))
 case("obj-scaled-beyond-float", {"s.xml": mesh("obj", "b.obj", '<transform name="toWorld"><scale value="1e10"/>'
                                                                '</transform>'),
                                  "b.obj": "v 0 0 0\nv 1e30 0 0\nv 0 1e30 0\nf 1 2 3\n"},
      ("s.xml:7:", "b.obj", "world space"))
+case("obj-quad-at-1e13", {"s.xml": mesh("obj", "b.obj", '<transform name="toWorld"><scale value="1e13"/></transform>'),
+                          "b.obj": QUAD}, ("s.xml:7:", "b.obj", "1e+12", "overflow"))
 # A byte order mark used to hide the first vertex: "index 3 is out of range (the file defines 2)", or, with more
 # vertices, a silently different mesh.
 case("legal-obj-utf8-bom", {"s.xml": mesh("obj", "n.obj"), "n.obj": "\ufeffv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"},

@@ -15,8 +15,7 @@ import numpy as np
 from ..device import dispatch
 from ..errors import SceneError
 from ..scene.registry import register
-from ..scene.xmlparser import FLOAT_MAX
-from .shape import Shape
+from .shape import SPHERE_EXTENT_MAX, Shape
 
 
 @register("mesh", "sphere")
@@ -34,11 +33,10 @@ class Sphere(Shape):
         self._attach(children, spec)
 
     def _check_extent(self, spec) -> None:
-        # Its bounding box is float32 on the device: a box with an infinite side breaks the BVH build.
-        if float(np.abs(self.center).max()) + self.radius > FLOAT_MAX:
+        if float(np.abs(self.center).max()) + self.radius > SPHERE_EXTENT_MAX:
             raise SceneError(f"sphere (center {self.center.tolist()}, radius {self.radius:g}) reaches beyond "
-                             f"{FLOAT_MAX:.4g}, the largest single-precision number the renderer computes with",
-                             spec.location)
+                             f"{SPHERE_EXTENT_MAX:g}: the single-precision intersection test may overflow "
+                             f"and miss it", spec.location)
 
     def area(self) -> float:
         return 4.0 * np.pi * self.radius ** 2
