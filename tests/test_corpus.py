@@ -202,6 +202,20 @@ case("number-sphere-radius-1e20", scene(body='<mesh type="sphere"><point name="c
                                              '<float name="radius" value="1e20"/></mesh>'),
      ("s.xml:7:", "sphere", "1e+18", "overflow"))
 case("number-hex", scene().replace('name="radius" value="1"', 'name="radius" value="0x10"'), ("s.xml:7:", "0x10"))
+case("number-max-depth-beyond-32-bits", scene(integrator='<integrator type="path_mis"><integer name="maxDepth" '
+                                                    'value="99999999999"/></integrator>'),
+     ("s.xml:2:", "maxDepth", "2147483647"))  # was an OverflowError traceback while packing
+case("number-mitsuba-max-depth-beyond-32-bits",
+     mitsuba('<integrator type="path"><integer name="max_depth" value="99999999999"/></integrator>'),
+     ("s.xml:4:", "max_depth", "2147483647"))
+# Filters so narrow that their single-precision weights vanish used to render a black image without a word.
+for kind in ("tent", "mitchell", "box"):
+    case(f"number-filter-{kind}-radius-1e-30",
+         scene().replace('<integer name="height" value="8"/>', '<integer name="height" value="8"/><rfilter type="'
+                         f'{kind}"><float name="radius" value="1e-30"/></rfilter>'), ("s.xml:4:", "radius", "1e-30"))
+case("number-gaussian-too-narrow-for-stddev",
+     scene().replace('<integer name="height" value="8"/>', '<integer name="height" value="8"/><rfilter '
+                     'type="gaussian"><float name="radius" value="1e-4"/></rfilter>'), ("s.xml:4:", "too narrow"))
 case("boolean-yes", scene(integrator='<integrator type="ao"><boolean name="x" value="yes"/></integrator>'),
      ("s.xml:2:", "boolean"))
 case("number-max-depth", scene(integrator='<integrator type="path_mis"><integer name="maxDepth" value="-7"/>'

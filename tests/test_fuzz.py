@@ -118,6 +118,41 @@ def test_fuzz_scene_random_bytes(tmp_path, data):
     _load(data, tmp_path)
 
 
+VALID_MITSUBA = """<?xml version="1.0"?>
+<scene version="3.0.0">
+  <default name="spp" value="2"/>
+  <integrator type="path"><integer name="max_depth" value="4"/></integrator>
+  <sensor type="perspective">
+    <float name="fov" value="40"/><string name="fov_axis" value="x"/>
+    <transform name="to_world"><lookat origin="0,1,4" target="0,0,0" up="0,1,0"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="6"/>
+      <rfilter type="tent"><float name="radius" value="1"/></rfilter></film>
+  </sensor>
+  <bsdf type="roughconductor" id="metal"><string name="material" value="Au"/><float name="alpha" value="0.2"/></bsdf>
+  <shape type="sphere"><point name="center" value="0, 0, 0"/><float name="radius" value="0.5"/><ref id="metal"/></shape>
+  <shape type="rectangle"><transform name="to_world"><scale value="4"/><rotate x="1" angle="-90"/></transform>
+    <bsdf type="diffuse"><texture type="checkerboard" name="reflectance"><rgb name="color0" value="0.2"/>
+      <spectrum name="color1" value="400:0.5, 700:0.8"/></texture></bsdf></shape>
+  <shape type="obj"><string name="filename" value="ground.obj"/><boolean name="face_normals" value="true"/>
+    <bsdf type="dielectric"><string name="int_ior" value="bk7"/></bsdf>
+    <emitter type="area"><rgb name="radiance" value="4, 4, 4"/></emitter></shape>
+  <emitter type="point"><point name="position" value="0,3,0"/><rgb name="intensity" value="10"/></emitter>
+  <emitter type="constant"><rgb name="radiance" value="0.1"/></emitter>
+</scene>
+"""
+MITSUBA_TOKENS = TOKENS + ["shape", "sensor", "film", "hdrfilm", "rgb", "spectrum", "ref", "id", "include",
+                           "to_world", "sample_count", "version", '"3.0.0"', "roughconductor", "alpha", "texture",
+                           "checkerboard", "x", "angle", "400:0.5", "1e39", "3e38", "-1e13", "1e20", "rectangle"]
+
+
+@fuzz
+@given(data=mutated(VALID_MITSUBA.encode(), MITSUBA_TOKENS))
+@example(data=VALID_MITSUBA.replace('value="0.5"/><ref', 'value="1e39"/><ref').encode())  # was an out-of-memory
+def test_fuzz_mitsuba_scene_mutations(tmp_path, data):
+    _load(data, tmp_path)
+
+
 # ---- OBJ --------------------------------------------------------------------------------------------------------
 NUM = st.one_of(st.floats(allow_nan=True, allow_infinity=True, width=32).map(repr),
                 st.integers(-10**25, 10**25).map(str), st.sampled_from(["x", "", "1e999", "-0", "nan", "1/2"]))
