@@ -116,6 +116,11 @@ case("xml-text-content", scene().replace("<mesh type=\"sphere\">", "hello <mesh 
      ("s.xml:7:3", "unexpected text"))
 case("xml-unknown-tag", scene().replace("<mesh type=\"sphere\">", "<blob/><mesh type=\"sphere\">"),
      ("s.xml:7:3", "unknown tag <blob>"))
+# The two formats told apart by the root's version attribute: a file of one read as the other says why
+case("xml-mitsuba-scene-without-version", mitsuba('<shape type="sphere"/>').replace(' version="3.0.0"', ""),
+     ("s.xml:2:3", "unknown tag <sensor>", 'version="3.0.0"', "read as a Nori scene"))
+case("xml-nori-tags-in-a-mitsuba-scene", mitsuba('<mesh type="sphere"/>'),
+     ("s.xml:4:3", "unknown tag <mesh>", "Nori's", "version attribute"))
 case("xml-unknown-attribute", scene().replace('<mesh type="sphere">', '<mesh type="sphere" size="2">'),
      ("s.xml:7:23", "size"))
 case("xml-missing-type", scene().replace('<mesh type="sphere">', "<mesh>"), ("s.xml:7:3", "'type'"))

@@ -367,8 +367,12 @@ class _Builder:
                                  c.loc)
             else:
                 extra = ", or <default>" if is_root else ""
+                hint = ""
+                if c.tag in ("shape", "sensor", "film", "rgb", "spectrum", "ref", "include"):
+                    hint = ('; <' + c.tag + '> is Mitsuba 3\'s: a Mitsuba scene\'s root is <scene version="3.0.0">, '
+                            'and this file\'s <scene> has no version, so it is read as a Nori scene')
                 raise SceneError(f"unknown tag <{c.tag}> in <{el.tag}>; expected an object "
-                                 f"({_tags(OBJECT_TAGS)}) or a property ({_tags(PROPERTY_TAGS)}){extra}",
+                                 f"({_tags(OBJECT_TAGS)}) or a property ({_tags(PROPERTY_TAGS)}){extra}{hint}",
                                  c.loc)
         return spec
 
