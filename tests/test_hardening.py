@@ -5,6 +5,7 @@ import os
 import time
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from clrender.cli import main
@@ -135,3 +136,33 @@ def test_a_successful_build_says_nothing_unless_asked(ctx, monkeypatch, capfd):
     monkeypatch.setenv("PYOPENCL_COMPILER_OUTPUT", "1")
     loud, err = build("loud")
     assert loud or "clrender test warning loud" in err
+
+
+def test_overflowing_pixel_sums_never_reach_the_image(tmp_path, capsys):
+    """Finite samples of absurd size (an albedo of 3e38) overflow a pixel's float32 sums on the device; those
+    pixels used to be written as inf. Their samples are dropped and counted like NaN/Inf ones."""
+    from clrender.film import read_exr
+
+    p = tmp_path / "s.xml"
+    p.write_text(SCENE.format(w=16, h=16).replace('type="normals"', 'type="path_mis"').replace(
+        '<float name="radius" value="1"/>', '<float name="radius" value="1"/><bsdf type="diffuse"><color '
+        'name="albedo" value="3e38"/></bsdf>').replace(
+        "</scene>", '<emitter type="point"><point name="position" value="0,2,3"/><color name="power" value="50"/>'
+                    '</emitter></scene>'))
+    assert main(["render", str(p), "-q", "--spp", "8", "-o", str(tmp_path / "o.exr")]) == 0
+    img, header = read_exr(tmp_path / "o.exr")
+    assert np.isfinite(img).all()
+    assert int(header["clrender.dropped_samples"]) > 0
+    assert img.max() > 1e30  # the pixels that did not overflow keep their (huge) values
+    assert "NaN/Inf samples dropped" in capsys.readouterr().err
+
+
+def test_film_drops_the_samples_of_overflowed_pixels():
+    from clrender.film import Film
+
+    ones = np.ones((1, 2))
+    film = Film(2, 1, np.array([[[1.0, 2, 3], [np.inf, 0, 0]]]), ones.copy(), ones.copy()[..., None] * [1, 1, 1],
+                np.array([[4.0, 5.0]]), np.zeros((1, 2), np.int64), {"dropped_samples": 0})
+    assert np.isfinite(film.image).all() and film.image[0, 1].tolist() == [0, 0, 0]
+    assert film.dropped.tolist() == [[0, 5]] and film.metadata["dropped_samples"] == 5
+    assert film.image[0, 0].tolist() == [1, 2, 3]
