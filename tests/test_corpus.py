@@ -243,6 +243,8 @@ case("plugin-negative-radius", scene().replace('name="radius" value="1"', 'name=
      ("s.xml:7:", "radius"))
 case("plugin-singular-scale", scene(body='<mesh type="obj"><string name="filename" value="quad.obj"/>'
                                          '<transform name="toWorld"><scale value="0"/></transform></mesh>'), "s.xml:7:")
+case("plugin-camera-projective-matrix", cam('<matrix value="1 0 0 0 0 1 0 0 0 0 1 3 0 0 1 1"/>'),
+     ("s.xml:5:", "affine"))  # its last row used to be dropped: a black image
 case("plugin-fov-180", scene().replace('<integer name="height" value="8"/>',
                                        '<integer name="height" value="8"/><float name="fov" value="180"/>'),
      ("s.xml:4:", "fov"))
