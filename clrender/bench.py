@@ -730,8 +730,8 @@ def plot(result: dict, path) -> Path:
         ax2.grid(True, which="both", alpha=0.3)
         ax2.legend(fontsize=8)
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    from .film import _atomic_write
+
+    path = _atomic_write(Path(path), lambda tmp: fig.savefig(tmp, dpi=110))  # a reader never sees half a plot
     plt.close(fig)
     return path

@@ -51,9 +51,9 @@ def cmd_test(args) -> int:
         else:
             from pathlib import Path
 
-            Path(args.json).parent.mkdir(parents=True, exist_ok=True)  # as render's -o does
-            with open(args.json, "w") as fh:
-                fh.write(text + "\n")
+            from .film import _atomic_write
+
+            _atomic_write(Path(args.json), lambda tmp: tmp.write_text(text + "\n"))
     print(f"{n_ok} passed, {n_bad} failed")
     return 0 if n_bad == 0 else 1
 

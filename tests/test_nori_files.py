@@ -135,3 +135,11 @@ def test_warptest_refuses_bad_parameters(tmp_path, capsys, args, what):
     err = capsys.readouterr().err
     assert what in err, err
     assert not (tmp_path / "w.png").exists()
+
+
+def test_unwritable_json_fails_before_the_tests_run(tmp_path, capsys):
+    p = tmp_path / "t.xml"
+    p.write_text(CHI2.format(prop="<integer name='testCount' value='1'/>"))
+    assert main(["test", str(p), "--json", "/proc/clrender-x.json"]) == 2
+    out = capsys.readouterr()
+    assert "/proc/clrender-x.json" in out.err and "PASS" not in out.out  # it used to test first, then fail
