@@ -124,9 +124,16 @@ def add_merge_parser(sub) -> None:
 def cmd_merge(args) -> int:
     from .parts import merge_parts, read_part
 
+    from .output import check_writable
+
     out = Path(args.output)
     if out.suffix.lower() != ".exr":
         raise ClrenderError(f"-o {out}: the merged image is an EXR; name it *.exr (add --png for a PNG)")
+    for part in args.parts:  # the merged image is a plain EXR: writing it over a part would lose that part
+        if out.resolve() == Path(part).resolve():
+            raise ClrenderError(f"-o {out}: that is one of the parts being merged; name another file")
+    for path in [out] + ([out.with_suffix(".png")] if args.png else []):
+        check_writable(path, args.output)  # before the parts are read
     film = merge_parts([read_part(p) for p in args.parts], allow_missing=args.partial)
     film.write_exr(out)
     written = [str(out)]

@@ -120,8 +120,11 @@ def _umask() -> int:
 
 def _atomic_write(path: Path, write) -> Path:
     """Write through a temporary file in the same folder, then rename: readers never see half a file."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=str(path.parent))
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=str(path.parent))
+    except OSError as e:  # name the user's file, not our temporary one
+        raise OSError(e.errno, f"cannot write '{path}': {e.strerror or e}") from None
     try:
         # mkstemp makes 0600 files; the image gets the permissions any tool would give it (0644 under umask 022)
         os.fchmod(fd, 0o666 & ~_umask())
