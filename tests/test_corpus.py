@@ -256,6 +256,8 @@ case("plugin-nested-wrongly", scene(body='<mesh type="sphere"><camera type="pers
 
 # ---- meshes: OBJ -----------------------------------------------------------------------------------------------
 case("obj-missing", mesh("obj", "nowhere.obj"), ("s.xml:7:", "nowhere.obj"))
+case("obj-empty-filename", mesh("obj", ""), ("s.xml:7:", "is empty"))  # was "it is a folder, not a file"
+case("image-empty-filename", bitmap(""), ("s.xml:4:", "is empty"))
 case("obj-is-a-folder", {"s.xml": mesh("obj", "sub"), "sub/x": ""}, ("s.xml:7:", "folder"))
 case("obj-dev-zero", mesh("obj", "/dev/zero"), ("s.xml:7:", "/dev/zero", "device file"))
 case("obj-dev-urandom", mesh("obj", "/dev/urandom"), ("s.xml:7:", "device file"))

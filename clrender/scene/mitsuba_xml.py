@@ -285,6 +285,7 @@ class MitsubaBuilder(_x._Builder):
         else:
             value = self.value_of(el, el.tag, text)
         if el.tag == "string" and name == "filename":
+            _x.check_filename(value, self.attr_loc(el, "value"))
             value = self.state.resolve(value)
         props.add(name, el.tag, value, el.loc, raw=text)
         if el.tag == "spectrum":

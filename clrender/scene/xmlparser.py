@@ -391,6 +391,7 @@ class _Builder:
         name, text = a["name"], a["value"]
         value = self.value_of(el, el.tag, text)
         if el.tag == "string" and name == "filename":
+            check_filename(value, self.attr_loc(el, "value"))
             value = os.path.normpath(os.path.join(self.base_dir, value))
         self.no_children(el)
         props.add(name, el.tag, value, el.loc, raw=text)
@@ -435,6 +436,12 @@ class _Builder:
 # --------------------------------------------------------------------------------------------------
 # Public entry points
 # --------------------------------------------------------------------------------------------------
+def check_filename(value: str, location: SourceLocation) -> None:
+    """An empty filename would resolve to the scene's own folder and be reported as "a folder, not a file"."""
+    if not value.strip():
+        raise SceneError('<string name="filename"> is empty; expected the path of a file', location)
+
+
 def _read_bytes(data: bytes, filename: str, force_encoding: str | None) -> tuple[_Source, _Elem]:
     """Pass one for any of the XML scene formats: the located element tree of ``data``."""
     data, declared, blanked = _prepare(data)
