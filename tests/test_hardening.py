@@ -114,6 +114,28 @@ def test_cpu_and_gpu_mean_one_kind_of_device(monkeypatch):
     assert context.choose_device("oclgrind")[1] is sim
 
 
+def test_the_default_device_is_never_a_simulator(monkeypatch):
+    """When no CPU device builds kernels (a PoCL that cannot write its cache, say), the default used to be the first
+    device listed: the Oclgrind simulator, chosen without a word. Now a real GPU, else an error naming why."""
+    import pyopencl as cl
+
+    from clrender.device import context
+
+    t = cl.device_type
+    sim = SimpleNamespace(type=t.CPU | t.GPU | t.ACCELERATOR | t.DEFAULT, name="Oclgrind Simulator", int_ptr=1)
+    cpu = SimpleNamespace(type=t.CPU, name="pthread CPU", int_ptr=2)
+    gpu = SimpleNamespace(type=t.GPU, name="Some GPU", int_ptr=3)
+    oclgrind = SimpleNamespace(name="Oclgrind", version="OpenCL 1.2")
+    pocl = SimpleNamespace(name="Portable Computing Language", version="OpenCL 3.0 PoCL 3.0")
+    monkeypatch.setattr(context, "build_check", lambda p, d: "cannot write its kernel cache" if d is cpu else None)
+    monkeypatch.setattr(context, "list_devices", lambda: [(oclgrind, sim), (pocl, cpu)])
+    with pytest.raises(context.DeviceError, match="cannot write its kernel cache") as e:
+        context.choose_device(None)
+    assert "--device" in str(e.value)
+    monkeypatch.setattr(context, "list_devices", lambda: [(oclgrind, sim), (pocl, cpu), (oclgrind, gpu)])
+    assert context.choose_device(None)[1] is gpu
+
+
 def test_a_successful_build_says_nothing_unless_asked(ctx, monkeypatch, capfd):
     """A build log of a successful build (NVIDIA's driver writes one for our kernels) is not shown on every
     render as pyopencl's CompilerWarning or the compiler's stderr; PYOPENCL_COMPILER_OUTPUT=1 shows both."""

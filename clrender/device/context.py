@@ -161,7 +161,15 @@ def choose_device(spec: str | int | None = None):
         if any("unknown target cpu" in w.lower() for w in problems):
             raise DeviceError("no CPU OpenCL device can compile kernels here (" + "; ".join(problems) + "). "
                               + _unknown_cpu_hint())
-        return devices[0]
+        # No CPU device builds: a real GPU or accelerator, never a simulator (Oclgrind reports itself as every
+        # kind, and would otherwise be chosen silently, rendering a thousand times slower)
+        for p, d in devices:
+            if _is_only(d, cl.device_type.GPU) or _is_only(d, cl.device_type.ACCELERATOR):
+                return p, d
+        what = "; ".join(problems) if problems else "there is no CPU or GPU device"
+        names = ", ".join(f"[{i}] {describe(p, d)}" for i, (p, d) in enumerate(devices))
+        raise DeviceError(f"no OpenCL device to render on by default ({what}); available: {names}. Choose one "
+                          f"with --device (a simulator such as Oclgrind only by name)")
     s = str(spec).strip()
     if s.isdigit():
         i = int(s)
