@@ -188,3 +188,26 @@ def test_film_drops_the_samples_of_overflowed_pixels():
     assert np.isfinite(film.image).all() and film.image[0, 1].tolist() == [0, 0, 0]
     assert film.dropped.tolist() == [[0, 5]] and film.metadata["dropped_samples"] == 5
     assert film.image[0, 0].tolist() == [1, 2, 3]
+
+
+def test_renders_with_an_unwritable_home_and_names_an_unwritable_pocl_cache(tmp_path):
+    """A container run as another user often has a home it cannot write: PoCL then failed to load (no cache) and
+    pyopencl failed on its first launch (its own caches). Now the caches go to the temporary folder; a
+    POCL_CACHE_DIR the user set that cannot be written is named in the error."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    p = _scene(tmp_path)
+    root = Path(__file__).resolve().parents[1]
+    env = {k: v for k, v in os.environ.items() if k not in ("POCL_CACHE_DIR", "XDG_CACHE_HOME")}
+    env.update(HOME="/proc/clrender-no-home", PYTHONPATH=str(root))
+    run = [sys.executable, "-m", "clrender.cli", "render", str(p), "-q", "--spp", "1"]
+    proc = subprocess.run(run + ["-o", str(tmp_path / "a.exr")], env=env, capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    assert "Portable Computing Language" in proc.stderr and "Traceback" not in proc.stderr
+    env["POCL_CACHE_DIR"] = "/proc/clrender-no-cache"
+    proc = subprocess.run(run + ["-o", str(tmp_path / "b.exr")], env=env, capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 2 and "POCL_CACHE_DIR" in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
