@@ -426,6 +426,8 @@ case("legal-no-emitter-warning", scene(integrator='<integrator type="path_mis"/>
      ("no emitter", "path_mis"), code=0)
 case("legal-no-emitter-warning-direct", scene(integrator='<integrator type="direct_ems"/>'),
      ("no emitter",), code=0)
+case("legal-no-emitter-warning-mitsuba", mitsuba('<shape type="sphere"/>'),
+     ("no emitter", "'path' integrator", "<shape>"), code=0)  # it named the kernel 'path_mitsuba' and <mesh>
 case("legal-time-limit", scene(), (), code=0, argv=["--time-limit", "0.5", "--spp", "1"])
 case("legal-define", scene().replace('name="radius" value="1"', 'name="radius" value="$r"'), (), code=0,
      argv=["-D", "r=0.5"])
