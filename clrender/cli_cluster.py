@@ -122,9 +122,8 @@ def add_merge_parser(sub) -> None:
 
 
 def cmd_merge(args) -> int:
-    from .parts import merge_parts, read_part
-
     from .output import check_writable
+    from .parts import merge_parts, read_part
 
     out = Path(args.output)
     if out.suffix.lower() != ".exr":

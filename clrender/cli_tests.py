@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import sys
+from pathlib import Path
 
 
 def add_parsers(sub):
@@ -30,8 +31,6 @@ def cmd_test(args) -> int:
     from .testing.nori import Runner, results_json
 
     if args.json and args.json != "-":  # before the tests run, not after
-        from pathlib import Path
-
         from .output import check_writable
 
         check_writable(Path(args.json))
@@ -49,8 +48,6 @@ def cmd_test(args) -> int:
         if args.json == "-":
             print(text)
         else:
-            from pathlib import Path
-
             from .film import _atomic_write
 
             _atomic_write(Path(args.json), lambda tmp: tmp.write_text(text + "\n"))
@@ -59,13 +56,10 @@ def cmd_test(args) -> int:
 
 
 def cmd_warptest(args) -> int:
+    from .output import check_writable
     from .testing.kernels import WARPS
     from .testing.nori import write_histograms
     from .testing.warptest import run_warptest
-
-    from pathlib import Path
-
-    from .output import check_writable
 
     out = args.plot or f"warptest_{args.warp}.png"
     try:

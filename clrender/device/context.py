@@ -204,9 +204,7 @@ def choose_device(spec: str | int | None = None):
         for p, d in devices:
             if _is_only(d, cl.device_type.GPU) or _is_only(d, cl.device_type.ACCELERATOR):
                 return p, d
-        what = "; ".join(problems) if problems else "there is no CPU or GPU device"
-        if _pocl_cache_problem():
-            what += "; " + _pocl_cache_problem()
+        what = "; ".join(problems + [_pocl_cache_problem() or ""]).strip("; ") or "there is no CPU or GPU device"
         names = ", ".join(f"[{i}] {describe(p, d)}" for i, (p, d) in enumerate(devices))
         raise DeviceError(f"no OpenCL device to render on by default ({what}); available: {names}. Choose one "
                           f"with --device (a simulator such as Oclgrind only by name)")
