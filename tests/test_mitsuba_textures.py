@@ -142,3 +142,17 @@ def test_texture_errors(tmp_path, png):
     (tmp_path / "bad.png").write_bytes(b"not a png")
     with pytest.raises(SceneError, match="cannot read image"):
         bitmap(tmp_path / "bad.png")
+
+
+def test_16_bit_grey_png_is_read(tmp_path):
+    # It used to be refused ("only 8-bit ... images"); Mitsuba reads it, sRGB-decoded unless raw like 8-bit ones.
+    from PIL import Image
+
+    from clrender.textures.imagefile import read_image, srgb_to_linear
+
+    values = (np.arange(12).reshape(3, 4) * 5000).astype(np.uint16)
+    Image.fromarray(values).save(tmp_path / "g.png")
+    raw = read_image(tmp_path / "g.png", raw=True)
+    assert raw.shape == (3, 4, 3)
+    np.testing.assert_allclose(raw[..., 1], values / 65535.0, rtol=1e-6)
+    np.testing.assert_allclose(read_image(tmp_path / "g.png")[..., 0], srgb_to_linear(values / 65535.0), rtol=1e-5)

@@ -1,9 +1,10 @@
 """Reading the images that bitmap textures and environment maps name: OpenEXR (through the OpenEXR library),
-Radiance RGBE `.hdr` (read here: flat or new-style run-length scanlines) and 8-bit PNG/JPEG (through Pillow).
+Radiance RGBE `.hdr` (read here: flat or new-style run-length scanlines) and 8-bit PNG/JPEG and 16-bit grey
+PNG (through Pillow).
 
-`read_image(path)` returns (pixels as float32 H x W x 3, linear): EXR and HDR hold linear values already; 8-bit
+`read_image(path)` returns (pixels as float32 H x W x 3, linear): EXR and HDR hold linear values already; PNG and JPEG
 images hold sRGB-encoded values, which are decoded unless `raw` (Mitsuba's convention for `bitmap`: 8-bit images
-are sRGB unless `raw` is set). Grey images become three equal channels; an alpha channel is dropped.
+are sRGB unless `raw` is set; 16-bit PNGs as well). Grey images become three equal channels; an alpha channel is dropped.
 """
 from __future__ import annotations
 
@@ -67,9 +68,14 @@ def _read_8bit(path: Path, raw: bool) -> np.ndarray:
     from PIL import Image
 
     with Image.open(path) as im:
-        if im.mode not in ("L", "LA", "RGB", "RGBA", "P"):
-            raise ValueError(f"only 8-bit grey or RGB images are supported, this one is mode {im.mode}")
-        a = np.asarray(im.convert("RGB"), np.float64) / 255.0
+        if im.mode in ("I;16", "I;16L", "I;16B", "I") and path.suffix.lower() == ".png":
+            # a 16-bit grey PNG (Pillow reads 16-bit RGB ones as 8-bit RGB itself)
+            a = np.repeat(np.asarray(im, np.float64)[..., None] / 65535.0, 3, axis=-1)
+        elif im.mode not in ("L", "LA", "RGB", "RGBA", "P"):
+            raise ValueError(f"only 8-bit grey or RGB and 16-bit grey images are supported, this one is mode "
+                             f"{im.mode}")
+        else:
+            a = np.asarray(im.convert("RGB"), np.float64) / 255.0
     return (a if raw else srgb_to_linear(a)).astype(np.float32)
 
 
