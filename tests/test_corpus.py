@@ -48,7 +48,8 @@ def mitsuba(body):
     return ('<scene version="3.0.0">\n'
             '  <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,3" target="0,0,0" up="0,1,0"/>'
             '</transform>\n'
-            '    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>\n'
+            '    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>'
+            '</sensor>\n'
             f'  {body}\n</scene>\n')
 
 
@@ -358,8 +359,8 @@ case("image-png-decompression-bomb", {"s.xml": bitmap("t.png"), "t.png": png_hea
      ("s.xml:4:", "t.png", "cannot read image"))
 case("image-exr-corrupt", {"s.xml": bitmap("t.exr"), "t.exr": b"v/1\x01" + bytes(60)},
      ("s.xml:4:", "t.exr", "cannot read image"))
-case("image-hdr-lying-resolution", {"s.xml": bitmap("t.hdr"),
-                                    "t.hdr": b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1000000 +X 1000000\n" + bytes(8)},
+case("image-hdr-lying-resolution", {"s.xml": bitmap("t.hdr"), "t.hdr": b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n"
+                                                                      b"-Y 1000000 +X 1000000\n" + bytes(8)},
      ("s.xml:4:", "t.hdr", "1000000 x 1000000"))
 case("image-is-a-folder", {"s.xml": bitmap("sub"), "sub/x": ""}, ("s.xml:4:", "not a regular file"))
 case("image-missing", bitmap("nowhere.png"), ("s.xml:4:", "nowhere.png", "not found"))

@@ -102,8 +102,8 @@ def test_scene_samples_cover_the_image_without_a_filter(tmp_path, capsys):
 
 
 CHI2 = "<test type='chi2test'>\n  {prop}\n  <bsdf type='diffuse'/>\n</test>\n"
-TTEST = ("<test type='ttest'>\n  {prop}\n  <string name='angles' value='0'/>\n  <string name='references' value='{refs}'/>\n"
-         "  <bsdf type='diffuse'/>\n</test>\n")
+TTEST = ("<test type='ttest'>\n  {prop}\n  <string name='angles' value='0'/>\n"
+         "  <string name='references' value='{refs}'/>\n  <bsdf type='diffuse'/>\n</test>\n")
 
 
 @pytest.mark.parametrize("text,what", [

@@ -235,6 +235,13 @@ def choose_device(spec: str | int | None = None):
     raise DeviceError(f"no OpenCL device matches '{s}'; available: {names}")
 
 
+def is_simulator(device) -> bool:
+    """Reports itself as more than one kind of device, as the Oclgrind simulator does (CPU, GPU and accelerator)."""
+    cl = _cl()
+    kinds = int(device.type) & int(cl.device_type.CPU | cl.device_type.GPU | cl.device_type.ACCELERATOR)
+    return bin(kinds).count("1") > 1
+
+
 def _is_only(device, kind) -> bool:
     """The device is of `kind` and of no other kind: a simulator such as Oclgrind, which reports itself as
     CPU, GPU and accelerator at once, is neither `cpu` nor `gpu` (choose it by name)."""

@@ -4,7 +4,8 @@ PNG (through Pillow).
 
 `read_image(path)` returns (pixels as float32 H x W x 3, linear): EXR and HDR hold linear values already; PNG and JPEG
 images hold sRGB-encoded values, which are decoded unless `raw` (Mitsuba's convention for `bitmap`: 8-bit images
-are sRGB unless `raw` is set; 16-bit PNGs as well). Grey images become three equal channels; an alpha channel is dropped.
+are sRGB unless `raw` is set; 16-bit PNGs as well). Grey images become three equal channels; an alpha channel is
+dropped.
 """
 from __future__ import annotations
 
