@@ -351,6 +351,10 @@ case("ply-ascii-list-length-lies", {"s.xml": mesh("ply", "m.ply"),
 case("ply-ascii-extra-number", {"s.xml": mesh("ply", "m.ply"),
                                 "m.ply": ply("ascii", 3, 1, b"0 0 0\n1 0 0 7\n0 1 0\n3 0 1 2\n")},
      ("s.xml:7:", "m.ply:11", "record 1", "calls for 3"))
+case("ply-float-indices", {"s.xml": mesh("ply", "m.ply"),
+                           "m.ply": ply("ascii", 3, 1, b"0 0 0\n1 0 0\n0 1 0\n3 0 1 2.5\n").replace(
+                               b"list uchar int", b"list uchar float")},
+     ("s.xml:7:", "m.ply:8", "must be integers"))  # 2.5 was read as vertex 2
 case("ply-dev-zero", mesh("ply", "/dev/zero"), ("s.xml:7:", "device file"))
 
 # ---- images (bitmap textures, environment maps; Mitsuba scenes) ---------------------------------------------------

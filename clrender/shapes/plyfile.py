@@ -113,6 +113,10 @@ def _check_header(data: bytes, path: str) -> None:
             if not elements:
                 raise SceneError("PLY property before any element", here)
             if len(tok) == 5 and tok[1] == "list" and tok[2] in _PLY_TYPES and tok[3] in _PLY_TYPES:
+                if tok[4] in _INDEX_NAMES and _PLY_TYPES[tok[3]][0] == "f":
+                    # a fractional index would be truncated to another vertex without a word
+                    raise SceneError(f"PLY face index list '{tok[4]}' has type {tok[3]}; vertex indices must be "
+                                     "integers (e.g. int or uint)", here)
                 size = np.dtype(_PLY_TYPES[tok[2]]).itemsize  # an empty list is only its length
             elif len(tok) == 3 and tok[1] in _PLY_TYPES:
                 size = np.dtype(_PLY_TYPES[tok[1]]).itemsize
@@ -168,7 +172,7 @@ def _check_ascii_records(body: bytes, elements, lists, header_lines: int, path: 
                 props = f"{n_props} propert{'y' if n_props == 1 else 'ies'}"
                 want = want or f"{need} ({props}{', each list as long as its length says' if any(is_list) else ''})"
                 raise SceneError(f"PLY '{name}' record {k - at} holds {len(tok)} numbers where the header calls "
-                                 f"for {want}", SourceLocation(path, header_lines + 1 + k))
+                                 f"for {want}{_COUNTS_HINT}", SourceLocation(path, header_lines + 1 + k))
         at += count
 
 
@@ -203,12 +207,16 @@ def _read_with_trimesh(data: bytes):
     return vertex, lists
 
 
+#: a header whose vertex count is smaller than the data makes the reader take vertex data for faces
+_COUNTS_HINT = " (or the header's element counts do not match the data)"
+
+
 def _fan(polygons, here: SourceLocation) -> np.ndarray:
     arr = np.asarray(polygons) if not isinstance(polygons, list) else None
     if arr is not None and arr.dtype != object and arr.ndim == 2:
         k = arr.shape[1]
         if k < 3:
-            raise SceneError(f"PLY face has {k} vertices (expected at least 3)", here)
+            raise SceneError(f"PLY face has {k} vertices (expected at least 3){_COUNTS_HINT}", here)
         j = np.arange(1, k - 1)
         tri = np.stack([np.broadcast_to(arr[:, :1], (arr.shape[0], k - 2)), arr[:, j], arr[:, j + 1]],
                        axis=2)
@@ -217,7 +225,7 @@ def _fan(polygons, here: SourceLocation) -> np.ndarray:
     for poly in polygons:
         poly = np.asarray(poly, np.int64).reshape(-1)
         if poly.size < 3:
-            raise SceneError(f"PLY face has {poly.size} vertices (expected at least 3)", here)
+            raise SceneError(f"PLY face has {poly.size} vertices (expected at least 3){_COUNTS_HINT}", here)
         j = np.arange(1, poly.size - 1)
         out.append(np.stack([np.full(j.size, poly[0]), poly[j], poly[j + 1]], axis=1))
     return np.concatenate(out) if out else np.zeros((0, 3), np.int64)
