@@ -211,3 +211,19 @@ def test_renders_with_an_unwritable_home_and_names_an_unwritable_pocl_cache(tmp_
     proc = subprocess.run(run + ["-o", str(tmp_path / "b.exr")], env=env, capture_output=True, text=True,
                           timeout=600)
     assert proc.returncode == 2 and "POCL_CACHE_DIR" in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+
+
+def test_a_vanishing_sun_packs_without_numpy_warnings(tmp_path):
+    # A distantdisk of thetaA 1e-30 printed numpy's "overflow encountered in cast" (its pdf is inf in float32).
+    import warnings
+
+    from clrender.loader import load_scene
+    from clrender.pack import pack_scene
+
+    p = tmp_path / "s.xml"
+    p.write_text(SCENE.format(w=4, h=4).replace("</scene>", '<emitter type="distantdisk"><color name="radiance" '
+                                                            'value="1"/><float name="thetaA" value="1e-30"/>'
+                                                            '</emitter></scene>'))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        pack_scene(load_scene(p))
