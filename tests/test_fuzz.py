@@ -6,6 +6,7 @@ short; for a long run set CLRENDER_FUZZ_EXAMPLES (e.g. 20000) and give pytest `-
 """
 import contextlib
 import os
+import re
 import signal
 import struct
 
@@ -151,6 +152,44 @@ MITSUBA_TOKENS = TOKENS + ["shape", "sensor", "film", "hdrfilm", "rgb", "spectru
 @example(data=VALID_MITSUBA.replace('value="0.5"/><ref', 'value="1e39"/><ref').encode())  # was an out-of-memory
 def test_fuzz_mitsuba_scene_mutations(tmp_path, data):
     _load(data, tmp_path)
+
+
+# ---- hostile values in valid scenes: each attribute value replaced by an extreme one -------------------------------
+_VALUE = re.compile(r'(?:value|x|angle|origin|target|up)="([^"$]*)"')
+HOSTILE_VALUES = ["0", "-1", "1e30", "-1e30", "1e-30", "3e38", "1e39", "1e13", "1e20", "nan", "", "1,0", "0,0,0", "-0",
+                  "2147483648", "99999999999", "x"]
+VALUE_SITES = [(name, i) for name, text in (("nori", VALID_SCENE), ("mitsuba", VALID_MITSUBA))
+               for i in range(len(_VALUE.findall(text)))]
+
+
+def _with_value(name: str, i: int, value: str) -> str:
+    text = VALID_SCENE if name == "nori" else VALID_MITSUBA
+    a, b = list(_VALUE.finditer(text))[i].span(1)
+    return text[:a] + value + text[b:]
+
+
+@fuzz
+@given(site=st.sampled_from(VALUE_SITES), value=st.sampled_from(HOSTILE_VALUES))
+@example(site=("nori", 1), value="99999999999")  # maxDepth: was an OverflowError traceback while packing
+@example(site=("nori", 10), value="1e-30")        # the filter's radius: numpy warnings, then a black image
+@example(site=("mitsuba", 24), value="3e38")      # a point light's intensity: its power overflowed float32
+def test_fuzz_hostile_values_load_and_pack(tmp_path, site, value):
+    """Loaded and packed (tables and BVH), an extreme value is accepted or refused with a clrender error: never
+    another exception, never numpy's RuntimeWarnings on the user's terminal."""
+    import warnings
+
+    from clrender.loader import load_scene
+    from clrender.pack import pack_scene
+
+    (tmp_path / "ground.obj").write_text("v -5 -5 0\nv 5 -5 0\nv 5 5 0\nv -5 5 0\nf 1 2 3 4\n")
+    p = tmp_path / "s.xml"
+    p.write_text(_with_value(*site, value))
+    with warnings.catch_warnings(), no_hang():
+        warnings.simplefilter("error", RuntimeWarning)
+        try:
+            pack_scene(load_scene(p))
+        except SceneError as e:
+            assert str(p) in str(e) or "ground.obj" in str(e), str(e)
 
 
 # ---- OBJ --------------------------------------------------------------------------------------------------------
