@@ -17,6 +17,8 @@ def _defines(items):
         if "=" not in item:
             raise ClrenderError(f"-D expects name=value, got '{item}'")
         k, v = item.split("=", 1)
+        if not k.strip():
+            raise ClrenderError(f"-D expects name=value, got '{item}' (no name)")
         out[k.strip()] = v
     return out
 

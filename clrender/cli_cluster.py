@@ -34,6 +34,9 @@ def parse_sample_range(text: str) -> tuple[int, int]:
     if start < 0 or count < 1:
         raise ClrenderError(f"--sample-range expects START:COUNT with START >= 0 and COUNT >= 1 "
                             f"(e.g. 0:64), got '{text}'")
+    if start + count >= 2**32:  # samples are numbered with 32 bits (Renderer.render's bound)
+        raise ClrenderError(f"--sample-range {text}: START + COUNT must stay below 2^32 = 4294967296, "
+                            f"got {start + count}")
     return start, count
 
 
@@ -119,11 +122,17 @@ def add_merge_parser(sub) -> None:
 
 
 def cmd_merge(args) -> int:
+    from .output import check_writable
     from .parts import merge_parts, read_part
 
     out = Path(args.output)
     if out.suffix.lower() != ".exr":
         raise ClrenderError(f"-o {out}: the merged image is an EXR; name it *.exr (add --png for a PNG)")
+    for part in args.parts:  # the merged image is a plain EXR: writing it over a part would lose that part
+        if out.resolve() == Path(part).resolve():
+            raise ClrenderError(f"-o {out}: that is one of the parts being merged; name another file")
+    for path in [out] + ([out.with_suffix(".png")] if args.png else []):
+        check_writable(path, args.output)  # before the parts are read
     film = merge_parts([read_part(p) for p in args.parts], allow_missing=args.partial)
     film.write_exr(out)
     written = [str(out)]

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import sys
+from pathlib import Path
 
 
 def add_parsers(sub):
@@ -29,6 +30,10 @@ def add_parsers(sub):
 def cmd_test(args) -> int:
     from .testing.nori import Runner, results_json
 
+    if args.json and args.json != "-":  # before the tests run, not after
+        from .output import check_writable
+
+        check_writable(Path(args.json))
     runner = Runner(device=args.device, seed=args.seed, plots=not args.no_plots, nori_dialect=args.nori_dialect)
     results = []
     for f in args.files:
@@ -43,22 +48,27 @@ def cmd_test(args) -> int:
         if args.json == "-":
             print(text)
         else:
-            with open(args.json, "w") as fh:
-                fh.write(text + "\n")
+            from .film import _atomic_write
+
+            _atomic_write(Path(args.json), lambda tmp: tmp.write_text(text + "\n"))
     print(f"{n_ok} passed, {n_bad} failed")
     return 0 if n_bad == 0 else 1
 
 
 def cmd_warptest(args) -> int:
+    from .output import check_writable
+    from .testing.kernels import WARPS
     from .testing.nori import write_histograms
     from .testing.warptest import run_warptest
 
+    out = args.plot or f"warptest_{args.warp}.png"
     try:
+        if args.warp in WARPS:  # an unknown warp is reported as such, not as an unwritable plot
+            check_writable(Path(out))  # before the samples are drawn, not after
         result, obs, exp, p = run_warptest(args.warp, args.param, args.samples, device=args.device, seed=args.seed)
     except ValueError as exc:
         print(f"clrender: error: {exc}", file=sys.stderr)
         return 2
-    out = args.plot or f"warptest_{args.warp}.png"
     write_histograms(out, obs, exp, f"{args.warp} {p:g}: {result.message}")
     print(f"{'PASS' if result.passed else 'FAIL'}  warp {args.warp} ({p:g}): {result.message}; histograms: {out}")
     return 0 if result.passed else 1

@@ -24,6 +24,18 @@ class Film:
     dropped: np.ndarray       # (H, W) samples dropped for NaN/Inf
     metadata: dict = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        # Finite samples of absurd size (a reflectance of 3e38) overflow a pixel's float32 sums on the device, which
+        # would write inf to the image: drop that pixel's samples, as the kernel drops NaN/Inf ones, and count them.
+        with np.errstate(invalid="ignore"):
+            bad = ~(np.isfinite(self.sum_wl).all(axis=-1) & np.isfinite(self.sum_w))
+        if bad.any():
+            self.dropped = self.dropped + np.where(bad, self.count, 0).astype(np.asarray(self.dropped).dtype)
+            for a in (self.sum_wl, self.sum_wl2, self.sum_w, self.count):
+                a[bad] = 0
+            if "dropped_samples" in self.metadata:
+                self.metadata["dropped_samples"] = int(self.dropped.sum())
+
     @classmethod
     def from_accumulators(cls, width, height, acc0, acc1, bad, metadata=None):
         n = width * height
@@ -38,7 +50,9 @@ class Film:
         w = self.sum_w[..., None]
         with np.errstate(invalid="ignore", divide="ignore"):
             img = np.where(w != 0, self.sum_wl / np.where(w != 0, w, 1), 0.0)
-        return img.astype(np.float32)
+        # a sum near float32's limit over a filter weight below 1 must not become inf in the float32 image
+        big = float(np.finfo(np.float32).max)
+        return np.clip(img, -big, big).astype(np.float32)
 
     def variance(self) -> np.ndarray:
         """Variance of each pixel's estimate (H, W, 3), treating sum(wL)/n as the mean of n samples
@@ -106,8 +120,11 @@ def _umask() -> int:
 
 def _atomic_write(path: Path, write) -> Path:
     """Write through a temporary file in the same folder, then rename: readers never see half a file."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=str(path.parent))
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=str(path.parent))
+    except OSError as e:  # name the user's file, not our temporary one
+        raise OSError(e.errno, f"cannot write '{path}': {e.strerror or e}") from None
     try:
         # mkstemp makes 0600 files; the image gets the permissions any tool would give it (0644 under umask 022)
         os.fchmod(fd, 0o666 & ~_umask())

@@ -213,7 +213,13 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     sph = ctx.array("spheres")[:ctx.size("spheres")]
 
     t_bvh = time.perf_counter()
-    lo, hi = primitive_bounds(tris[:, 0], tris[:, 1], tris[:, 2], sph)
+    with np.errstate(over="ignore", invalid="ignore"):
+        lo, hi = primitive_bounds(tris[:, 0], tris[:, 1], tris[:, 2], sph)
+    if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+        # The shapes check their own extent; this guards the build (an infinite box makes its binning allocate
+        # without bound) against any that does not.
+        raise SceneError("a shape reaches beyond the largest single-precision number (about 3.4e38): the "
+                         "scene's bounding boxes are not finite")
     bvh = build_bvh(lo, hi, **{**BUILD_OPTIONS, **BUILD_OPTIONS_BY_WIDTH.get(bvh_width, {}), **(bvh_options or {})})
     leaves = bvh_leaves(bvh)
     # A hit names its triangle by leaf reference (where its vertices are in the primitive table, the only copy

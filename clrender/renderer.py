@@ -271,6 +271,7 @@ class Renderer:
             meta.update(rays_camera=stats.rays[0], rays_closest=stats.rays[1], rays_shadow=stats.rays[2],
                         rays_total=stats.rays_total)
         film = Film.from_accumulators(self.width, self.height, acc0, acc1, bad, meta)
+        stats.dropped = int(film.dropped.sum())  # with the samples of pixels whose sums overflowed
         film.stats = stats
         return film
 

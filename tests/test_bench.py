@@ -157,6 +157,29 @@ def test_skipped_device_is_reported_not_a_crash(monkeypatch):
     assert ok["integrator"] == "normals" and ok["rays"]["per_sample"] == 1.0
 
 
+def test_devices_all_skips_a_simulator_unless_named(monkeypatch):
+    # `--devices all` used to run the default set on the Oclgrind simulator too (installed by the test extra):
+    # hours of a simulated CPU. It is listed as skipped; named, it is benchmarked.
+    from types import SimpleNamespace
+
+    import pyopencl as cl
+
+    from clrender.device import context
+
+    t = cl.device_type
+    sim = SimpleNamespace(type=t.CPU | t.GPU | t.ACCELERATOR, name="Oclgrind Simulator", int_ptr=1, version="1.2",
+                          vendor="v", opencl_c_version="1.2", driver_version="21", max_compute_units=1,
+                          global_mem_size=2**27)
+    cpu = SimpleNamespace(**{**vars(sim), "type": t.CPU, "name": "pthread CPU", "int_ptr": 2})
+    plat = SimpleNamespace(name="P", version="OpenCL 3.0")
+    monkeypatch.setattr(context, "list_devices", lambda: [(plat, sim), (plat, cpu)])
+    monkeypatch.setattr(context, "build_check", lambda p, d: None)
+    every = {d["name"]: d for d in bench.resolve_devices("all")}
+    assert not every["Oclgrind Simulator"]["ok"] and "simulator" in every["Oclgrind Simulator"]["reason"]
+    assert every["pthread CPU"]["ok"]
+    assert bench.resolve_devices("oclgrind")[0]["ok"]
+
+
 def test_plot_without_matplotlib_names_the_extra(monkeypatch, tmp_path):
     monkeypatch.setitem(sys.modules, "matplotlib", None)
     with pytest.raises(ClrenderError, match=r'pip install "clrender\[plot\]"'):

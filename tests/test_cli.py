@@ -171,3 +171,13 @@ def test_bad_dialect_in_the_environment_is_a_clear_error(tmp_path, monkeypatch, 
     assert main(["render", str(write(tmp_path, ASYM)), "-o", str(tmp_path / "x.exr"), "-q"]) == 2
     err = capsys.readouterr().err
     assert "CLRENDER_NORI_DIALECT" in err and "upstream" in err and "Traceback" not in err
+
+
+def test_sample_range_beyond_32_bits_is_an_option_error(tmp_path, capsys):
+    # It used to reach the renderer and leave as a ValueError traceback.
+    (tmp_path / "quad.obj").write_text(QUAD)
+    p = write(tmp_path, GOOD.format(w=8, h=8, mesh="quad.obj"))
+    assert main(["render", str(p), "-q", "--sample-range", "4294967295:4", "-o", str(tmp_path / "o.exr")]) == 2
+    err = capsys.readouterr().err
+    assert "--sample-range" in err and "2^32" in err, err
+    assert not list(tmp_path.glob("*.exr"))

@@ -6,6 +6,7 @@ short; for a long run set CLRENDER_FUZZ_EXAMPLES (e.g. 20000) and give pytest `-
 """
 import contextlib
 import os
+import re
 import signal
 import struct
 
@@ -116,6 +117,79 @@ def test_fuzz_scene_from_tokens(tmp_path, parts):
 @given(data=st.binary(max_size=300))
 def test_fuzz_scene_random_bytes(tmp_path, data):
     _load(data, tmp_path)
+
+
+VALID_MITSUBA = """<?xml version="1.0"?>
+<scene version="3.0.0">
+  <default name="spp" value="2"/>
+  <integrator type="path"><integer name="max_depth" value="4"/></integrator>
+  <sensor type="perspective">
+    <float name="fov" value="40"/><string name="fov_axis" value="x"/>
+    <transform name="to_world"><lookat origin="0,1,4" target="0,0,0" up="0,1,0"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="6"/>
+      <rfilter type="tent"><float name="radius" value="1"/></rfilter></film>
+  </sensor>
+  <bsdf type="roughconductor" id="metal"><string name="material" value="Au"/><float name="alpha" value="0.2"/></bsdf>
+  <shape type="sphere"><point name="center" value="0, 0, 0"/><float name="radius" value="0.5"/><ref id="metal"/></shape>
+  <shape type="rectangle"><transform name="to_world"><scale value="4"/><rotate x="1" angle="-90"/></transform>
+    <bsdf type="diffuse"><texture type="checkerboard" name="reflectance"><rgb name="color0" value="0.2"/>
+      <spectrum name="color1" value="400:0.5, 700:0.8"/></texture></bsdf></shape>
+  <shape type="obj"><string name="filename" value="ground.obj"/><boolean name="face_normals" value="true"/>
+    <bsdf type="dielectric"><string name="int_ior" value="bk7"/></bsdf>
+    <emitter type="area"><rgb name="radiance" value="4, 4, 4"/></emitter></shape>
+  <emitter type="point"><point name="position" value="0,3,0"/><rgb name="intensity" value="10"/></emitter>
+  <emitter type="constant"><rgb name="radiance" value="0.1"/></emitter>
+</scene>
+"""
+MITSUBA_TOKENS = TOKENS + ["shape", "sensor", "film", "hdrfilm", "rgb", "spectrum", "ref", "id", "include",
+                           "to_world", "sample_count", "version", '"3.0.0"', "roughconductor", "alpha", "texture",
+                           "checkerboard", "x", "angle", "400:0.5", "1e39", "3e38", "-1e13", "1e20", "rectangle"]
+
+
+@fuzz
+@given(data=mutated(VALID_MITSUBA.encode(), MITSUBA_TOKENS))
+@example(data=VALID_MITSUBA.replace('value="0.5"/><ref', 'value="1e39"/><ref').encode())  # was an out-of-memory
+def test_fuzz_mitsuba_scene_mutations(tmp_path, data):
+    _load(data, tmp_path)
+
+
+# ---- hostile values in valid scenes: each attribute value replaced by an extreme one -------------------------------
+_VALUE = re.compile(r'(?:value|x|angle|origin|target|up)="([^"$]*)"')
+HOSTILE_VALUES = ["0", "-1", "1e30", "-1e30", "1e-30", "3e38", "1e39", "1e13", "1e20", "nan", "", "1,0", "0,0,0", "-0",
+                  "2147483648", "99999999999", "x"]
+VALUE_SITES = [(name, i) for name, text in (("nori", VALID_SCENE), ("mitsuba", VALID_MITSUBA))
+               for i in range(len(_VALUE.findall(text)))]
+
+
+def _with_value(name: str, i: int, value: str) -> str:
+    text = VALID_SCENE if name == "nori" else VALID_MITSUBA
+    a, b = list(_VALUE.finditer(text))[i].span(1)
+    return text[:a] + value + text[b:]
+
+
+@fuzz
+@given(site=st.sampled_from(VALUE_SITES), value=st.sampled_from(HOSTILE_VALUES))
+@example(site=("nori", 1), value="99999999999")  # maxDepth: was an OverflowError traceback while packing
+@example(site=("nori", 10), value="1e-30")        # the filter's radius: numpy warnings, then a black image
+@example(site=("mitsuba", 24), value="3e38")      # a point light's intensity: its power overflowed float32
+def test_fuzz_hostile_values_load_and_pack(tmp_path, site, value):
+    """Loaded and packed (tables and BVH), an extreme value is accepted or refused with a clrender error: never
+    another exception, never numpy's RuntimeWarnings on the user's terminal."""
+    import warnings
+
+    from clrender.loader import load_scene
+    from clrender.pack import pack_scene
+
+    (tmp_path / "ground.obj").write_text("v -5 -5 0\nv 5 -5 0\nv 5 5 0\nv -5 5 0\nf 1 2 3 4\n")
+    p = tmp_path / "s.xml"
+    p.write_text(_with_value(*site, value))
+    with warnings.catch_warnings(), no_hang():
+        warnings.simplefilter("error", RuntimeWarning)
+        try:
+            pack_scene(load_scene(p))
+        except SceneError as e:
+            assert str(p) in str(e) or "ground.obj" in str(e), str(e)
 
 
 # ---- OBJ --------------------------------------------------------------------------------------------------------

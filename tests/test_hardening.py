@@ -5,6 +5,7 @@ import os
 import time
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from clrender.cli import main
@@ -113,6 +114,28 @@ def test_cpu_and_gpu_mean_one_kind_of_device(monkeypatch):
     assert context.choose_device("oclgrind")[1] is sim
 
 
+def test_the_default_device_is_never_a_simulator(monkeypatch):
+    """When no CPU device builds kernels (a PoCL that cannot write its cache, say), the default used to be the first
+    device listed: the Oclgrind simulator, chosen without a word. Now a real GPU, else an error naming why."""
+    import pyopencl as cl
+
+    from clrender.device import context
+
+    t = cl.device_type
+    sim = SimpleNamespace(type=t.CPU | t.GPU | t.ACCELERATOR | t.DEFAULT, name="Oclgrind Simulator", int_ptr=1)
+    cpu = SimpleNamespace(type=t.CPU, name="pthread CPU", int_ptr=2)
+    gpu = SimpleNamespace(type=t.GPU, name="Some GPU", int_ptr=3)
+    oclgrind = SimpleNamespace(name="Oclgrind", version="OpenCL 1.2")
+    pocl = SimpleNamespace(name="Portable Computing Language", version="OpenCL 3.0 PoCL 3.0")
+    monkeypatch.setattr(context, "build_check", lambda p, d: "cannot write its kernel cache" if d is cpu else None)
+    monkeypatch.setattr(context, "list_devices", lambda: [(oclgrind, sim), (pocl, cpu)])
+    with pytest.raises(context.DeviceError, match="cannot write its kernel cache") as e:
+        context.choose_device(None)
+    assert "--device" in str(e.value)
+    monkeypatch.setattr(context, "list_devices", lambda: [(oclgrind, sim), (pocl, cpu), (oclgrind, gpu)])
+    assert context.choose_device(None)[1] is gpu
+
+
 def test_a_successful_build_says_nothing_unless_asked(ctx, monkeypatch, capfd):
     """A build log of a successful build (NVIDIA's driver writes one for our kernels) is not shown on every
     render as pyopencl's CompilerWarning or the compiler's stderr; PYOPENCL_COMPILER_OUTPUT=1 shows both."""
@@ -135,3 +158,72 @@ def test_a_successful_build_says_nothing_unless_asked(ctx, monkeypatch, capfd):
     monkeypatch.setenv("PYOPENCL_COMPILER_OUTPUT", "1")
     loud, err = build("loud")
     assert loud or "clrender test warning loud" in err
+
+
+def test_overflowing_pixel_sums_never_reach_the_image(tmp_path, capsys):
+    """Finite samples of absurd size (an albedo of 3e38) overflow a pixel's float32 sums on the device; those
+    pixels used to be written as inf. Their samples are dropped and counted like NaN/Inf ones."""
+    from clrender.film import read_exr
+
+    p = tmp_path / "s.xml"
+    p.write_text(SCENE.format(w=16, h=16).replace('type="normals"', 'type="path_mis"').replace(
+        '<float name="radius" value="1"/>', '<float name="radius" value="1"/><bsdf type="diffuse"><color '
+        'name="albedo" value="3e38"/></bsdf>').replace(
+        "</scene>", '<emitter type="point"><point name="position" value="0,2,3"/><color name="power" value="50"/>'
+                    '</emitter></scene>'))
+    assert main(["render", str(p), "-q", "--spp", "8", "-o", str(tmp_path / "o.exr")]) == 0
+    img, header = read_exr(tmp_path / "o.exr")
+    assert np.isfinite(img).all()
+    assert int(header["clrender.dropped_samples"]) > 0
+    assert img.max() > 1e30  # the pixels that did not overflow keep their (huge) values
+    assert "NaN/Inf samples dropped" in capsys.readouterr().err
+
+
+def test_film_drops_the_samples_of_overflowed_pixels():
+    from clrender.film import Film
+
+    ones = np.ones((1, 2))
+    film = Film(2, 1, np.array([[[1.0, 2, 3], [np.inf, 0, 0]]]), ones.copy(), ones.copy()[..., None] * [1, 1, 1],
+                np.array([[4.0, 5.0]]), np.zeros((1, 2), np.int64), {"dropped_samples": 0})
+    assert np.isfinite(film.image).all() and film.image[0, 1].tolist() == [0, 0, 0]
+    assert film.dropped.tolist() == [[0, 5]] and film.metadata["dropped_samples"] == 5
+    assert film.image[0, 0].tolist() == [1, 2, 3]
+
+
+def test_renders_with_an_unwritable_home_and_names_an_unwritable_pocl_cache(tmp_path):
+    """A container run as another user often has a home it cannot write: PoCL then failed to load (no cache) and
+    pyopencl failed on its first launch (its own caches). Now the caches go to the temporary folder; a
+    POCL_CACHE_DIR the user set that cannot be written is named in the error."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    p = _scene(tmp_path)
+    root = Path(__file__).resolve().parents[1]
+    env = {k: v for k, v in os.environ.items() if k not in ("POCL_CACHE_DIR", "XDG_CACHE_HOME")}
+    env.update(HOME="/proc/clrender-no-home", PYTHONPATH=str(root))
+    run = [sys.executable, "-m", "clrender.cli", "render", str(p), "-q", "--spp", "1"]
+    proc = subprocess.run(run + ["-o", str(tmp_path / "a.exr")], env=env, capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    assert "Portable Computing Language" in proc.stderr and "Traceback" not in proc.stderr
+    env["POCL_CACHE_DIR"] = "/proc/clrender-no-cache"
+    proc = subprocess.run(run + ["-o", str(tmp_path / "b.exr")], env=env, capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 2 and "POCL_CACHE_DIR" in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+
+
+def test_a_vanishing_sun_packs_without_numpy_warnings(tmp_path):
+    # A distantdisk of thetaA 1e-30 printed numpy's "overflow encountered in cast" (its pdf is inf in float32).
+    import warnings
+
+    from clrender.loader import load_scene
+    from clrender.pack import pack_scene
+
+    p = tmp_path / "s.xml"
+    p.write_text(SCENE.format(w=4, h=4).replace("</scene>", '<emitter type="distantdisk"><color name="radiance" '
+                                                            'value="1"/><float name="thetaA" value="1e-30"/>'
+                                                            '</emitter></scene>'))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        pack_scene(load_scene(p))

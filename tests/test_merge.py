@@ -129,3 +129,19 @@ def test_bad_farm_arguments_are_clear_errors(farm, tmp_path, capsys, args, messa
 def test_merge_of_a_missing_file_is_a_clear_error(tmp_path, capsys):
     assert main(["merge", str(tmp_path / "nope.exr"), "-o", str(tmp_path / "m.exr")]) == 2
     assert "nope.exr" in capsys.readouterr().err
+
+
+def test_merge_refuses_to_write_over_one_of_its_parts(farm, capsys):
+    # It used to write the merged plain image over part 0, losing that part's accumulators.
+    d, _, _, parts = farm
+    before = parts[0].read_bytes()
+    assert main(["merge", *map(str, parts), "-o", str(parts[0])]) == 2
+    assert "one of the parts" in capsys.readouterr().err
+    assert parts[0].read_bytes() == before
+
+
+def test_merge_names_an_unwritable_output_before_reading_the_parts(farm, capsys):
+    _, _, _, parts = farm
+    assert main(["merge", *map(str, parts), "-o", "/proc/clrender-merged.exr"]) == 2
+    err = capsys.readouterr().err
+    assert "'/proc/clrender-merged.exr'" in err and "/proc/.clrender" not in err, err  # not our temporary file

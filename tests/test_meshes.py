@@ -120,6 +120,14 @@ def test_comments_groups_and_unknown_statements_ignored(tmp_path):
     np.testing.assert_array_equal(m.faces, [[0, 1, 2]])
 
 
+def test_utf8_byte_order_mark_keeps_the_first_vertex(tmp_path):
+    # Windows editors start a file with a BOM; it used to hide the first 'v', so 'f 1 2 3' took other vertices.
+    p = tmp_path / "m.obj"
+    p.write_bytes(b"\xef\xbb\xbf" + (QUAD + "f 1 2 3\n").encode())
+    m = load_obj(p)
+    np.testing.assert_array_equal(m.positions, [[0, 0, 0], [1, 0, 0], [1, 1, 0]])
+
+
 def test_tabs_crlf_and_extra_vertex_numbers(tmp_path):
     text = "v\t0 0 0 1 0 0\r\nv 1 0 0 1 0 0\r\nv 0 1 0 1 0 0\r\n  f 1 2 3\r\n"
     m = load_both(write(tmp_path, text))

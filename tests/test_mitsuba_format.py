@@ -390,6 +390,37 @@ def test_serialized_errors_are_located(tmp_path):
         assert re.search(message, str(e.value)), str(e.value)
 
 
+def test_serialized_zlib_bomb_is_refused_from_its_counts(tmp_path, monkeypatch):
+    """A small file whose stream would inflate to gigabytes: refused before it is inflated (the whole stream used
+    to be inflated at once, exhausting the memory)."""
+    import clrender.shapes.serializedfile as S
+
+    head = struct.pack("<I", S.SINGLE) + b"bomb\0" + struct.pack("<QQ", 2**33, 2**33)
+    comp = zlib.compressobj(9)
+    stream = comp.compress(head) + comp.compress(bytes(1 << 24)) + comp.flush()  # 16 MiB of zeros, ~16 KiB
+    (tmp_path / "bomb.serialized").write_bytes(struct.pack("<HH", S.MAGIC, 4) + stream)
+    inflated = []
+    real = zlib.decompressobj
+    monkeypatch.setattr(S.zlib, "decompressobj", lambda: _Counting(real(), inflated))
+    with pytest.raises(SceneError, match="claims 8589934592 vertices"):
+        S.load_serialized(tmp_path / "bomb.serialized")
+    assert sum(inflated) <= 1 << 16
+
+
+class _Counting:
+    def __init__(self, d, sizes):
+        self.d, self.sizes = d, sizes
+
+    def decompress(self, data, max_length=0):
+        out = self.d.decompress(data, max_length)
+        self.sizes.append(len(out))
+        return out
+
+    @property
+    def unconsumed_tail(self):
+        return self.d.unconsumed_tail
+
+
 def test_crop_window_must_fit():
     err(f'{HEAD}<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="10"/>'
         f'\n<integer name="crop_width" value="11"/></film></sensor></scene>', 2, None, "does not fit")

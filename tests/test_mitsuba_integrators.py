@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import clrender
+import clrender.plugins  # noqa: F401  (registers the plugins: a test run alone must not depend on others)
 from clrender.errors import SceneError
 from clrender.scene.registry import instantiate
 from clrender.testing.stats import compare_mean_to_value, compare_to_value, mean_and_error

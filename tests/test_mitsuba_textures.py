@@ -256,8 +256,8 @@ def test_blend_of_a_mirror_and_diffuse_in_a_furnace(tmp_path):
     import clrender
     from clrender.testing.stats import compare_mean_to_value
 
-    bsdf = (f'<bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="conductor"/>'
-            f'<bsdf type="diffuse"><rgb name="reflectance" value="0.8"/></bsdf></bsdf>')
+    bsdf = ('<bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="conductor"/>'
+            '<bsdf type="diffuse"><rgb name="reflectance" value="0.8"/></bsdf></bsdf>')
     (tmp_path / "s.xml").write_text(FURNACE.format(bsdf=bsdf))
     film = clrender.render(clrender.load_scene(tmp_path / "s.xml"), spp=256, seed=4)
     res = compare_mean_to_value(film, 0.9)
@@ -329,3 +329,18 @@ def test_16_bit_pngs_match_mitsuba(tmp_path):
                 want.append(np.array(theirs.eval(si)))
             np.testing.assert_allclose(bitmap(tmp_path / name, raw=raw).eval(uv), want, atol=1e-6,
                                        err_msg=f"{name} raw={raw}")
+
+
+def test_16_bit_grey_png_is_read(tmp_path):
+    # It used to be refused ("only 8-bit ... images"); Mitsuba reads it, sRGB-decoded unless raw like 8-bit ones,
+    # and keeps the values as half floats (hence the tolerance).
+    from PIL import Image
+
+    from clrender.textures.imagefile import read_image, srgb_to_linear
+
+    values = (np.arange(12).reshape(3, 4) * 5000).astype(np.uint16)
+    Image.fromarray(values).save(tmp_path / "g.png")
+    raw = read_image(tmp_path / "g.png", raw=True)
+    assert raw.shape == (3, 4, 3)
+    np.testing.assert_allclose(raw[..., 1], values / 65535.0, rtol=1e-3)
+    np.testing.assert_allclose(read_image(tmp_path / "g.png")[..., 0], srgb_to_linear(values / 65535.0), rtol=1e-3)

@@ -99,3 +99,47 @@ def test_scene_samples_cover_the_image_without_a_filter(tmp_path, capsys):
 
     scene = create(parse_file(str(p)).children[0])
     assert clrender.render(scene, spp=4096).image.mean() > 0.01
+
+
+CHI2 = "<test type='chi2test'>\n  {prop}\n  <bsdf type='diffuse'/>\n</test>\n"
+TTEST = ("<test type='ttest'>\n  {prop}\n  <string name='angles' value='0'/>\n"
+         "  <string name='references' value='{refs}'/>\n  <bsdf type='diffuse'/>\n</test>\n")
+
+
+@pytest.mark.parametrize("text,what", [
+    # each used to end in a traceback (a complex p-value, a reshape, a division by zero) or to pass vacuously
+    (CHI2.format(prop="<float name='significanceLevel' value='2'/>"), "significanceLevel"),
+    (CHI2.format(prop="<integer name='resolution' value='-3'/>"), "resolution"),
+    (CHI2.format(prop="<integer name='sampleCount' value='-5'/>"), "sampleCount"),
+    (CHI2.format(prop="<integer name='testCount' value='0'/>"), "testCount"),
+    (TTEST.format(prop="<integer name='sampleCount' value='0'/>", refs="0.5"), "sampleCount"),
+    (TTEST.format(prop="", refs="nan"), ":4:3: 'references'"),
+])
+def test_bad_test_file_properties_are_located_errors(tmp_path, capsys, text, what):
+    p = tmp_path / "t.xml"
+    p.write_text(text)
+    assert main(["test", str(p), "--no-plots"]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "t.xml:" in err and what in err, err
+    assert "t.xml:2:" in err or what.startswith(":4:"), err
+
+
+@pytest.mark.parametrize("args,what", [
+    (["cone", "nan"], "half-angle"), (["cone", "-10"], "half-angle"), (["beckmann", "0"], "alpha"),
+    (["square", "--samples", "-5"], "--samples"), (["square", "--samples", "0"], "--samples"),
+    (["square", "3"], "no parameter"),
+])
+def test_warptest_refuses_bad_parameters(tmp_path, capsys, args, what):
+    # these used to run and FAIL (a NaN cone), crash inside numpy (negative samples) or pass vacuously (0 samples)
+    assert main(["warptest", *args, "--plot", str(tmp_path / "w.png")]) == 2
+    err = capsys.readouterr().err
+    assert what in err, err
+    assert not (tmp_path / "w.png").exists()
+
+
+def test_unwritable_json_fails_before_the_tests_run(tmp_path, capsys):
+    p = tmp_path / "t.xml"
+    p.write_text(CHI2.format(prop="<integer name='testCount' value='1'/>"))
+    assert main(["test", str(p), "--json", "/proc/clrender-x.json"]) == 2
+    out = capsys.readouterr()
+    assert "/proc/clrender-x.json" in out.err and "PASS" not in out.out  # it used to test first, then fail

@@ -55,6 +55,10 @@ class PerspectiveCamera:
         m = self.to_world.matrix
         if not np.all(np.isfinite(m)):
             raise SceneError("camera toWorld has NaN or infinite entries", props.location("toWorld"))
+        if np.any(m[3] != [0, 0, 0, 1]):
+            # the camera row keeps the upper 3 x 4 part: a projective row would be dropped without a word
+            raise SceneError(f"camera toWorld must be affine (last matrix row 0 0 0 1), got {m[3].tolist()}",
+                             props.location("toWorld"))
         if np.linalg.norm(m[:3, 2]) < 1e-12:
             raise SceneError("camera toWorld maps the viewing direction (+z) to zero", props.location("toWorld"))
         self.mirror_x = mirrors_camera_x(spec.dialect) if spec is not None else True
@@ -171,6 +175,9 @@ class MitsubaPerspectiveCamera(PerspectiveCamera):
         m = self.to_world.matrix
         if not np.all(np.isfinite(m)) or np.linalg.norm(m[:3, 2]) < 1e-12:
             raise SceneError("sensor to_world is not finite or maps the viewing direction (+z) to zero",
+                             props.location("to_world"))
+        if np.any(m[3] != [0, 0, 0, 1]):
+            raise SceneError(f"sensor to_world must be affine (last matrix row 0 0 0 1), got {m[3].tolist()}",
                              props.location("to_world"))
         # Mitsuba refuses a scaled or sheared camera (its columns must be orthonormal within 1e-3; mirrors are
         # fine); read as written it would change the field of view and the clip distances.

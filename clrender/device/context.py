@@ -51,10 +51,46 @@ def _host_cpu_override() -> str | None:
     return None
 
 
+def _default_pocl_cache() -> str:
+    """~/.cache/clrender/pocl, or a folder in the temporary directory where the home is not writable (a container
+    run as another user): PoCL without a writable cache does not load at all, and pyopencl, which keeps its own
+    caches under $XDG_CACHE_HOME (default ~/.cache), fails on its first kernel launch; it is pointed there too."""
+    home = os.path.join(os.path.expanduser("~"), ".cache", "clrender", "pocl")
+    try:
+        os.makedirs(home, exist_ok=True)
+        if os.access(home, os.W_OK | os.X_OK):
+            return home
+    except OSError:
+        pass
+    import tempfile
+
+    root = os.path.join(tempfile.gettempdir(), f"clrender-cache-{os.getuid()}")
+    os.environ.setdefault("XDG_CACHE_HOME", root)
+    return os.path.join(root, "clrender", "pocl")
+
+
+def _pocl_cache_problem() -> str | None:
+    """Why PoCL may have failed to load: its cache folder cannot be written."""
+    d = os.environ.get("POCL_CACHE_DIR")
+    if not d:
+        return None
+    import tempfile
+
+    try:  # what PoCL does: create the folder and write in it
+        os.makedirs(d, exist_ok=True)
+        fd, probe = tempfile.mkstemp(dir=d)
+        os.close(fd)
+        os.unlink(probe)
+        return None
+    except OSError as e:
+        return f"PoCL needs a writable POCL_CACHE_DIR, and '{d}' is not ({e.strerror or e})"
+
+
 def _cl():
     # Importing pyopencl lazily keeps `clrender --help` fast and lets us word a missing driver clearly.
     # PoCL reads its environment when it initialises, so this must happen before the first platform query.
-    os.environ.setdefault("POCL_CACHE_DIR", os.path.join(os.path.expanduser("~"), ".cache", "clrender", "pocl"))
+    if "POCL_CACHE_DIR" not in os.environ:
+        os.environ["POCL_CACHE_DIR"] = _default_pocl_cache()
     if "POCL_LLVM_CPU_NAME" not in os.environ:
         cpu = _host_cpu_override()
         if cpu:
@@ -142,7 +178,9 @@ def choose_device(spec: str | int | None = None):
     cl = _cl()
     devices = list_devices()
     if not devices:
-        raise DeviceError("no OpenCL device found; install pocl-binary-distribution for a CPU device")
+        hint = _pocl_cache_problem()
+        raise DeviceError("no OpenCL device found; " + (hint if hint else
+                                                        "install pocl-binary-distribution for a CPU device"))
     if spec is None or spec == "":
         spec = os.environ.get("CLRENDER_DEVICE", "")
     if spec is None or spec == "":
@@ -161,7 +199,15 @@ def choose_device(spec: str | int | None = None):
         if any("unknown target cpu" in w.lower() for w in problems):
             raise DeviceError("no CPU OpenCL device can compile kernels here (" + "; ".join(problems) + "). "
                               + _unknown_cpu_hint())
-        return devices[0]
+        # No CPU device builds: a real GPU or accelerator, never a simulator (Oclgrind reports itself as every
+        # kind, and would otherwise be chosen silently, rendering a thousand times slower)
+        for p, d in devices:
+            if _is_only(d, cl.device_type.GPU) or _is_only(d, cl.device_type.ACCELERATOR):
+                return p, d
+        what = "; ".join(problems + [_pocl_cache_problem() or ""]).strip("; ") or "there is no CPU or GPU device"
+        names = ", ".join(f"[{i}] {describe(p, d)}" for i, (p, d) in enumerate(devices))
+        raise DeviceError(f"no OpenCL device to render on by default ({what}); available: {names}. Choose one "
+                          f"with --device (a simulator such as Oclgrind only by name)")
     s = str(spec).strip()
     if s.isdigit():
         i = int(s)
@@ -187,6 +233,13 @@ def choose_device(spec: str | int | None = None):
             return p, d
     names = ", ".join(f"[{i}] {describe(p, d)}" for i, (p, d) in enumerate(devices))
     raise DeviceError(f"no OpenCL device matches '{s}'; available: {names}")
+
+
+def is_simulator(device) -> bool:
+    """Reports itself as more than one kind of device, as the Oclgrind simulator does (CPU, GPU and accelerator)."""
+    cl = _cl()
+    kinds = int(device.type) & int(cl.device_type.CPU | cl.device_type.GPU | cl.device_type.ACCELERATOR)
+    return bin(kinds).count("1") > 1
 
 
 def _is_only(device, kind) -> bool:

@@ -67,4 +67,5 @@ class DistantDiskEmitter(Emitter):
         p["radiance"][:3] = self.radiance
         for k in range(3):
             p["frame"][k][:3] = self.frame[k]
-        p["cos_max"], p["one_minus_cos"], p["pdf"] = cos_a, one_minus_cos, 1.0 / (2.0 * np.pi * one_minus_cos)
+        with np.errstate(over="ignore"):  # a cone of thetaA 1e-30: pdf inf in float32, which the kernel handles
+            p["cos_max"], p["one_minus_cos"], p["pdf"] = cos_a, one_minus_cos, 1.0 / (2.0 * np.pi * one_minus_cos)

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..scene.registry import register
+from ..scene.xmlparser import FLOAT_MAX
 from .emitter import Emitter, luminance, nonnegative_color
 
 
@@ -65,3 +66,7 @@ class MitsubaPoint(PointEmitter):
         if not np.all(np.isfinite(self.position)):
             raise SceneError(f"position must be finite, got {self.position.tolist()}", props.location("position"))
         self.power = 4.0 * np.pi * nonnegative_color(props, "intensity", np.ones(3), emitter=True)
+        if not self.power.max() <= FLOAT_MAX:  # packed as float32: it would be infinite
+            raise SceneError(f"intensity {self.intensity.max():g} is too large: its power (4 pi times it) exceeds "
+                             f"{FLOAT_MAX:.4g}, the largest single-precision number",
+                             props.location("intensity"))

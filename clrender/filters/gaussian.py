@@ -29,6 +29,11 @@ class GaussianFilter(Filter):
             if not self.stddev > 0:
                 raise SceneError(f"stddev must be positive, got {self.stddev}", props.location("stddev"))
         self.floor = float(np.exp(-self.radius ** 2 / (2 * self.stddev ** 2)))
+        if props is not None and not 1.0 - self.floor >= 1e-6:
+            # the kernel subtracts the floor in single precision: the weights would all be 0, the image black
+            raise SceneError(f"gaussian filter of radius {self.radius:g} is too narrow for its stddev "
+                             f"{self.stddev:g}: its weights vanish in single precision (the radius must be at least "
+                             f"0.0015 stddev)", props.location("radius" if props.has("radius") else "stddev"))
 
     def eval(self, x):
         x = np.asarray(x, np.float64)

@@ -22,25 +22,32 @@ from ..scene.registry import register
 from .integrator import NO_LIMIT, Integrator
 
 
+#: depths are 32-bit on the device (a larger one left as an OverflowError traceback while packing)
+MAX_DEPTH = 2**31 - 1
+
+
 class PathIntegrator(Integrator):
     needs_emitter = True  # sees nothing but emitted light
 
     def __init__(self, props, children, spec):
         depth = props.get_int("maxDepth", -1)
-        if depth == 0 or depth < -1:
-            raise SceneError(f"maxDepth must be -1 (no limit) or at least 1, got {depth}", props.location("maxDepth"))
+        if depth == 0 or depth < -1 or depth > MAX_DEPTH:
+            raise SceneError(f"maxDepth must be -1 (no limit) or at least 1 (and at most {MAX_DEPTH}), got {depth}",
+                             props.location("maxDepth"))
         self.max_depth = NO_LIMIT if depth == -1 else depth
 
 
 def mitsuba_depths(props, integrator):
     """Mitsuba's max_depth (-1 = no limit, else >= 0) and rr_depth (>= 1), checked as Mitsuba checks them."""
     depth = props.get_int("max_depth", -1)
-    if depth < -1:
-        raise SceneError(f"{integrator}: max_depth must be -1 (no limit) or at least 0, got {depth}",
+    if depth < -1 or depth > MAX_DEPTH:
+        raise SceneError(f"{integrator}: max_depth must be -1 (no limit) or at least 0 (and at most {MAX_DEPTH}), "
+                         f"got {depth}",
                          props.location("max_depth"))
     rr = props.get_int("rr_depth", 5)
-    if rr < 1:
-        raise SceneError(f"{integrator}: rr_depth must be at least 1, got {rr}", props.location("rr_depth"))
+    if not 1 <= rr <= MAX_DEPTH:
+        raise SceneError(f"{integrator}: rr_depth must be at least 1 (and at most {MAX_DEPTH}), got {rr}",
+                         props.location("rr_depth"))
     return (NO_LIMIT if depth == -1 else depth), rr
 
 

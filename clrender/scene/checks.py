@@ -40,5 +40,8 @@ def warn_if_unlit(scene) -> None:
         return
     if scene.emitters or any(getattr(s, "emitter", None) is not None for s in scene.shapes):
         return
+    # name the integrator and the shape tag as the file spells them (the kernel of Mitsuba's 'path' is another)
+    integrator = getattr(getattr(scene.integrator, "spec", None), "type", None) or scene.integrator.kernel
+    shape = "shape" if getattr(getattr(scene, "spec", None), "format", "nori") == "mitsuba" else "mesh"
     log.warning("%s: the scene has no emitter, so the '%s' integrator renders a black image; add an "
-                "<emitter> (e.g. an area light in a <mesh>)", scene.location, scene.integrator.kernel)
+                "<emitter> (e.g. an area light in a <%s>)", scene.location, integrator, shape)

@@ -179,9 +179,13 @@ class MitsubaBuilder(_x._Builder):
                 raise self.err(f"<{c.tag}> is a transform op and is only allowed inside <transform>", c.loc)
             else:
                 extra = ", <default>" if is_root else ""
+                hint = ""
+                if c.tag in ("mesh", "camera", "color"):
+                    hint = (f"; <{c.tag}> is Nori's: this file is read as a Mitsuba 3 scene because its <scene> has "
+                            f"a version attribute (Nori's <scene> has none)")
                 raise self.err(f"unknown tag <{c.tag}> in <{el.tag}>; expected an object "
                                f"({_x._tags(t for t in MITSUBA_OBJECT_TAGS if t != 'scene')}), a property "
-                               f"({_x._tags(MITSUBA_PROPERTY_TAGS)}), <ref>, <include>, <alias>{extra}", c.loc)
+                               f"({_x._tags(MITSUBA_PROPERTY_TAGS)}), <ref>, <include>, <alias>{extra}{hint}", c.loc)
 
     def unknown_id(self, el, oid: str) -> SceneError:
         known = ", ".join(sorted(self.state.ids)) or "none"
@@ -281,6 +285,7 @@ class MitsubaBuilder(_x._Builder):
         else:
             value = self.value_of(el, el.tag, text)
         if el.tag == "string" and name == "filename":
+            _x.check_filename(value, self.attr_loc(el, "value"))
             value = self.state.resolve(value)
         props.add(name, el.tag, value, el.loc, raw=text)
         if el.tag == "spectrum":

@@ -49,6 +49,8 @@ _OP_ATTRS = {
 _XML_WS = b" \t\r\n"
 _VAR = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
 _NUM_SPLIT = re.compile(r"[\s,]+")
+#: the largest finite float32: the device computes in float, where a larger number becomes infinite
+FLOAT_MAX = float(np.finfo(np.float32).max)
 _INT = re.compile(r"[+-]?[0-9]+")
 _ATTR = re.compile(rb"""([^\s=/<>"']+)\s*=\s*("[^"]*"|'[^']*')""")
 _DECL_ENCODING = re.compile(rb"""encoding\s*=\s*["']([A-Za-z0-9._-]+)["']""")
@@ -281,6 +283,10 @@ class _Builder:
                 what = "not a number" if math.isnan(values[-1]) else "infinite (or too large for a float)"
                 raise SceneError(f"number '{t}' in attribute {attr}=\"{text}\" of {tag} is {what}; "
                                  f"every number in a scene must be finite", self.attr_loc(el, attr))
+            if abs(values[-1]) > FLOAT_MAX:
+                raise SceneError(f"number '{t}' in attribute {attr}=\"{text}\" of {tag} is too large: the "
+                                 f"renderer computes in single precision, whose numbers stop at about "
+                                 f"{FLOAT_MAX:.4g}", self.attr_loc(el, attr))
         if counts is not None and len(values) not in counts:
             want = " or ".join(str(c) for c in counts)
             raise SceneError(f"attribute {attr}=\"{text}\" of {tag} needs {want} "
@@ -361,8 +367,12 @@ class _Builder:
                                  c.loc)
             else:
                 extra = ", or <default>" if is_root else ""
+                hint = ""
+                if c.tag in ("shape", "sensor", "film", "rgb", "spectrum", "ref", "include"):
+                    hint = ('; <' + c.tag + '> is Mitsuba 3\'s: a Mitsuba scene\'s root is <scene version="3.0.0">, '
+                            'and this file\'s <scene> has no version, so it is read as a Nori scene')
                 raise SceneError(f"unknown tag <{c.tag}> in <{el.tag}>; expected an object "
-                                 f"({_tags(OBJECT_TAGS)}) or a property ({_tags(PROPERTY_TAGS)}){extra}",
+                                 f"({_tags(OBJECT_TAGS)}) or a property ({_tags(PROPERTY_TAGS)}){extra}{hint}",
                                  c.loc)
         return spec
 
@@ -381,6 +391,7 @@ class _Builder:
         name, text = a["name"], a["value"]
         value = self.value_of(el, el.tag, text)
         if el.tag == "string" and name == "filename":
+            check_filename(value, self.attr_loc(el, "value"))
             value = os.path.normpath(os.path.join(self.base_dir, value))
         self.no_children(el)
         props.add(name, el.tag, value, el.loc, raw=text)
@@ -425,6 +436,12 @@ class _Builder:
 # --------------------------------------------------------------------------------------------------
 # Public entry points
 # --------------------------------------------------------------------------------------------------
+def check_filename(value: str, location: SourceLocation) -> None:
+    """An empty filename would resolve to the scene's own folder and be reported as "a folder, not a file"."""
+    if not value.strip():
+        raise SceneError('<string name="filename"> is empty; expected the path of a file', location)
+
+
 def _read_bytes(data: bytes, filename: str, force_encoding: str | None) -> tuple[_Source, _Elem]:
     """Pass one for any of the XML scene formats: the located element tree of ``data``."""
     data, declared, blanked = _prepare(data)

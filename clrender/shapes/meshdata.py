@@ -27,11 +27,13 @@ class MeshData:
     faces: np.ndarray
 
     def __post_init__(self) -> None:
-        self.positions = np.ascontiguousarray(self.positions, dtype=np.float32).reshape(-1, 3)
-        if self.normals is not None:
-            self.normals = np.ascontiguousarray(self.normals, dtype=np.float32).reshape(-1, 3)
-        if self.uvs is not None:
-            self.uvs = np.ascontiguousarray(self.uvs, dtype=np.float32).reshape(-1, 2)
+        # A coordinate beyond float32's range becomes infinite here; the mesh shape reports it with its location.
+        with np.errstate(over="ignore"):
+            self.positions = np.ascontiguousarray(self.positions, dtype=np.float32).reshape(-1, 3)
+            if self.normals is not None:
+                self.normals = np.ascontiguousarray(self.normals, dtype=np.float32).reshape(-1, 3)
+            if self.uvs is not None:
+                self.uvs = np.ascontiguousarray(self.uvs, dtype=np.float32).reshape(-1, 2)
         self.faces = np.ascontiguousarray(self.faces, dtype=np.int32).reshape(-1, 3)
 
     @property

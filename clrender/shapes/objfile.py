@@ -40,6 +40,11 @@ def load_obj(path, location: SourceLocation | None = None) -> MeshData:
     """
     path = os.fspath(path)
     data = read_mesh_bytes(path, "OBJ", location)
+    if data.startswith(b"\xef\xbb\xbf"):
+        # a UTF-8 byte order mark (Windows editors write one): left in, it hides the first statement
+        data = data[3:]
+    elif data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise SceneError("OBJ file is UTF-16 encoded; save it as ASCII or UTF-8", SourceLocation(path, 1))
 
     parsed = None
     try:

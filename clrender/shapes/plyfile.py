@@ -92,6 +92,8 @@ def _check_header(data: bytes, path: str) -> None:
     body = len(data) - (nl + 1) if nl >= 0 else 0
     fmt = None
     elements: list[tuple[str, int, int, int]] = []  # name, count, line, bytes per record at least
+    lists: list[list[bool]] = []  # per element, per property: is it a list
+    header_lines = data[:end].count(b"\n") + 1  # the end_header line's number
     for lineno, raw in enumerate(data[:end].decode("ascii", "replace").splitlines(), start=1):
         tok = raw.split()
         here = SourceLocation(path, lineno)
@@ -106,10 +108,15 @@ def _check_header(data: bytes, path: str) -> None:
             if len(tok) != 3 or not tok[2].isdigit():
                 raise SceneError(f"bad PLY element line '{raw.strip()}' (expected 'element NAME COUNT')", here)
             elements.append((tok[1], int(tok[2]), lineno, 0))
+            lists.append([])
         elif tok[0] == "property":
             if not elements:
                 raise SceneError("PLY property before any element", here)
             if len(tok) == 5 and tok[1] == "list" and tok[2] in _PLY_TYPES and tok[3] in _PLY_TYPES:
+                if tok[4] in _INDEX_NAMES and _PLY_TYPES[tok[3]][0] == "f":
+                    # a fractional index would be truncated to another vertex without a word
+                    raise SceneError(f"PLY face index list '{tok[4]}' has type {tok[3]}; vertex indices must be "
+                                     "integers (e.g. int or uint)", here)
                 size = np.dtype(_PLY_TYPES[tok[2]]).itemsize  # an empty list is only its length
             elif len(tok) == 3 and tok[1] in _PLY_TYPES:
                 size = np.dtype(_PLY_TYPES[tok[1]]).itemsize
@@ -119,6 +126,7 @@ def _check_header(data: bytes, path: str) -> None:
                                  f"{', '.join(_PLY_TYPES)})", here)
             name, count, line, per = elements[-1]
             elements[-1] = (name, count, line, per + size)
+            lists[-1].append(tok[1] == "list")
         else:
             raise SceneError(f"unknown PLY header line '{raw.strip()}'", here)
     if fmt is None:
@@ -129,6 +137,7 @@ def _check_header(data: bytes, path: str) -> None:
         if need > lines:
             raise SceneError(f"the PLY header declares {need} records but the file has only {lines} lines "
                              "after the header (truncated, or a wrong element count)", SourceLocation(path))
+        _check_ascii_records(data[nl + 1:], elements, lists, header_lines, path)
         return
     offset = 0
     for name, count, line, per in elements:
@@ -137,6 +146,34 @@ def _check_header(data: bytes, path: str) -> None:
             raise SceneError(f"PLY header declares {count} '{name}' records, at least {count * per} bytes, but "
                              f"the file has only {body} bytes after the header (truncated, or a wrong "
                              f"element count)", SourceLocation(path, line))
+
+
+def _check_ascii_records(body: bytes, elements, lists, header_lines: int, path: str) -> None:
+    """Each ASCII record (one a line) must hold exactly the numbers its properties and list lengths call for:
+    the line-based reader would otherwise drop extra numbers, or read a list shorter than its length says,
+    without a word."""
+    lines = body.split(b"\n")
+    at = 0
+    for (name, count, _, _), is_list in zip(elements, lists):
+        n_props = len(is_list)
+        for k in range(at, at + count):
+            tok = lines[k].split()
+            need, want = 0, None
+            for lst in is_list:
+                if lst:
+                    try:
+                        need += 1 + int(tok[need])
+                    except (IndexError, ValueError):
+                        want = f"a list length as number {need + 1}"
+                        break
+                else:
+                    need += 1
+            if want is not None or need != len(tok):
+                props = f"{n_props} propert{'y' if n_props == 1 else 'ies'}"
+                want = want or f"{need} ({props}{', each list as long as its length says' if any(is_list) else ''})"
+                raise SceneError(f"PLY '{name}' record {k - at} holds {len(tok)} numbers where the header calls "
+                                 f"for {want}{_COUNTS_HINT}", SourceLocation(path, header_lines + 1 + k))
+        at += count
 
 
 def _field_names(element) -> list[str]:
@@ -170,12 +207,16 @@ def _read_with_trimesh(data: bytes):
     return vertex, lists
 
 
+#: a header whose vertex count is smaller than the data makes the reader take vertex data for faces
+_COUNTS_HINT = " (or the header's element counts do not match the data)"
+
+
 def _fan(polygons, here: SourceLocation) -> np.ndarray:
     arr = np.asarray(polygons) if not isinstance(polygons, list) else None
     if arr is not None and arr.dtype != object and arr.ndim == 2:
         k = arr.shape[1]
         if k < 3:
-            raise SceneError(f"PLY face has {k} vertices (expected at least 3)", here)
+            raise SceneError(f"PLY face has {k} vertices (expected at least 3){_COUNTS_HINT}", here)
         j = np.arange(1, k - 1)
         tri = np.stack([np.broadcast_to(arr[:, :1], (arr.shape[0], k - 2)), arr[:, j], arr[:, j + 1]],
                        axis=2)
@@ -184,7 +225,7 @@ def _fan(polygons, here: SourceLocation) -> np.ndarray:
     for poly in polygons:
         poly = np.asarray(poly, np.int64).reshape(-1)
         if poly.size < 3:
-            raise SceneError(f"PLY face has {poly.size} vertices (expected at least 3)", here)
+            raise SceneError(f"PLY face has {poly.size} vertices (expected at least 3){_COUNTS_HINT}", here)
         j = np.arange(1, poly.size - 1)
         out.append(np.stack([np.full(j.size, poly[0]), poly[j], poly[j + 1]], axis=1))
     return np.concatenate(out) if out else np.zeros((0, 3), np.int64)

@@ -62,10 +62,35 @@ def load_serialized(path, location: SourceLocation | None = None, shape_index: i
         if not 0 <= offset <= len(data) - 4 or struct.unpack_from("<HH", data, offset) != (MAGIC, version):
             raise _fail(path, f"mesh {shape_index} does not start with a header at offset {offset}", location)
     try:
-        body = zlib.decompressobj().decompress(data[offset + 4:])
+        body = _inflate(data[offset + 4:], version, path, location)
     except zlib.error as e:
         raise _fail(path, f"its compressed stream is corrupt ({e})", location) from None
     return _parse_mesh(body, version, path, location)
+
+
+#: DEFLATE expands its input at most about 1032-fold
+_MAX_RATIO = 1032
+
+
+def _inflate(stream: bytes, version: int, path, location) -> bytes:
+    """The mesh's decompressed data, and no more than its header says it holds: a small file whose stream
+    inflates to gigabytes (a zlib bomb) is refused from its counts instead of exhausting the memory."""
+    d = zlib.decompressobj()
+    head = d.decompress(stream, 1 << 16)  # flags, name, counts (the name is short)
+    need = len(head)
+    if len(head) >= 4:
+        (flags,) = struct.unpack_from("<I", head, 0)
+        at = 4 if version == 3 else head.find(b"\0", 4) + 1
+        if at > 0 and at + 16 <= len(head):
+            nv, nf = struct.unpack_from("<QQ", head, at)
+            fsize = 8 if flags & DOUBLE else 4
+            per_vertex = 3 + (3 if flags & HAS_NORMALS else 0) + (2 if flags & HAS_UVS else 0) + \
+                (3 if flags & HAS_COLORS else 0)
+            need = at + 16 + nv * per_vertex * fsize + nf * 3 * (8 if nv > 0xFFFFFFFF else 4)
+            if need > _MAX_RATIO * len(stream) + 1024:
+                raise _fail(path, f"it claims {nv} vertices and {nf} triangles, more than its {len(stream)} "
+                                  f"compressed bytes can hold", location)
+    return head + d.decompress(d.unconsumed_tail, max(need - len(head), 1))
 
 
 def _parse_mesh(body: bytes, version: int, path, location) -> MeshData:

@@ -17,6 +17,15 @@ from ..device import dispatch
 from ..device.layout import NONE
 from ..errors import SceneError
 
+#: Largest world-space coordinate of a triangle's vertex. The watertight triangle test (kernels/bvh_common.h)
+#: multiplies three coordinate differences in single precision: beyond about 7e12 its products overflow and the
+#: triangle is silently missed (measured: a quad at 1e11 renders, at 1e13 it vanishes). 1e12 keeps a margin for
+#: ray origins elsewhere in the scene.
+TRIANGLE_COORD_MAX = 1e12
+#: The same for an analytic sphere, whose test squares coordinate differences (|center| + radius): beyond about
+#: 1.8e19 the squares overflow (measured: radius 1e19 renders, 1e20 vanishes).
+SPHERE_EXTENT_MAX = 1e18
+
 
 class Shape(abc.ABC):
     kernel: str = ""

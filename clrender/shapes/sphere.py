@@ -17,7 +17,7 @@ import numpy as np
 from ..device import dispatch
 from ..errors import SceneError
 from ..scene.registry import register
-from .shape import Shape
+from .shape import SPHERE_EXTENT_MAX, Shape
 
 
 def frame_quaternion(m: np.ndarray) -> np.ndarray:
@@ -62,7 +62,14 @@ class Sphere(Shape):
             raise SceneError(f"sphere center must be finite, got {self.center}", props.location("center"))
         if not (self.radius > 0 and np.isfinite(self.radius)):
             raise SceneError(f"sphere radius must be a positive number, got {self.radius}", spec.location)
+        self._check_extent(spec)
         self._attach(children, spec)
+
+    def _check_extent(self, spec) -> None:
+        if float(np.abs(self.center).max()) + self.radius > SPHERE_EXTENT_MAX:
+            raise SceneError(f"sphere (center {self.center.tolist()}, radius {self.radius:g}) reaches beyond "
+                             f"{SPHERE_EXTENT_MAX:g}: the single-precision intersection test may overflow "
+                             f"and miss it", spec.location)
 
     def area(self) -> float:
         return 4.0 * np.pi * self.radius ** 2
@@ -116,6 +123,7 @@ class MitsubaSphere(Sphere):
         self.frame = lin / float(scales.mean())
         if np.linalg.det(lin) < 0:      # a mirror turns Mitsuba's sphere inside out (checked against Mitsuba 3.9.1)
             self.flip_normals = not self.flip_normals
+        self._check_extent(spec)
         self._attach(children, spec)
 
     def fill(self, ctx, index, row):

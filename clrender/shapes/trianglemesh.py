@@ -17,7 +17,7 @@ from ..device import dispatch
 from ..device.layout import NONE
 from ..errors import SceneError
 from ..scene.transform import Transform
-from .shape import Shape
+from .shape import TRIANGLE_COORD_MAX, Shape
 
 log = logging.getLogger("clrender")
 
@@ -73,7 +73,14 @@ class TriangleMesh(Shape):
                 raise
             # The error names the mesh file (and line); add where the scene asked for that file.
             raise SceneError(f"in mesh {e}", where) from None
-        mesh = mesh.transformed(to_world.matrix)
+        with np.errstate(over="ignore", invalid="ignore"):
+            mesh = mesh.transformed(to_world.matrix)
+        used = mesh.positions[mesh.faces]
+        if not (np.isfinite(used).all() and np.abs(used).max(initial=0.0) <= TRIANGLE_COORD_MAX):
+            # beyond it a triangle would be missed (or, past float32's range, dropped as degenerate) without a word
+            raise SceneError(f"mesh '{filename or name}': a vertex lies beyond {TRIANGLE_COORD_MAX:g} in world "
+                             f"space (its coordinates mapped by {to_world_name}): the single-precision triangle "
+                             f"test may overflow and miss it", where or spec.location)
         if prepare is not None:
             mesh = prepare(mesh)
         mesh, dropped = mesh.drop_degenerate()

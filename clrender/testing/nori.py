@@ -40,9 +40,24 @@ def _numbers(props, name, default=None):
         return list(default)
     text = props.get_string(name)
     try:
-        return [float(t) for t in text.replace(",", " ").split()]
+        values = [float(t) for t in text.replace(",", " ").split()]
     except ValueError:
         raise SceneError(f"'{name}' must be a list of numbers, got '{text}'", props.location(name)) from None
+    if not all(math.isfinite(v) for v in values):
+        raise SceneError(f"'{name}' must be a list of finite numbers, got '{text}'", props.location(name))
+    return values
+
+
+def _checked(props, name, value, low, high=None, what=""):
+    """`value` of property `name`, or an error at its line unless low <= value (<= high)."""
+    if not (value >= low and (high is None or value <= high)):
+        want = what or (f"between {low} and {high}" if high is not None else f"at least {low}")
+        raise SceneError(f"{name} must be {want}, got {value}", props.location(name))
+    return value
+
+
+#: sample counts index 32-bit work-items on the device
+MAX_SAMPLES = 2**31 - 1
 
 
 class _TestFile:
@@ -51,6 +66,9 @@ class _TestFile:
     def __init__(self, props, children, spec):
         self.location = spec.location
         self.alpha = props.get_float("significanceLevel", 0.01)
+        if not 0 < self.alpha < 1:
+            raise SceneError(f"significanceLevel must be between 0 and 1 (exclusive), got {self.alpha}",
+                             props.location("significanceLevel"))
         self.items = children
 
 
@@ -58,7 +76,7 @@ class _TestFile:
 class TTestFile(_TestFile):
     def __init__(self, props, children, spec):
         super().__init__(props, children, spec)
-        self.sample_count = props.get_int("sampleCount", 100000)
+        self.sample_count = _checked(props, "sampleCount", props.get_int("sampleCount", 100000), 2, MAX_SAMPLES)
         self.angles = _numbers(props, "angles", [0.0]) if props.has("angles") else []
         self.distances = _numbers(props, "distances", [0.0]) if props.has("distances") else [0.0]
         self.references = _numbers(props, "references")
@@ -78,10 +96,13 @@ class TTestFile(_TestFile):
 class Chi2TestFile(_TestFile):
     def __init__(self, props, children, spec):
         super().__init__(props, children, spec)
-        self.resolution = props.get_int("resolution", 10)
-        self.min_exp = props.get_float("minExpFrequency", 5.0)
-        self.sample_count = props.get_int("sampleCount", self.resolution * 2 * self.resolution * 5000)
-        self.test_count = props.get_int("testCount", 5)
+        self.resolution = _checked(props, "resolution", props.get_int("resolution", 10), 1, 4096)
+        self.min_exp = _checked(props, "minExpFrequency", props.get_float("minExpFrequency", 5.0), 0.0,
+                                what="0 or more")
+        self.sample_count = _checked(props, "sampleCount",
+                                     props.get_int("sampleCount", self.resolution * 2 * self.resolution * 5000),
+                                     1, MAX_SAMPLES)
+        self.test_count = _checked(props, "testCount", props.get_int("testCount", 5), 1, 10**6)
         for c in children:
             if c.spec.tag != "bsdf":
                 raise SceneError("a chi2test takes only <bsdf> children", c.spec.location)

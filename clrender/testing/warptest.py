@@ -25,6 +25,15 @@ def run_warptest(warp: str, param: float | None = None, samples: int = 1_000_000
 
     if warp not in WARPS:
         raise ValueError(f"unknown warp '{warp}'; known: {', '.join(WARPS)}")
+    if not 1 <= samples < 2**31:
+        raise ValueError(f"--samples must be between 1 and {2**31 - 1}, got {samples}")
+    if param is not None:
+        if warp not in DEFAULT_PARAM:
+            raise ValueError(f"warp '{warp}' takes no parameter (got {param:g}); only cone and beckmann do")
+        if warp == "cone" and not 0 < param <= 180:
+            raise ValueError(f"the cone's half-angle must be in (0, 180] degrees, got {param:g}")
+        if warp == "beckmann" and not 0 < param <= 10:
+            raise ValueError(f"Beckmann's alpha must be in (0, 10], got {param:g}")
     ctx, queue = get_context(device)
     p = DEFAULT_PARAM.get(warp, 0.0) if param is None else float(param)
     kparam = math.cos(math.radians(p)) if warp == "cone" else p

@@ -24,7 +24,8 @@ def srgb_to_linear(x: np.ndarray) -> np.ndarray:
 def read_image(path, raw: bool = False, location=None) -> np.ndarray:
     path = Path(path)
     if not path.is_file():
-        raise SceneError(f"image file '{path}' not found", location)
+        what = "not found" if not path.exists() else "is not a regular file (a folder or a device)"
+        raise SceneError(f"image file '{path}' {what}", location)
     suffix = path.suffix.lower()
     try:
         if suffix == ".exr":
@@ -38,7 +39,9 @@ def read_image(path, raw: bool = False, location=None) -> np.ndarray:
                              ".jpg or .jpeg", location)
     except SceneError:
         raise
-    except (OSError, ValueError, KeyError, IndexError, TypeError) as exc:
+    except MemoryError:
+        raise SceneError(f"image '{path}' is too large for the host memory", location) from None
+    except Exception as exc:  # OpenEXR raises RuntimeError for a corrupt file, Pillow its DecompressionBombError
         raise SceneError(f"cannot read image '{path}': {exc}", location) from None
     if not np.all(np.isfinite(img)):
         raise SceneError(f"image '{path}' holds NaN or infinite values", location)
@@ -66,7 +69,7 @@ def _read_8bit(path: Path, raw: bool) -> np.ndarray:
 
     with Image.open(path) as im:
         wide = True
-        if im.mode == "I;16":                  # 16-bit grey
+        if im.mode in ("I;16", "I;16L", "I;16B") or (im.mode == "I" and path.suffix.lower() == ".png"):  # 16-bit grey
             a = np.repeat((np.asarray(im, np.float64) / 65535.0)[..., None], 3, axis=-1)
         elif im.mode not in ("L", "LA", "RGB", "RGBA", "P"):
             raise ValueError(f"only 8- or 16-bit grey or RGB images are supported, this one is mode {im.mode}")
@@ -126,6 +129,10 @@ def _read_rgbe(path: Path) -> np.ndarray:
         raise ValueError(f"unsupported resolution line {b' '.join(res).decode(errors='replace')!r} (only -Y H +X W)")
     h, w = int(res[1]), int(res[3])
     buf = np.frombuffer(data, np.uint8, offset=pos)
+    if h < 0 or w < 0 or h * w > 16 * (len(buf) + 1):
+        # a run-length scanline stores at least 127 values of a component in 2 bytes: no more than ~16 pixels
+        # a byte; a larger claim is a corrupt resolution line, not a reason to allocate it
+        raise ValueError(f"the resolution line claims {w} x {h} pixels but only {len(buf)} bytes follow")
     out = np.empty((h, w, 4), np.uint8)
     i = 0
     for y in range(h):
