@@ -159,8 +159,11 @@ def err(tmp_path, text):
         (QUAD + "f 1 2\n", 5, "at least 3"),
         (QUAD + "f 1 2 3\nf 1 a 3\n", 6, "bad vertex index 'a'"),
         (QUAD + "f 1 2 3\nf 1///2 2 3\n", 6, "bad face corner"),
+        (QUAD + "f 1 2 3\nf 1 2-3 4\n", 6, "'2-3'"),
     ],
 )
+# Warnings as errors: numpy 2.2's DeprecationWarning from np.fromstring at a bad token used to reach users.
+@pytest.mark.filterwarnings("error")
 def test_obj_errors_name_file_and_line(tmp_path, text, line, needle):
     msg, e = err(tmp_path, text)
     assert e.location.line == line

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -147,7 +148,7 @@ def _floats_block(lines: list[bytes], need: int) -> np.ndarray:
     block = b"\n".join(lines)
     if b"#" in block:
         raise _NeedSlowPath  # trailing comments: let the careful parser strip them
-    values = np.fromstring(block, dtype=np.float64, sep=" ")
+    values = _numbers(block, np.float64)
     if values.size == need * len(lines):
         # Equal totals could still hide a short line next to a long one; verify per line.
         counts = _token_counts(np.frombuffer(block, np.uint8), len(lines))[0]
@@ -159,6 +160,19 @@ def _floats_block(lines: list[bytes], need: int) -> np.ndarray:
         raise _NeedSlowPath
     starts = np.cumsum(counts) - counts
     return values[starts[:, None] + np.arange(need)[None, :]]
+
+
+def _numbers(block: bytes, dtype) -> np.ndarray:
+    """The numbers of a whitespace-separated block, up to its first bad token (the callers count tokens)."""
+    # At a bad token numpy 2.2 (the newest for Python 3.10) stops with a DeprecationWarning that users would
+    # see; numpy 2.5 raises ValueError. Either way the careful parser takes over and names the line.
+    # "ignore", not "error": the filter is process-wide, so another thread may at worst miss a warning.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        try:
+            return np.fromstring(block, dtype=dtype, sep=" ")
+        except ValueError:
+            raise _NeedSlowPath from None
 
 
 def _token_counts(b: np.ndarray, nlines: int):
@@ -196,7 +210,7 @@ def _faces_block(lines: list[bytes]):
         raise _NeedSlowPath
     spaced = b.copy()
     spaced[slash_pos] = 32
-    ints = np.fromstring(spaced.tobytes(), dtype=np.int64, sep=" ")
+    ints = _numbers(spaced.tobytes(), np.int64)
     nint = nslash + 1 - ndouble
     if ints.size != int(nint.sum()):
         raise _NeedSlowPath
