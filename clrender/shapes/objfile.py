@@ -21,14 +21,13 @@ from __future__ import annotations
 
 import math
 import os
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from clrender.errors import SceneError, SourceLocation
 from clrender.shapes.meshdata import MeshData
-from clrender.shapes.meshfile import read_mesh_bytes
+from clrender.shapes.meshfile import numpy_text_errors, read_mesh_bytes
 
 __all__ = ["load_obj"]
 
@@ -163,16 +162,9 @@ def _floats_block(lines: list[bytes], need: int) -> np.ndarray:
 
 
 def _numbers(block: bytes, dtype) -> np.ndarray:
-    """The numbers of a whitespace-separated block, up to its first bad token (the callers count tokens)."""
-    # At a bad token numpy 2.2 (the newest for Python 3.10) stops with a DeprecationWarning that users would
-    # see; numpy 2.5 raises ValueError. Either way the careful parser takes over and names the line.
-    # "ignore", not "error": the filter is process-wide, so another thread may at worst miss a warning.
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        try:
-            return np.fromstring(block, dtype=dtype, sep=" ")
-        except ValueError:
-            raise _NeedSlowPath from None
+    """The numbers of a whitespace-separated block; ValueError at a bad token (load_obj then parses carefully)."""
+    with numpy_text_errors():
+        return np.fromstring(block, dtype=dtype, sep=" ")
 
 
 def _token_counts(b: np.ndarray, nlines: int):
