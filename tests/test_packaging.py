@@ -49,3 +49,25 @@ def test_every_runtime_import_is_a_dependency():
                 if _DIST.get(top, top).lower() not in required:
                     missing.setdefault(top, str(path.relative_to(ROOT)))
     assert not missing, f"imported but not in install_requires: {missing}"
+
+
+# Where a floor in setup.cfg once let in releases that broke clrender or warned at users (checked by installing them).
+_FLOORS = {
+    "openexr": ((3, 3), "OpenEXR.File: with 3.2, `clrender render` died writing its EXR"),
+    "pyopencl": ((2024, 2, 6), "the fix for pytools' UserWarning about safe_sync, printed by every render"),
+}
+
+
+def test_floors_exclude_releases_known_to_fail_us():
+    import re
+
+    cfg = configparser.ConfigParser()
+    cfg.read(ROOT / "setup.cfg")
+    floors = {}
+    for ln in cfg["options"]["install_requires"].splitlines():
+        m = re.fullmatch(r"\s*([A-Za-z0-9_.-]+)\s*>=\s*([0-9.]+)\s*", ln)
+        if m:
+            floors[m[1].lower()] = tuple(int(x) for x in m[2].split("."))
+    for dist, (oldest, why) in _FLOORS.items():
+        assert dist in floors, f"{dist} has no >= floor in install_requires"
+        assert floors[dist] >= oldest, f"{dist}>={'.'.join(map(str, floors[dist]))} admits releases without {why}"

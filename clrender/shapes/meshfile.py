@@ -5,8 +5,10 @@ block forever; a folder gives an obscure error. Only regular files are meshes.
 """
 from __future__ import annotations
 
+import contextlib
 import os
 import stat
+import warnings
 
 from clrender.errors import SceneError, SourceLocation
 
@@ -41,3 +43,16 @@ def read_mesh_bytes(path, kind: str, location: SourceLocation | None) -> bytes:
         except MemoryError:
             why = "not enough memory to read it"
     raise SceneError(f"cannot read {kind} file '{path}': {why}", location)
+
+
+@contextlib.contextmanager
+def numpy_text_errors():
+    """np.fromstring(text, sep=" ") at a bad token raises ValueError inside, as numpy 2.5 does: numpy 2.2 (the
+    newest for Python 3.10) stops there with a DeprecationWarning instead, which users saw."""
+    with warnings.catch_warnings():
+        # Only this message: the filter is process-wide while it lasts, and another thread gets numpy 2.5's way too.
+        warnings.filterwarnings("error", "string or file could not be read to its end", DeprecationWarning)
+        try:
+            yield
+        except DeprecationWarning as e:
+            raise ValueError(str(e).split(";")[0]) from None  # numpy 2.5's words, without "will raise in future"

@@ -27,7 +27,7 @@ import numpy as np
 
 from clrender.errors import SceneError, SourceLocation
 from clrender.shapes.meshdata import MeshData
-from clrender.shapes.meshfile import read_mesh_bytes
+from clrender.shapes.meshfile import numpy_text_errors, read_mesh_bytes
 
 __all__ = ["load_obj"]
 
@@ -152,7 +152,7 @@ def _floats_block(lines: list[bytes], need: int) -> np.ndarray:
     block = b"\n".join(lines)
     if b"#" in block:
         raise _NeedSlowPath  # trailing comments: let the careful parser strip them
-    values = np.fromstring(block, dtype=np.float64, sep=" ")
+    values = _numbers(block, np.float64)
     if values.size == need * len(lines):
         # Equal totals could still hide a short line next to a long one; verify per line.
         counts = _token_counts(np.frombuffer(block, np.uint8), len(lines))[0]
@@ -164,6 +164,12 @@ def _floats_block(lines: list[bytes], need: int) -> np.ndarray:
         raise _NeedSlowPath
     starts = np.cumsum(counts) - counts
     return values[starts[:, None] + np.arange(need)[None, :]]
+
+
+def _numbers(block: bytes, dtype) -> np.ndarray:
+    """The numbers of a whitespace-separated block; ValueError at a bad token (load_obj then parses carefully)."""
+    with numpy_text_errors():
+        return np.fromstring(block, dtype=dtype, sep=" ")
 
 
 def _token_counts(b: np.ndarray, nlines: int):
@@ -201,7 +207,7 @@ def _faces_block(lines: list[bytes]):
         raise _NeedSlowPath
     spaced = b.copy()
     spaced[slash_pos] = 32
-    ints = np.fromstring(spaced.tobytes(), dtype=np.int64, sep=" ")
+    ints = _numbers(spaced.tobytes(), np.int64)
     nint = nslash + 1 - ndouble
     if ints.size != int(nint.sum()):
         raise _NeedSlowPath

@@ -19,7 +19,7 @@ import numpy as np
 
 from clrender.errors import SceneError, SourceLocation
 from clrender.shapes.meshdata import MeshData
-from clrender.shapes.meshfile import read_mesh_bytes
+from clrender.shapes.meshfile import numpy_text_errors, read_mesh_bytes
 
 __all__ = ["load_ply"]
 
@@ -188,7 +188,8 @@ def _read_with_trimesh(data: bytes):
 
     from trimesh.exchange import ply as tply
 
-    kwargs = tply.load_ply(io.BytesIO(data), fix_texture=False, skip_materials=True)
+    with numpy_text_errors():  # else numpy 2.2 warns at a bad number and trimesh hands back ragged rows
+        kwargs = tply.load_ply(io.BytesIO(data), fix_texture=False, skip_materials=True)
     elements = kwargs["metadata"]["_ply_raw"]
     if "vertex" not in elements or elements["vertex"].get("data") is None:
         raise ValueError("no vertex element")
