@@ -264,8 +264,7 @@ def mitsuba_casts(scene, recs, kinds, valid):
     waited for (Dr.Jit's own threads, one per core, with Embree's packets inside). Returns the two casts as
     callables for the timing loop (each warmed once: the JIT compiles its kernel then) and what to report,
     with the hit distances (-1 for none) under "t_hit"."""
-    os.environ.setdefault("DRJIT_LIBLLVM_PATH", "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1")
-    import drjit as dr
+    import drjit as dr   # importing vs_mitsuba (above) pointed DRJIT_LIBLLVM_PATH at the LLVM it needs
     import mitsuba as mi
     mi.set_variant("llvm_ad_rgb")
     tris = _scene_triangles(scene, "--mitsuba")

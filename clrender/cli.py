@@ -39,13 +39,13 @@ def cmd_render(args) -> int:
     from .output import output_paths
     from .renderer import Interrupted, Renderer
 
-    if (args.cluster or args.sample_range) and args.partial_every is not None:
-        print("clrender: error: --partial-every is not supported with --cluster or --sample-range yet", file=sys.stderr)
-        return 2
-    if (args.cluster or args.sample_range) and args.emitter_selection != "uniform":
-        print("clrender: error: --emitter-selection power is not supported with --cluster or --sample-range yet",
-              file=sys.stderr)
-        return 2
+    if args.cluster or args.sample_range:
+        for option, used in (("--partial-every", args.partial_every is not None),
+                             ("--emitter-selection power", args.emitter_selection != "uniform")):
+            if used:
+                print(f"clrender: error: {option} is not supported with --cluster or --sample-range yet",
+                      file=sys.stderr)
+                return 2
     if args.cluster or args.sample_range:
         from .cli_cluster import cmd_render_distributed
 

@@ -9,6 +9,7 @@ clFinish, so Python's signal handler runs while the device works).
 from __future__ import annotations
 
 import os
+import copy
 import time
 from dataclasses import dataclass
 
@@ -215,8 +216,9 @@ class Renderer:
                         on_pass(done)
                     if partial is not None and not stop and done < spp and \
                             time.perf_counter() - last_partial >= partial[0]:
-                        stats.seconds = time.perf_counter() - t_start
-                        partial[1](self._film(done, seed, start_sample, stats, (acc0, acc1, bad, rays),
+                        snap = copy.copy(stats)   # the render's own stats go on counting
+                        snap.seconds = time.perf_counter() - t_start
+                        partial[1](self._film(done, seed, start_sample, snap, (acc0, acc1, bad, rays),
                                               (d_acc0, d_acc1, d_bad, d_rays), p0, p1, partial=True))
                         last_partial = time.perf_counter()
                     if stop:
@@ -240,9 +242,8 @@ class Renderer:
                           p0, p1)
 
     def _film(self, done, seed, start_sample, stats, host, dev, p0, p1, partial=False) -> Film:
-        """The Film of the `done` samples per pixel accumulated on the device so far (pixels p0:p1)."""
-        import copy
-
+        """The Film of the `done` samples per pixel accumulated on the device so far (pixels p0:p1); fills in
+        `stats`."""
         import pyopencl as cl
 
         acc0, acc1, bad, rays = host
@@ -254,7 +255,6 @@ class Renderer:
         if self.count_rays:
             cl.enqueue_copy(self.queue, rays, d_rays)
         self.queue.finish()
-        stats = copy.copy(stats) if partial else stats
         stats.samples = done * (p1 - p0)
         stats.dropped = int(bad.sum())
         meta = {

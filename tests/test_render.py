@@ -221,3 +221,13 @@ def test_cli_partial_every_writes_the_image_so_far(scene_dir, tmp_path, monkeypa
     with pytest.raises(SystemExit) as e:
         main(["render", str(write_scene(scene_dir)), "--partial-every", "0"])
     assert e.value.code == 2
+
+
+def test_options_the_cluster_path_lacks_are_refused(scene_dir, capsys):
+    from clrender.cli import main
+
+    scene = str(write_scene(scene_dir))
+    for extra, name in ((["--partial-every", "5"], "--partial-every"),
+                        (["--emitter-selection", "power"], "--emitter-selection power")):
+        assert main(["render", scene, "--sample-range", "0:1", "-q", *extra]) == 2
+        assert f"{name} is not supported with --cluster or --sample-range" in capsys.readouterr().err
