@@ -424,3 +424,19 @@ class _Counting:
 def test_crop_window_must_fit():
     err(f'{HEAD}<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="10"/>'
         f'\n<integer name="crop_width" value="11"/></film></sensor></scene>', 2, None, "does not fit")
+
+
+def test_participating_media_are_refused_by_name_and_line():
+    """A <medium> (in a shape, in the sensor, or referenced from the scene's top level) is named as unsupported,
+    at its own line, not reported as a nesting mistake."""
+    shape_medium = (f'{HEAD}{SENSOR}<shape type="sphere"><bsdf type="null"/>\n'
+                    '<medium type="homogeneous" name="interior"><float name="scale" value="2"/></medium>'
+                    '</shape></scene>')
+    err(shape_medium, 2, None, '<medium type="homogeneous">', "participating media are not supported")
+    referenced = (f'{HEAD}\n<medium type="heterogeneous" id="fog"/>\n{SENSOR}'
+                  '<shape type="sphere"><ref id="fog" name="exterior"/></shape></scene>')
+    err(referenced, 2, None, '<medium type="heterogeneous">', "participating media are not supported")
+    in_sensor = (f'{HEAD}<sensor type="perspective">\n<medium type="homogeneous"/>'
+                 '<film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="6"/></film>'
+                 '</sensor></scene>')
+    err(in_sensor, 2, None, "participating media are not supported")

@@ -68,11 +68,17 @@ def _fov_one_percent_wider(scene):
     scene.camera.fov *= 1.01
 
 
+def _path_rules(scene):
+    scene.integrator.volpath = False       # Mitsuba's path: null events count, hide_emitters sees through
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name, mutate", [
     ("cornell_meshes", _mirror), ("filter_lanczos_crop", _crop_off_by_one), ("thinlens", _pinhole),
     ("gaussian_sample_border", _border_ignored), ("filter_gaussian_fov_y", _fov_one_percent_wider),
-], ids=["mirrored camera", "crop window 1 px off", "pinhole for thin lens", "sample_border ignored", "fov 1% wider"])
+    ("integrator_volpath_depth2", _path_rules), ("integrator_volpath_hide", _path_rules),
+], ids=["mirrored camera", "crop window 1 px off", "pinhole for thin lens", "sample_border ignored", "fov 1% wider",
+        "volpath depth as path's", "volpath hide_emitters as path's"])
 def test_twin_test_fails_when_clrender_is_wrong(name, mutate):
     """The harness can fail: each twin, rendered with one thing it verifies done wrong, must not pass."""
     import clrender
