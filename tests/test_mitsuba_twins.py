@@ -77,8 +77,9 @@ def _path_rules(scene):
     ("cornell_meshes", _mirror), ("filter_lanczos_crop", _crop_off_by_one), ("thinlens", _pinhole),
     ("gaussian_sample_border", _border_ignored), ("filter_gaussian_fov_y", _fov_one_percent_wider),
     ("integrator_volpath_depth2", _path_rules), ("integrator_volpath_hide", _path_rules),
+    ("orthographic", _mirror),
 ], ids=["mirrored camera", "crop window 1 px off", "pinhole for thin lens", "sample_border ignored", "fov 1% wider",
-        "volpath depth as path's", "volpath hide_emitters as path's"])
+        "volpath depth as path's", "volpath hide_emitters as path's", "mirrored orthographic sensor"])
 def test_twin_test_fails_when_clrender_is_wrong(name, mutate):
     """The harness can fail: each twin, rendered with one thing it verifies done wrong, must not pass."""
     import clrender

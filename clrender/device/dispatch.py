@@ -174,7 +174,8 @@ RFILTER = Kind(
             ("crop_x", "float"), ("crop_y", "float"), ("film_width", "float"), ("film_height", "float"),
             ("clip_window", "uint"),     # 1: samples whose filter offset leaves the window count with weight 0
             ("lens_radius", "float"),    # thin lens aperture radius (0: pinhole)
-            ("focus_distance", "float")),  # distance of the plane in focus along the viewing axis
+            ("focus_distance", "float"),  # distance of the plane in focus along the viewing axis
+            ("ortho", "uint")),          # 1: orthographic (rays along the z axis from the film's plane)
     param_bytes=16, flags=(), dispatch_name="filter_profile", row="cam", type_field="filter_type",
     methods=(Method("eval", "float", "__global const Camera* cam, float x", "cam, x", "return 0.0f;",
                     required=True),),
