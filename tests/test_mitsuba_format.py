@@ -312,11 +312,19 @@ def test_scene_without_sensor_is_an_error():
     assert "no sensor" in str(e)
 
 
-def test_substitute_samplers_warn(caplog):
-    with caplog.at_level(logging.WARNING, logger="clrender"):
-        scene = load('<sensor type="perspective"><sampler type="stratified"><integer name="sample_count" value="16"/>'
-                     '<boolean name="jitter" value="false"/></sampler><film type="hdrfilm"/></sensor>')
-    assert scene.sample_count == 16 and "independent sampler" in caplog.text
+def test_stratifying_samplers_use_scrambled_sobol(caplog):
+    from clrender.pack import pack_scene
+    from clrender.renderer import render_defines
+
+    for kind in ("stratified", "multijitter", "orthogonal", "ldsampler"):
+        with caplog.at_level(logging.INFO, logger="clrender"):
+            scene = load(f'<sensor type="perspective"><sampler type="{kind}"><integer name="sample_count" '
+                         'value="16"/></sampler><film type="hdrfilm"/></sensor><shape type="cube"/>')
+        assert scene.sample_count == 16 and "scrambled Sobol" in caplog.text
+        buffers = pack_scene(scene)
+        assert buffers.sampler == "sobol" and render_defines(scene, buffers)["CLR_SAMPLER_SOBOL"] == 1
+    plain = load('<shape type="cube"/>')
+    assert "CLR_SAMPLER_SOBOL" not in render_defines(plain, pack_scene(plain))
 
 
 # ---------------------------------------------------------------------------------------------- meshes
