@@ -9,7 +9,8 @@ Each case is a Mitsuba plugin dict (texture filenames relative to this folder; t
 the same dict). Each surface point has a uv, Mitsuba's interaction geometry (a shading frame whose first axis
 follows dp/du, a geometric normal near the shading normal, dp/du and dp/dv) and wi; the file holds that geometry in
 the local frame (dp/du, dp/dv, the geometric normal; and dp/du in world space) as clrender's BSDF query carries it,
-the wo of each pair (local) and Mitsuba's eval (f |cos theta_o|, as it returns it) and pdf.
+the wo of each pair (local) and Mitsuba's eval (f |cos theta_o|, as it returns it) and pdf; and, for a few bitmaps,
+the uv gradient Mitsuba's eval_1_grad gives at random uvs (what bumpmap differentiates).
 """
 import json
 import sys
@@ -82,6 +83,14 @@ CASES = {
     "normalmap-of-bumpmap": {"type": "normalmap", "normalmap": NM,
                              "bsdf": {"type": "bumpmap", "height": bitmap("perturbed_height.png", raw=True),
                                       "scale": 0.5, "bsdf": ANISO}},
+}
+#: bitmaps whose uv gradient (eval_1_grad) is recorded at random uvs: every wrap mode, a to_uv that turns a
+#: non-square image, an sRGB-decoded colour image (the luminance is differentiated), and `nearest` (no gradient)
+GRADIENTS = {
+    "repeat": bitmap("perturbed_height.png", raw=True),
+    "mirror-to_uv": bitmap("perturbed_ripple.png", raw=True, wrap_mode="mirror", to_uv="rotate"),
+    "clamp-srgb": bitmap("perturbed_ripple.png", wrap_mode="clamp"),
+    "nearest": bitmap("perturbed_height.png", raw=True, filter_type="nearest"),
 }
 #: to_uv transforms by name (a string in a dict above): the test builds the same 4x4 matrix
 TO_UV = {"rotate": [[1.2 * np.cos(0.5), -0.7 * np.sin(0.5), 0, 0.1], [1.2 * np.sin(0.5), 0.7 * np.cos(0.5), 0, -0.3],
@@ -159,12 +168,23 @@ def main():
                 pdf.append(float(pd))
             rows.append({"eval": ev, "pdf": pdf})
         cases[name] = {"dict": d, "points": rows}
+    rng = np.random.default_rng(7)
+    grads = {}
+    for name, d in GRADIENTS.items():
+        tex = mi.load_dict(to_mitsuba(d, mi))
+        uvs = rng.uniform(-1.5, 2.5, (40, 2))
+        g = []
+        for uv in uvs:
+            si = mi.SurfaceInteraction3f()
+            si.uv = mi.Point2f(*uv)
+            g.append([float(c) for c in tex.eval_1_grad(si)])
+        grads[name] = {"dict": d, "uv": uvs.tolist(), "grad": g}
     F = [p["frame"] for p in pts]
     data = {"mitsuba_version": mi.__version__, "variant": "scalar_rgb", "to_uv": TO_UV,
             "points": [{"uv": p["uv"].tolist(), "wi": p["wi"].tolist(), "wo": p["wo"].tolist(),
                         "geometry": [(f @ p["dpdu"]).tolist(), (f @ p["dpdv"]).tolist(), (f @ p["ng"]).tolist(),
                                      p["dpdu"].tolist()]} for p, f in zip(pts, F)],
-            "cases": cases}
+            "cases": cases, "gradients": grads}
 
     def rounded(x):
         if isinstance(x, float):
