@@ -266,3 +266,33 @@ def test_nesting_deeper_than_the_dispatch_is_a_located_error():
         d = {"type": "normalmap", "normalmap": {"type": "rgb", "value": [0.5, 0.5, 1]}, "bsdf": d}
     with pytest.raises(SceneError, match="nested 4 deep; at most 3 levels"):
         create(spec(d))
+
+
+# ------------------------------------------------------------------------------------------- aov sh_normal
+AOV_SCENE = """<scene version="3.0.0">
+    <integrator type="aov"><string name="aovs" value="nn:sh_normal"/></integrator>
+    <sensor type="perspective">
+        <transform name="to_world"><lookat origin="0, 0, 3" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="1"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/>
+            <rfilter type="box"/></film>
+    </sensor>
+    <shape type="rectangle">{bsdf}</shape>
+</scene>"""
+NM = '<bsdf type="normalmap"><rgb name="normalmap" value="0.8, 0.5, 0.9"/><bsdf type="diffuse"/></bsdf>'
+
+
+@pytest.mark.parametrize("bsdf, want", [
+    ('<bsdf type="diffuse"/>', [0, 0, 1]),
+    (NM, [0.6, 0, 0.8]),
+    (f'<bsdf type="twosided">{NM}</bsdf>', [0, 0, 1]),
+], ids=["diffuse", "normalmap", "twosided-normalmap"])
+def test_aov_sh_normal_is_the_perturbed_normal(tmp_path, bsdf, want):
+    """Mitsuba 3.9.1's aov shows a top-level normalmap's normal as sh_normal (BSDF::sh_frame), not a nested one's:
+    these values are what it renders for these scenes."""
+    import clrender
+
+    path = tmp_path / "aov.xml"
+    path.write_text(AOV_SCENE.format(bsdf=bsdf))
+    film = clrender.render(clrender.load_scene(path), seed=1)
+    np.testing.assert_allclose(film.image[1:3, 1:3].reshape(-1, 3), np.broadcast_to(want, (4, 3)), atol=1e-5)

@@ -36,6 +36,7 @@ from ..device import dispatch
 @register("bsdf", "bumpmap", fmt="mitsuba")
 class BumpMap(Composite):
     kernel = "bsdfs/bumpmap.h"
+    METHODS = ("eval", "pdf", "sample", "albedo", "normal")
     PARAMS = [("tex", "uint"), ("scale", "float"), ("child", "int"), ("options", "uint")]
     owner = '<bsdf type="bumpmap">'
 

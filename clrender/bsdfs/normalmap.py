@@ -35,6 +35,7 @@ def perturb_options(props) -> int:
 @register("bsdf", "normalmap", fmt="mitsuba")
 class NormalMap(Composite):
     kernel = "bsdfs/normalmap.h"
+    METHODS = ("eval", "pdf", "sample", "albedo", "normal")
     PARAMS = [("normalmap", "texture"), ("child", "int"), ("options", "uint")]
     owner = '<bsdf type="normalmap">'
 

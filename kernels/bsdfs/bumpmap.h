@@ -48,3 +48,8 @@ INLINE float3 COMPOSITE_FN(bumpmap_sample)(__global const Bsdf* b, BsdfQuery* q,
 INLINE float3 COMPOSITE_FN(bumpmap_albedo)(__global const Bsdf* b, const BsdfQuery* q) {
     return CHILD_FN(albedo)(b + b->p.bumpmap.child, q);
 }
+
+/* the perturbed normal (aov's sh_normal); a wrapper's own, not its child's (Mitsuba 3.9's sh_frame) */
+INLINE float3 COMPOSITE_FN(bumpmap_normal)(__global const Bsdf* b, const BsdfQuery* q) {
+    return bumpmap_frame(b, q).n;
+}

@@ -41,3 +41,8 @@ INLINE float3 COMPOSITE_FN(normalmap_sample)(__global const Bsdf* b, BsdfQuery* 
 INLINE float3 COMPOSITE_FN(normalmap_albedo)(__global const Bsdf* b, const BsdfQuery* q) {
     return CHILD_FN(albedo)(b + b->p.normalmap.child, q);
 }
+
+/* the perturbed normal (aov's sh_normal); a wrapper's own, not its child's (Mitsuba 3.9's sh_frame) */
+INLINE float3 COMPOSITE_FN(normalmap_normal)(__global const Bsdf* b, const BsdfQuery* q) {
+    return normalmap_frame(b, q).n;
+}
