@@ -85,6 +85,10 @@ BSDF = Kind(
                "q->wo = (float3)(0.0f, 0.0f, 1.0f); q->eta = 1.0f; q->measure = MEASURE_SOLID_ANGLE; "
                "return (float3)(0.0f);", required=True),
         Method("albedo", "float3", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return (float3)(1.0f);"),
+        # the normal the BSDF shades with, in the local frame: a normalmap's or bumpmap's, (0, 0, 1) for the rest
+        # (Mitsuba's BSDF::sh_frame, which aov's sh_normal shows)
+        Method("normal", "float3", "__global const Bsdf* b, const BsdfQuery* q", "b, q",
+               "return (float3)(0.0f, 0.0f, 1.0f);"),
     ),
     after=("bsdfs/common.h", "texture.h"),
     # twosided(blendbsdf(mask(diffuse))) is three levels: each level is a switch over the composites that calls
