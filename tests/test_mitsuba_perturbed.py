@@ -18,41 +18,31 @@ import pytest
 from clrender import plugins  # noqa: F401  (registers the plugins)
 from clrender.device import layout
 from clrender.errors import SceneError
-from clrender.scene.properties import PropertyList
 from clrender.scene.registry import create
 from clrender.scene.spec import PluginSpec
 from clrender.scene.transform import Transform
 from clrender.testing.chi2 import bin_directions, chi2_test, expected_from_grid, refined_direction_grid
 from clrender.testing.kernels import bsdf_pdf_eval_batch, bsdf_sample_batch
+from clrender.testing.mitsuba_dict import spec_from_dict
 from clrender.textures.texture import TextureTable
 
 VALUES = Path(__file__).resolve().parent / "mitsuba" / "bsdf_values"
 DATA = json.loads((VALUES / "perturbed.json").read_text())
-TEXTURES = ("bitmap", "checkerboard")
 
 
-def spec(d: dict, tag: str = "bsdf", name=None) -> PluginSpec:
+def _files_and_to_uv(props, key, value) -> bool:
+    if key == "filename":
+        props.add(key, "string", str(VALUES / value))
+    elif key == "to_uv":
+        props.add(key, "transform", Transform(DATA["to_uv"][value]))
+    else:
+        return False
+    return True
+
+
+def spec(d: dict, tag: str = "bsdf") -> PluginSpec:
     """The plugin spec of a Mitsuba-style dict (nested textures by their key, files in VALUES)."""
-    props = PropertyList(f'<{tag} type="{d["type"]}">', None, fmt="mitsuba")
-    children = []
-    for k, v in d.items():
-        if k == "type":
-            continue
-        if isinstance(v, dict) and v.get("type") == "rgb":
-            props.add(k, "color", v["value"])
-        elif isinstance(v, dict):
-            children.append(spec(v, "texture" if v["type"] in TEXTURES else "bsdf", k))
-        elif isinstance(v, bool):
-            props.add(k, "boolean", v)
-        elif isinstance(v, (int, float)):
-            props.add(k, "float", float(v))
-        elif k == "filename":
-            props.add(k, "string", str(VALUES / v))
-        elif k == "to_uv":
-            props.add(k, "transform", Transform(DATA["to_uv"][v]))
-        else:
-            props.add(k, "string", v)
-    return PluginSpec(tag, d["type"], name, props, children, None, format="mitsuba")
+    return spec_from_dict(d, tag, special=_files_and_to_uv)
 
 
 def rows_of(d):

@@ -6,20 +6,38 @@ from ..scene.properties import PropertyList
 from ..scene.spec import PluginSpec
 
 
-def spec_from_dict(d: dict, tag: str = "bsdf") -> PluginSpec:
+#: the Mitsuba texture plugins a nested dict may be (its tag is then <texture>, else <bsdf>)
+TEXTURES = ("bitmap", "checkerboard")
+
+
+def spec_from_dict(d: dict, tag: str = "bsdf", name: str | None = None, special=None) -> PluginSpec:
+    """``special(props, key, value)``, when given, may add a property itself (e.g. a file name resolved
+    somewhere, a transform) and return True; nested dicts become children named by their key."""
     props = PropertyList(f'<{tag} type="{d["type"]}">', None, fmt="mitsuba")
     children = []
     for k, v in d.items():
-        if k == "type":
+        if k == "type" or (special is not None and special(props, k, v)):
             continue
         if isinstance(v, dict) and v.get("type") == "rgb":
             props.add(k, "color", v["value"])
         elif isinstance(v, dict):
-            children.append(spec_from_dict(v))
+            children.append(spec_from_dict(v, "texture" if v["type"] in TEXTURES else "bsdf", k, special))
         elif isinstance(v, bool):
             props.add(k, "boolean", v)
         elif isinstance(v, (int, float)):
             props.add(k, "float", float(v))
         else:
             props.add(k, "string", v)
-    return PluginSpec(tag, d["type"], None, props, children, None, format="mitsuba")
+    return PluginSpec(tag, d["type"], name, props, children, None, format="mitsuba")
+
+
+def rounded(x):
+    """Floats rounded to 7 significant digits (float32's precision) through nested lists and dicts: the reference
+    values that the dev scripts write from Mitsuba, in smaller files."""
+    if isinstance(x, float):
+        return float(f"{x:.7g}")
+    if isinstance(x, (list, tuple)):
+        return [rounded(v) for v in x]
+    if isinstance(x, dict):
+        return {k: rounded(v) for k, v in x.items()}
+    return x

@@ -17,39 +17,4 @@ INLINE Frame bumpmap_frame(__global const Bsdf* b, const BsdfQuery* q) {
 }
 #endif
 
-INLINE float3 COMPOSITE_FN(bumpmap_eval)(__global const Bsdf* b, const BsdfQuery* q) {
-    Frame f = bumpmap_frame(b, q);
-    BsdfQuery c;
-    if (!perturb_query(&f, q, &c)) return (float3)(0.0f);
-    /* the child's f holds no cosine, which the integrators take of wo in this frame, not the child's */
-    return CHILD_FN(eval)(b + b->p.bumpmap.child, &c) *
-           (fabs(c.wo.z) / fabs(q->wo.z) * perturb_shadowing(b->p.bumpmap.options, &f, q->wo));
-}
-
-INLINE float COMPOSITE_FN(bumpmap_pdf)(__global const Bsdf* b, const BsdfQuery* q) {
-    Frame f = bumpmap_frame(b, q);
-    BsdfQuery c;
-    if (!perturb_query(&f, q, &c)) return 0.0f;
-    return CHILD_FN(pdf)(b + b->p.bumpmap.child, &c);
-}
-
-INLINE float3 COMPOSITE_FN(bumpmap_sample)(__global const Bsdf* b, BsdfQuery* q, float2 u) {
-    Frame f = bumpmap_frame(b, q);
-    BsdfQuery c;
-    perturb_query(&f, q, &c);
-    float3 w = CHILD_FN(sample)(b + b->p.bumpmap.child, &c, u);
-    q->wo = to_world(&f, c.wo);
-    q->eta = c.eta;
-    q->measure = c.measure;
-    if (!(c.wo.z * q->wo.z > 0.0f)) return (float3)(0.0f);
-    return w * perturb_shadowing(b->p.bumpmap.options, &f, q->wo);
-}
-
-INLINE float3 COMPOSITE_FN(bumpmap_albedo)(__global const Bsdf* b, const BsdfQuery* q) {
-    return CHILD_FN(albedo)(b + b->p.bumpmap.child, q);
-}
-
-/* the perturbed normal (aov's sh_normal); a wrapper's own, not its child's (Mitsuba 3.9's sh_frame) */
-INLINE float3 COMPOSITE_FN(bumpmap_normal)(__global const Bsdf* b, const BsdfQuery* q) {
-    return bumpmap_frame(b, q).n;
-}
+PERTURB_WRAPPER(bumpmap)

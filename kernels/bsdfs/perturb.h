@@ -60,4 +60,40 @@ INLINE float perturb_shadowing(uint options, const Frame* f, float3 wo) {
     return 2.0f / (1.0f + sqrt(1.0f + a2 * perturb_tan2(wo)));
 }
 
+/* The methods of a perturbed-frame wrapper NAME (normalmap, bumpmap), for one nesting level (COMPOSITE_FN,
+   CHILD_FN): its frame comes from NAME##_frame(b, q), its row holds p.NAME.child and p.NAME.options.
+   eval: the child's f holds no cosine, which the integrators take of wo in this frame, not the child's.
+   normal: the perturbed normal (aov's sh_normal), a wrapper's own, not its child's (Mitsuba 3.9's sh_frame). */
+#define PERTURB_WRAPPER(NAME)                                                                                    \
+INLINE float3 COMPOSITE_FN(NAME##_eval)(__global const Bsdf* b, const BsdfQuery* q) {                            \
+    Frame f = NAME##_frame(b, q);                                                                                \
+    BsdfQuery c;                                                                                                 \
+    if (!perturb_query(&f, q, &c)) return (float3)(0.0f);                                                        \
+    return CHILD_FN(eval)(b + b->p.NAME.child, &c) *                                                             \
+           (fabs(c.wo.z) / fabs(q->wo.z) * perturb_shadowing(b->p.NAME.options, &f, q->wo));                    \
+}                                                                                                                \
+INLINE float COMPOSITE_FN(NAME##_pdf)(__global const Bsdf* b, const BsdfQuery* q) {                              \
+    Frame f = NAME##_frame(b, q);                                                                                \
+    BsdfQuery c;                                                                                                 \
+    if (!perturb_query(&f, q, &c)) return 0.0f;                                                                  \
+    return CHILD_FN(pdf)(b + b->p.NAME.child, &c);                                                               \
+}                                                                                                                \
+INLINE float3 COMPOSITE_FN(NAME##_sample)(__global const Bsdf* b, BsdfQuery* q, float2 u) {                      \
+    Frame f = NAME##_frame(b, q);                                                                                \
+    BsdfQuery c;                                                                                                 \
+    perturb_query(&f, q, &c);                                                                                    \
+    float3 w = CHILD_FN(sample)(b + b->p.NAME.child, &c, u);                                                     \
+    q->wo = to_world(&f, c.wo);                                                                                  \
+    q->eta = c.eta;                                                                                              \
+    q->measure = c.measure;                                                                                      \
+    if (!(c.wo.z * q->wo.z > 0.0f)) return (float3)(0.0f);                                                       \
+    return w * perturb_shadowing(b->p.NAME.options, &f, q->wo);                                                  \
+}                                                                                                                \
+INLINE float3 COMPOSITE_FN(NAME##_albedo)(__global const Bsdf* b, const BsdfQuery* q) {                          \
+    return CHILD_FN(albedo)(b + b->p.NAME.child, q);                                                             \
+}                                                                                                                \
+INLINE float3 COMPOSITE_FN(NAME##_normal)(__global const Bsdf* b, const BsdfQuery* q) {                          \
+    return NAME##_frame(b, q).n;                                                                                 \
+}
+
 #endif

@@ -57,25 +57,24 @@ INLINE float3 mesh_shading_normal(const SceneData* sd, __global const Shape* s, 
     return l2 > 0.0f ? n * (1.0f / sqrt(l2)) : ng;
 }
 
-/* Mitsuba's dp/du of triangle t: from its uvs, or where it has none (or they are degenerate) its first edge. */
-INLINE float3 mesh_dpdu(const SceneData* sd, __global const Shape* s, const MeshTriangle* t) {
+/* Mitsuba's dp/du and dp/dv of triangle t: from its uvs, or where it has none (or they are degenerate) its first
+   and second edges. */
+INLINE float3 mesh_dpduv(const SceneData* sd, __global const Shape* s, const MeshTriangle* t, float3* dpdv) {
     float3 dp0 = t->p1 - t->p0, dp1 = t->p2 - t->p0;
+    *dpdv = dp1;
     if (!(s->flags & SHAPE_HAS_UVS)) return dp0;
     float2 uv0 = sd->uvs[t->i0], duv0 = sd->uvs[t->i1] - uv0, duv1 = sd->uvs[t->i2] - uv0;
     float det = duv0.x * duv1.y - duv0.y * duv1.x;
-    return det != 0.0f ? (dp0 * duv1.y - dp1 * duv0.y) * (1.0f / det) : dp0;
+    if (det == 0.0f) return dp0;
+    float inv = 1.0f / det;
+    *dpdv = (dp1 * duv0.x - dp0 * duv1.x) * inv;
+    return (dp0 * duv1.y - dp1 * duv0.y) * inv;
 }
 
-#ifdef CLR_SURFACE_DERIVATIVES
-/* Mitsuba's dp/dv of triangle t (the partner of mesh_dpdu): from its uvs, or its second edge. */
-INLINE float3 mesh_dpdv(const SceneData* sd, __global const Shape* s, const MeshTriangle* t) {
-    float3 dp0 = t->p1 - t->p0, dp1 = t->p2 - t->p0;
-    if (!(s->flags & SHAPE_HAS_UVS)) return dp1;
-    float2 uv0 = sd->uvs[t->i0], duv0 = sd->uvs[t->i1] - uv0, duv1 = sd->uvs[t->i2] - uv0;
-    float det = duv0.x * duv1.y - duv0.y * duv1.x;
-    return det != 0.0f ? (dp1 * duv0.x - dp0 * duv1.x) * (1.0f / det) : dp1;
+INLINE float3 mesh_dpdu(const SceneData* sd, __global const Shape* s, const MeshTriangle* t) {
+    float3 dpdv;
+    return mesh_dpduv(sd, s, t, &dpdv);
 }
-#endif
 
 INLINE bool mesh_surface(const SceneData* sd, __global const Shape* s, const Ray* r, const Hit* h,
                          Intersection* its) {
@@ -104,8 +103,8 @@ INLINE bool mesh_surface(const SceneData* sd, __global const Shape* s, const Ray
     its->sh = (s->flags & SHAPE_NEEDS_UV) ? frame_from_tangent(n, mesh_dpdu(sd, s, &tri)) : frame_from_normal(n);
 #ifdef CLR_SURFACE_DERIVATIVES
     bool uv = (s->flags & SHAPE_NEEDS_UV) != 0u;
-    its->dpdu = uv ? mesh_dpdu(sd, s, &tri) : (float3)(0.0f);
-    its->dpdv = uv ? mesh_dpdv(sd, s, &tri) : (float3)(0.0f);
+    its->dpdu = uv ? mesh_dpduv(sd, s, &tri, &its->dpdv) : (float3)(0.0f);
+    if (!uv) its->dpdv = (float3)(0.0f);
 #endif
     its->tri = h->prim;
     return true;

@@ -24,6 +24,24 @@ INLINE float3 bitmap_texel(__global const Texture* t, int x, int y) {
     return px[y * (int)t->p.bitmap.dims.x + x].xyz;
 }
 
+/* The four texels around a (bilinear) lookup at texture coordinates (s, tt) and their weights a (along x) and b. */
+typedef struct { int xa, xb, ya, yb; float a, b; } BitmapTaps;
+
+INLINE BitmapTaps bitmap_taps(uint4 d, float s, float tt) {
+    int w = (int)d.x, h = (int)d.y;
+    float fx = s * (float)w - 0.5f, fy = tt * (float)h - 0.5f;
+    float x0f = floor(fx), y0f = floor(fy);
+    BitmapTaps k;
+    k.a = fx - x0f;
+    k.b = fy - y0f;
+    int x0 = bitmap_floor(x0f), y0 = bitmap_floor(y0f);
+    k.xa = bitmap_wrap(x0, w, d.w);
+    k.xb = bitmap_wrap(x0 + 1, w, d.w);
+    k.ya = bitmap_wrap(y0, h, d.w);
+    k.yb = bitmap_wrap(y0 + 1, h, d.w);
+    return k;
+}
+
 INLINE float3 bitmap_eval(__global const Texture* t, float2 uv) {
     uint4 d = t->p.bitmap.dims;
     int w = (int)d.x, h = (int)d.y;
@@ -32,15 +50,10 @@ INLINE float3 bitmap_eval(__global const Texture* t, float2 uv) {
     if (d.z == 1u)
         return bitmap_texel(t, bitmap_wrap(bitmap_floor(s * (float)w), w, d.w),
                             bitmap_wrap(bitmap_floor(tt * (float)h), h, d.w));
-    float fx = s * (float)w - 0.5f, fy = tt * (float)h - 0.5f;
-    float x0f = floor(fx), y0f = floor(fy);
-    float a = fx - x0f, b = fy - y0f;
-    int x0 = bitmap_floor(x0f), y0 = bitmap_floor(y0f);
-    int xa = bitmap_wrap(x0, w, d.w), xb = bitmap_wrap(x0 + 1, w, d.w);
-    int ya = bitmap_wrap(y0, h, d.w), yb = bitmap_wrap(y0 + 1, h, d.w);
-    float3 top = bitmap_texel(t, xa, ya) * (1.0f - a) + bitmap_texel(t, xb, ya) * a;
-    float3 bot = bitmap_texel(t, xa, yb) * (1.0f - a) + bitmap_texel(t, xb, yb) * a;
-    return top * (1.0f - b) + bot * b;
+    BitmapTaps k = bitmap_taps(d, s, tt);
+    float3 top = bitmap_texel(t, k.xa, k.ya) * (1.0f - k.a) + bitmap_texel(t, k.xb, k.ya) * k.a;
+    float3 bot = bitmap_texel(t, k.xa, k.yb) * (1.0f - k.a) + bitmap_texel(t, k.xb, k.yb) * k.a;
+    return top * (1.0f - k.b) + bot * k.b;
 }
 
 /* The uv gradient of the first channel as Mitsuba 3.9's eval_1_grad takes it (bumpmap's height): the derivative of
@@ -50,20 +63,15 @@ INLINE float3 bitmap_eval(__global const Texture* t, float2 uv) {
 INLINE float2 bitmap_grad(__global const Texture* t, float2 uv) {
     uint4 d = t->p.bitmap.dims;
     if (d.z == 1u) return (float2)(0.0f);
-    int w = (int)d.x, h = (int)d.y;
     float4 r0 = t->p.bitmap.to_uv[0], r1 = t->p.bitmap.to_uv[1];
     float s = r0.x * uv.x + r0.y * uv.y + r0.z, tt = r1.x * uv.x + r1.y * uv.y + r1.z;
-    float fx = s * (float)w - 0.5f, fy = tt * (float)h - 0.5f;
-    float x0f = floor(fx), y0f = floor(fy);
-    float a = fx - x0f, b = fy - y0f;
-    int x0 = bitmap_floor(x0f), y0 = bitmap_floor(y0f);
-    int xa = bitmap_wrap(x0, w, d.w), xb = bitmap_wrap(x0 + 1, w, d.w);
-    int ya = bitmap_wrap(y0, h, d.w), yb = bitmap_wrap(y0 + 1, h, d.w);
-    float f00 = bitmap_texel(t, xa, ya).x, f10 = bitmap_texel(t, xb, ya).x;
-    float f01 = bitmap_texel(t, xa, yb).x, f11 = bitmap_texel(t, xb, yb).x;
+    BitmapTaps k = bitmap_taps(d, s, tt);
+    float a = k.a, b = k.b;
+    float f00 = bitmap_texel(t, k.xa, k.ya).x, f10 = bitmap_texel(t, k.xb, k.ya).x;
+    float f01 = bitmap_texel(t, k.xa, k.yb).x, f11 = bitmap_texel(t, k.xb, k.yb).x;
     float dx = (1.0f - b) * (f10 - f00) + b * (f11 - f01);
     float dy = (1.0f - a) * (f01 - f00) + a * (f11 - f10);
-    return (float2)((float)w * (r0.x * dx + r1.x * dy), (float)h * (r0.y * dx + r1.y * dy));
+    return (float2)((float)d.x * (r0.x * dx + r1.x * dy), (float)d.y * (r0.y * dx + r1.y * dy));
 }
 
 #endif

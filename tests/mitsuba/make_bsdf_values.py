@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from clrender.testing.mitsuba_dict import rounded
+
 OUT = Path(__file__).parent / "bsdf_values" / "conductors_dielectrics.json"
 
 GLOSSY = [
@@ -130,15 +132,6 @@ def main(argv):
             events.append(ev)
         cases.append({"type": kind, "props": props, "events": events})
     OUT.parent.mkdir(parents=True, exist_ok=True)
-    def rounded(x):   # 7 significant digits: float32's precision, a smaller file
-        if isinstance(x, float):
-            return float(f"{x:.7g}")
-        if isinstance(x, (list, tuple)):
-            return [rounded(v) for v in x]
-        if isinstance(x, dict):
-            return {k: rounded(v) for k, v in x.items()}
-        return x
-
     OUT.write_text(json.dumps(rounded({"mitsuba_version": mi.__version__, "variant": "scalar_rgb",
                                        "wi": wi_all.tolist(), "wo": wo_all.tolist(), "cases": cases}), separators=(",", ":")))
     print(f"wrote {OUT} ({len(cases)} cases)")

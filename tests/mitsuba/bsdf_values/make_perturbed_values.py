@@ -21,6 +21,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parents[2]))
 from clrender.png import encode_png  # noqa: E402
+from clrender.testing.mitsuba_dict import rounded  # noqa: E402
 
 
 def textures():
@@ -185,15 +186,6 @@ def main():
                         "geometry": [(f @ p["dpdu"]).tolist(), (f @ p["dpdv"]).tolist(), (f @ p["ng"]).tolist(),
                                      p["dpdu"].tolist()]} for p, f in zip(pts, F)],
             "cases": cases, "gradients": grads}
-
-    def rounded(x):
-        if isinstance(x, float):
-            return float(f"{x:.7g}")
-        if isinstance(x, (list, tuple)):
-            return [rounded(v) for v in x]
-        if isinstance(x, dict):
-            return {k: rounded(v) for k, v in x.items()}
-        return x
 
     (HERE / "perturbed.json").write_text(json.dumps(rounded(data), separators=(",", ":")))
     print(f"wrote {HERE / 'perturbed.json'} ({len(cases)} cases x {len(pts)} points)")
