@@ -307,6 +307,15 @@ def test_aovs_of_the_plane(tmp_path):
     assert np.all(render(tmp_path, sky, "aov", spp=4, aovs="dd.y:depth").image == 0.0)
 
 
+def test_depth_integrator_is_aovs_depth(tmp_path):
+    """Mitsuba's `depth` renders what `aov` renders for `dd.y:depth` (as Mitsuba 3.9.1 does)."""
+    xml = A.polygon_light_scene(tmp_path, "path_mis")
+    a = render(tmp_path, xml, "depth", spp=4)
+    b = render(tmp_path, xml, "aov", spp=4, aovs="dd.y:depth")
+    np.testing.assert_array_equal(a.image, b.image)
+    assert a.image.max() > 0
+
+
 # --- errors --------------------------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("type_name,props,message", [
