@@ -1,0 +1,140 @@
+"""Development tool: evaluate Mitsuba 3's principled BSDF at fixed direction pairs and write the values the default
+test run compares clrender with (tests/test_mitsuba_principled.py).
+
+    pip install mitsuba==3.9.1      # dev only, never a dependency of clrender
+    python tests/mitsuba/bsdf_values/make_principled_values.py
+
+Each case is a Mitsuba plugin dict (the test builds the clrender BSDF from the same dict) and the variant it is
+evaluated in: scalar_rgb, except where Mitsuba's variants disagree (scalar_rgb adds sheen only where the diffuse lobe
+is on, so not at spec_trans = 1; the vectorised variants, which render the twin references, add it there too:
+llvm_ad_rgb for that case). The file holds the direction pairs (local frame, z = normal; wi on both sides, wo over
+the sphere and near the mirror and refraction directions) and, per case, Mitsuba's eval (f |cos theta_o|, as
+Mitsuba returns it) and pdf per pair.
+"""
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+LLVM = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
+
+
+def refracted(wi, eta):
+    e = eta if wi[2] > 0 else 1 / eta
+    s2 = (1 - wi[2] ** 2) / (e * e)
+    if s2 >= 1:
+        return None
+    return np.array([-wi[0] / e, -wi[1] / e, -np.sign(wi[2]) * np.sqrt(1 - s2)])
+
+
+def directions():
+    """(wi, wo) pairs: wi at several elevations above and below; wo on a grid over the sphere plus near the mirror
+    and (eta 1.5) refraction directions, where the glossy lobes are."""
+    pairs = []
+    rng = np.random.default_rng(31)
+    for side in (1, -1):
+        for th_i in ((0.0, 30.0, 60.0, 82.0) if side > 0 else (10.0, 45.0, 75.0)):
+            t = np.radians(th_i)
+            wi = np.array([np.sin(t) * 0.8, np.sin(t) * 0.6, side * np.cos(t)])
+            for th_o in (5.0, 35.0, 60.0, 85.0, 100.0, 130.0, 170.0):
+                for ph_o in (0.0, 110.0, 200.0, 290.0):
+                    a, p = np.radians(th_o), np.radians(ph_o)
+                    pairs.append((wi, np.array([np.sin(a) * np.cos(p), np.sin(a) * np.sin(p), side * np.cos(a)])))
+            targets = [wi * np.array([-1, -1, 1])]
+            r = refracted(wi, 1.5)
+            if r is not None:
+                targets.append(r)
+            for d in targets:
+                for scale in (0.12,) * 5 + (0.015,) * 3:   # the wide lobes, and the sharp ones (clearcoat, roughness 0.05)
+                    wo = d + rng.normal(scale=scale, size=3)
+                    pairs.append((wi, wo / np.linalg.norm(wo)))
+    return pairs
+
+
+def rgb(*v):
+    return {"type": "rgb", "value": list(v)}
+
+
+CASES = {
+    "default": {"type": "principled"},
+    "metal-tinted": {"type": "principled", "base_color": rgb(0.9, 0.6, 0.2), "metallic": 0.8, "roughness": 0.3,
+                     "spec_tint": 0.5},
+    "metal-full-smooth": {"type": "principled", "base_color": rgb(0.95, 0.9, 0.85), "metallic": 1.0,
+                          "roughness": 0.1},
+    "glass-eta": {"type": "principled", "base_color": rgb(0.9, 0.8, 0.6), "spec_trans": 0.7, "roughness": 0.2,
+                  "eta": 1.45},
+    "glass-full-specular": {"type": "principled", "spec_trans": 1.0, "roughness": 0.5, "specular": 0.3},
+    "sheen-clearcoat": {"type": "principled", "base_color": rgb(0.2, 0.4, 0.7), "roughness": 0.6, "sheen": 0.6,
+                        "sheen_tint": 0.4, "clearcoat": 0.8, "clearcoat_gloss": 0.6},
+    "anisotropic": {"type": "principled", "base_color": rgb(0.5, 0.5, 0.3), "anisotropic": 0.7, "roughness": 0.4,
+                    "metallic": 0.3, "spec_tint": 0.2},
+    "flatness-rough": {"type": "principled", "base_color": rgb(0.7, 0.3, 0.3), "flatness": 0.5, "roughness": 0.9},
+    "everything": {"type": "principled", "base_color": rgb(0.3, 0.8, 0.5), "roughness": 0.35, "anisotropic": 0.3,
+                   "metallic": 0.2, "spec_trans": 0.4, "specular": 0.7, "spec_tint": 0.3, "sheen": 0.3,
+                   "sheen_tint": 0.7, "flatness": 0.2, "clearcoat": 0.5, "clearcoat_gloss": 0.3,
+                   "main_specular_sampling_rate": 0.7, "clearcoat_sampling_rate": 2.0,
+                   "diffuse_reflectance_sampling_rate": 0.5},
+    "smooth-transmissive-clearcoat": {"type": "principled", "roughness": 0.05, "spec_trans": 0.5, "clearcoat": 1.0,
+                                      "clearcoat_gloss": 0.9, "eta": 1.33},
+    "eta-below-one": {"type": "principled", "spec_trans": 0.6, "eta": 0.8, "roughness": 0.3},
+    "zero-specular-transmissive": {"type": "principled", "spec_trans": 0.5, "specular": 0.0, "roughness": 0.4},
+    "zero-roughness-metal": {"type": "principled", "metallic": 0.6, "roughness": 0.0, "base_color": rgb(0.5, 0.9, 1)},
+}
+# Mitsuba's variants disagree here (see the docstring): evaluated with the vectorised one
+VECTORISED = {
+    "glass-sheen": {"type": "principled", "spec_trans": 1.0, "sheen": 0.8, "sheen_tint": 0.5,
+                    "base_color": rgb(0.6, 0.7, 0.9), "roughness": 0.3},
+}
+
+
+def evaluate(mi, variant, cases, pairs):
+    mi.set_variant(variant)
+    ctx = mi.BSDFContext()
+    out = {}
+    wi = np.array([p[0] for p in pairs])
+    wo = np.array([p[1] for p in pairs])
+    for name, d in cases.items():
+        bsdf = mi.load_dict(d)
+        if variant == "scalar_rgb":
+            vals, pdfs = [], []
+            for a, b in pairs:
+                si = mi.SurfaceInteraction3f()
+                si.p, si.n, si.uv = [0, 0, 0], [0, 0, 1], [0.5, 0.5]
+                si.sh_frame = mi.Frame3f(si.n)
+                si.wi = mi.Vector3f(*a)
+                v = bsdf.eval(ctx, si, mi.Vector3f(*b))
+                vals.append([float(v[0]), float(v[1]), float(v[2])])
+                pdfs.append(float(bsdf.pdf(ctx, si, mi.Vector3f(*b))))
+        else:
+            si = mi.SurfaceInteraction3f()
+            n = len(pairs)
+            si.p = mi.Point3f(np.zeros(n), np.zeros(n), np.zeros(n))
+            si.n = mi.Normal3f(np.zeros(n), np.zeros(n), np.ones(n))
+            si.sh_frame = mi.Frame3f(si.n)
+            si.uv = mi.Point2f(np.full(n, 0.5), np.full(n, 0.5))
+            si.wi = mi.Vector3f(wi[:, 0], wi[:, 1], wi[:, 2])
+            w = mi.Vector3f(wo[:, 0], wo[:, 1], wo[:, 2])
+            vals = np.array(bsdf.eval(ctx, si, w)).T.tolist()
+            pdfs = np.array(bsdf.pdf(ctx, si, w)).tolist()
+        out[name] = {"dict": d, "variant": variant, "eval": vals, "pdf": pdfs}
+    return out
+
+
+def main():
+    if "DRJIT_LIBLLVM_PATH" not in os.environ and Path(LLVM).is_file():
+        os.environ["DRJIT_LIBLLVM_PATH"] = LLVM
+    import mitsuba as mi
+
+    pairs = directions()
+    cases = evaluate(mi, "scalar_rgb", CASES, pairs)
+    cases.update(evaluate(mi, "llvm_ad_rgb", VECTORISED, pairs))
+    data = {"mitsuba_version": mi.__version__, "wi": [list(map(float, a)) for a, _ in pairs],
+            "wo": [list(map(float, b)) for _, b in pairs], "cases": cases}
+    (HERE / "principled.json").write_text(json.dumps(data, separators=(",", ":")) + "\n")
+    print("principled.json", len(cases), "cases x", len(pairs), "pairs")
+
+
+if __name__ == "__main__":
+    main()
