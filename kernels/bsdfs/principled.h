@@ -258,7 +258,7 @@ INLINE float3 principled_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) 
         float2 sc = sin_cos(2.0f * M_PI_F_ * ux);
         float3 m = (float3)(sc.y * st, sc.x * st, ct);
         wo = 2.0f * dot3(wi, m) * m - wi;
-        if (!(dot3(wi, m) > 0.0f && dot3(wo, m) > 0.0f)) return (float3)(0.0f);
+        if (!(dot3(wi, m) > 0.0f && dot3(wo, m) > 0.0f && wo.z > 0.0f)) return (float3)(0.0f);
     } else {
         float2 v = (float2)(ps < 1.0f ? minf((u.x - p.w - p.z) / ps, 0.99999994f) : u.x, u.y);
         float3 m = mf_sample(pr_dist(b, q), front ? wi : -wi, v);
