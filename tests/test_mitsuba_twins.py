@@ -68,11 +68,20 @@ def _fov_one_percent_wider(scene):
     scene.camera.fov *= 1.01
 
 
+def _principled_glass_eta(scene):
+    glass = [s.bsdf for s in scene.shapes if type(s.bsdf).__name__ == "Principled" and s.bsdf.has_spec_trans]
+    assert glass
+    for b in glass:
+        b.eta = 1.33
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name, mutate", [
     ("cornell_meshes", _mirror), ("filter_lanczos_crop", _crop_off_by_one), ("thinlens", _pinhole),
     ("gaussian_sample_border", _border_ignored), ("filter_gaussian_fov_y", _fov_one_percent_wider),
-], ids=["mirrored camera", "crop window 1 px off", "pinhole for thin lens", "sample_border ignored", "fov 1% wider"])
+    ("principled", _principled_glass_eta),
+], ids=["mirrored camera", "crop window 1 px off", "pinhole for thin lens", "sample_border ignored", "fov 1% wider",
+        "principled glass eta 1.33 for 1.5"])
 def test_twin_test_fails_when_clrender_is_wrong(name, mutate):
     """The harness can fail: each twin, rendered with one thing it verifies done wrong, must not pass."""
     import clrender
