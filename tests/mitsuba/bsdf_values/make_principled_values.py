@@ -81,6 +81,12 @@ CASES = {
     "eta-below-one": {"type": "principled", "spec_trans": 0.6, "eta": 0.8, "roughness": 0.3},
     "zero-specular-transmissive": {"type": "principled", "spec_trans": 0.5, "specular": 0.0, "roughness": 0.4},
     "zero-roughness-metal": {"type": "principled", "metallic": 0.6, "roughness": 0.0, "base_color": rgb(0.5, 0.9, 1)},
+    # a reflective material as Blender's exporter writes it: twosided around principled, specular (not eta)
+    "blender-twosided": {"type": "twosided", "bsdf": {"type": "principled", "base_color": rgb(0.1, 0.3, 0.8),
+                                                      "roughness": 0.45, "metallic": 0.1, "specular": 0.5,
+                                                      "spec_tint": 0.0, "spec_trans": 0.0, "anisotropic": 0.0,
+                                                      "sheen": 0.0, "sheen_tint": 0.5, "clearcoat": 0.3,
+                                                      "clearcoat_gloss": 0.2}},
     # white: Burley's model returns more than arrives here (the albedos below show it, Mitsuba's as ours)
     "white-rough": {"type": "principled", "base_color": rgb(1, 1, 1), "roughness": 1.0},
     "white-sheen-clearcoat": {"type": "principled", "base_color": rgb(1, 1, 1), "roughness": 0.2, "sheen": 1.0,
