@@ -8,7 +8,8 @@ from .films import hdrfilm  # noqa: F401
 from .samplers import independent  # noqa: F401
 from .textures import bitmap, checkerboard, checkerboard_color, uvtexture  # noqa: F401
 from .bsdfs import blendbsdf, conductor, dielectric, diffuse, mask, microfacet, mirror, null, plastic  # noqa: F401
-from .bsdfs import principled, roughconductor, roughdielectric, roughplastic, thindielectric, twosided  # noqa: F401
+from .bsdfs import principled, principledthin, roughconductor, roughdielectric, roughplastic  # noqa: F401
+from .bsdfs import thindielectric, twosided  # noqa: F401
 from .emitters import area, constant, distant, distantdisk, envmap, point, spot  # noqa: F401
 from .integrators import (ao, aov, av, direct, direct_ems, direct_mats, direct_mis, material,  # noqa: F401
                           normals, path, path_ems, path_mats, path_mis, simple, whitted)

@@ -50,6 +50,52 @@ def specular_to_eta(specular: float) -> float:
     return 2.0 / (1.0 - np.sqrt(0.08 * specular)) - 1.0
 
 
+def read_parameters(props, children, float_params, owner):
+    """(base_color, {name: (value, texture or None)}, given(name)) of the principled BSDFs: base_color a colour or
+    a texture, the others floats or textures (a texture's float view, Mitsuba's eval_1); given(name) is Mitsuba's
+    get_flag: the parameter is given, and not as the float 0."""
+    names = ("base_color",) + tuple(n for n, _ in float_params)
+    tex = named_textures(children, names, owner)
+    base_color = color_or_texture(props, tex, "base_color", 0.5)
+    floats = {}
+    for name, default in float_params:
+        if name in tex and props.has(name):
+            raise SceneError(f"{name} given both as a value and as a texture", props.location(name))
+        if name in tex:
+            floats[name] = (0.0, tex[name].float_view())
+            continue
+        v = float_value(props, name, default, unbounded=True)
+        if not np.isfinite(v):
+            raise SceneError(f"{name} must be finite, got {v}", props.location(name))
+        floats[name] = (v, None)
+
+    def given(n):
+        return n in tex or (props.has(n) and not (props.tag(n) == "float" and floats[n][0] == 0))
+
+    return base_color, floats, given
+
+
+def read_rates(props, rates):
+    out = {}
+    for name, field in rates:
+        v = float(props.get_float(name, 1.0))
+        if not (v >= 0 and np.isfinite(v)):
+            raise SceneError(f"{name} must be non-negative, got {v}", props.location(name))
+        out[field] = v
+    return out
+
+
+def fill_parameters(p, bsdf, float_params, textures) -> bool:
+    """Write base_color(_tex), w[] and w_tex[]; whether a texture is read."""
+    uses = fill_color(p, "base_color", bsdf.base_color, textures)
+    for i, (name, _) in enumerate(float_params):
+        v, t = bsdf.floats[name]
+        p["w"][i] = v
+        p["w_tex"][i] = layout.NONE if t is None else textures.add(t)
+        uses |= t is not None
+    return uses
+
+
 @register("bsdf", "principled", fmt="mitsuba")
 class Principled(Bsdf):
     kernel = "bsdfs/principled.h"
@@ -61,22 +107,7 @@ class Principled(Bsdf):
     children = ("texture",)
 
     def __init__(self, props, children, spec):
-        names = ("base_color",) + tuple(n for n, _ in FLOAT_PARAMS)
-        tex = named_textures(children, names, OWNER)
-        self.base_color = color_or_texture(props, tex, "base_color", 0.5)
-        self.floats = {}
-        for name, default in FLOAT_PARAMS:
-            if name in tex and props.has(name):
-                raise SceneError(f"{name} given both as a value and as a texture", props.location(name))
-            if name in tex:
-                self.floats[name] = (0.0, tex[name].float_view())
-                continue
-            v = float_value(props, name, default, unbounded=True)
-            if not np.isfinite(v):
-                raise SceneError(f"{name} must be finite, got {v}", props.location(name))
-            self.floats[name] = (v, None)
-        # Mitsuba's get_flag: a lobe is on when its parameter is given, unless as the float 0
-        given = lambda n: n in tex or (props.has(n) and not (props.tag(n) == "float" and self.floats[n][0] == 0))
+        self.base_color, self.floats, given = read_parameters(props, children, FLOAT_PARAMS, OWNER)
         self.has_spec_trans = given("spec_trans")
         self.has_anisotropic = given("anisotropic")
         if props.has("eta") and props.has("specular"):
@@ -96,20 +127,10 @@ class Principled(Bsdf):
             if self.has_spec_trans and s == 0.0:
                 s = 1e-3
             self.eta = float(specular_to_eta(np.float32(s)))
-        self.rates = {}
-        for name, field in RATES:
-            v = float(props.get_float(name, 1.0))
-            if not (v >= 0 and np.isfinite(v)):
-                raise SceneError(f"{name} must be non-negative, got {v}", props.location(name))
-            self.rates[field] = v
+        self.rates = read_rates(props, RATES)
 
     def fill(self, p, row, textures):
-        uses = fill_color(p, "base_color", self.base_color, textures)
-        for i, (name, _) in enumerate(FLOAT_PARAMS):
-            v, t = self.floats[name]
-            p["w"][i] = v
-            p["w_tex"][i] = layout.NONE if t is None else textures.add(t)
-            uses |= t is not None
+        uses = fill_parameters(p, self, FLOAT_PARAMS, textures)
         p["eta"] = self.eta
         for field, v in self.rates.items():
             p[field] = v

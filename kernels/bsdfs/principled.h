@@ -23,6 +23,7 @@
 #include "common.h"
 #include "warp.h"
 #include "distribution.h"
+#include "principled_common.h"
 
 /* indices into p.principled.w: clrender/bsdfs/principled.py FLOAT_PARAMS */
 #define PR_ROUGHNESS 0
@@ -40,53 +41,14 @@ INLINE float pr_w(__global const Bsdf* b, const BsdfQuery* q, int i) {
     return param_float(q, b->p.principled.w[i], b->p.principled.w_tex[i]);
 }
 
-/* GGX with Mitsuba's calc_dist_params; always visible-normal sampling */
 INLINE MfDist pr_dist(__global const Bsdf* b, const BsdfQuery* q) {
-    float r2 = pr_w(b, q, PR_ROUGHNESS);
-    r2 *= r2;
-    float aspect = sqrt(1.0f - 0.9f * pr_w(b, q, PR_ANISOTROPIC));
-    MfDist d;
-    d.type = MF_GGX;
-    d.ax = maxf(1e-3f, r2 / aspect);
-    d.ay = maxf(1e-3f, r2 * aspect);
-    d.visible = true;
-    return d;
+    return pr_ggx(pr_w(b, q, PR_ROUGHNESS), pr_w(b, q, PR_ANISOTROPIC));
 }
 
-INLINE float pr_sw(float c) {
-    float m = clamp(1.0f - c, 0.0f, 1.0f);
-    float m2 = m * m;
-    return m2 * m2 * m;
-}
-
-/* Mitsuba's calc_schlick: Schlick's approximation with the cosine on the denser side (cos_t inside-out) */
-INLINE float3 pr_schlick(float3 r0, float cos_i, float eta) {
-    float eta_it = cos_i >= 0.0f ? eta : 1.0f / eta;
-    float c;
-    if (eta_it > 1.0f) {
-        c = fabs(cos_i);
-    } else {
-        float r = 1.0f / eta_it;
-        c = safe_sqrt(1.0f - (1.0f - cos_i * cos_i) * r * r);
-    }
-    float w = pr_sw(c);
-    return r0 + (1.0f - r0) * w;
-}
-
-INLINE float pr_lum(float3 c) { return 0.212671f * c.x + 0.715160f * c.y + 0.072169f * c.z; }
-
-/* The half vector of (wi, wo) on the upper hemisphere and whether wo is on wi's side. */
+/* The half vector of (wi, wo) (reflect: wo on wi's side; else refracted at eta_p), turned to the upper hemisphere */
 INLINE float3 pr_half(float3 wi, float3 wo, float eta_p, bool reflect) {
     float3 h = normalize3(wi + wo * (reflect ? 1.0f : eta_p));
     return h.z < 0.0f ? -h : h;
-}
-
-/* Mitsuba's mac_mic_compatibility: wi on the front of h (h as seen from wi's side) and wo on the front (reflection)
-   or the back (refraction) */
-INLINE bool pr_compatible(float3 h, float3 wi, float3 wo, bool reflect) {
-    float3 hs = wi.z > 0.0f ? h : -h;
-    float o = dot3(wo, hs);
-    return dot3(wi, hs) > 0.0f && (reflect ? o > 0.0f : o < 0.0f);
 }
 
 INLINE float pr_gtr1_d(float alpha, float cos_t) {

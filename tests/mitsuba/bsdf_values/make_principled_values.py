@@ -1,5 +1,6 @@
-"""Development tool: evaluate Mitsuba 3's principled BSDF at fixed direction pairs and write the values the default
-test run compares clrender with (tests/test_mitsuba_principled.py).
+"""Development tool: evaluate Mitsuba 3's principled and principledthin BSDFs at fixed direction pairs and write the
+values the default test run compares clrender with (tests/test_mitsuba_principled.py): principled.json,
+principledthin.json.
 
     pip install mitsuba==3.9.1      # dev only, never a dependency of clrender
     python tests/mitsuba/bsdf_values/make_principled_values.py
@@ -92,6 +93,19 @@ CASES = {
     "white-sheen-clearcoat": {"type": "principled", "base_color": rgb(1, 1, 1), "roughness": 0.2, "sheen": 1.0,
                               "clearcoat": 1.0},
 }
+THIN = {
+    "thin-default": {"type": "principledthin"},
+    "thin-doc": {"type": "principledthin", "base_color": rgb(0.7, 0.1, 0.1), "roughness": 0.15, "spec_tint": 0.1,
+                 "anisotropic": 0.5, "spec_trans": 0.8, "diff_trans": 0.3, "eta": 1.33},
+    "thin-leaf": {"type": "principledthin", "base_color": rgb(0.2, 0.6, 0.1), "roughness": 0.6, "spec_trans": 0.2,
+                  "diff_trans": 1.2, "sheen": 0.5, "sheen_tint": 0.6, "flatness": 0.4, "eta": 1.4},
+    "thin-smooth-rates": {"type": "principledthin", "roughness": 0.1, "spec_trans": 0.6, "diff_trans": 0.5,
+                          "specular_reflectance_sampling_rate": 2.0, "specular_transmittance_sampling_rate": 0.5,
+                          "diffuse_reflectance_sampling_rate": 0.7, "diffuse_transmittance_sampling_rate": 1.5},
+    "thin-only-specular": {"type": "principledthin", "spec_trans": 1.0, "roughness": 0.3, "eta": 1.7,
+                           "base_color": rgb(0.9, 0.9, 0.5), "spec_tint": 0.5},
+    "thin-white-diffuse-transmission": {"type": "principledthin", "base_color": rgb(1, 1, 1), "diff_trans": 2.0},
+}
 # Mitsuba's variants disagree here (see the docstring): evaluated with the vectorised one
 VECTORISED = {
     "glass-sheen": {"type": "principled", "spec_trans": 1.0, "sheen": 0.8, "sheen_tint": 0.5,
@@ -166,15 +180,16 @@ def main():
     import mitsuba as mi
 
     pairs = directions()
-    cases = evaluate(mi, "scalar_rgb", CASES, pairs)
-    cases.update(evaluate(mi, "llvm_ad_rgb", VECTORISED, pairs))
-    for name, a in albedos(mi, {**CASES, **VECTORISED}).items():
-        cases[name]["albedo"] = a
-    data = {"mitsuba_version": mi.__version__, "wi": [list(map(float, a)) for a, _ in pairs],
-            "albedo_wi": [list(x) for x in ALBEDO_WI],
-            "wo": [list(map(float, b)) for _, b in pairs], "cases": cases}
-    (HERE / "principled.json").write_text(json.dumps(data, separators=(",", ":")) + "\n")
-    print("principled.json", len(cases), "cases x", len(pairs), "pairs")
+    for fname, scalar, vectorised in (("principled.json", CASES, VECTORISED), ("principledthin.json", THIN, {})):
+        cases = evaluate(mi, "scalar_rgb", scalar, pairs)
+        cases.update(evaluate(mi, "llvm_ad_rgb", vectorised, pairs))
+        for name, a in albedos(mi, {**scalar, **vectorised}).items():
+            cases[name]["albedo"] = a
+        data = {"mitsuba_version": mi.__version__, "wi": [list(map(float, a)) for a, _ in pairs],
+                "albedo_wi": [list(x) for x in ALBEDO_WI],
+                "wo": [list(map(float, b)) for _, b in pairs], "cases": cases}
+        (HERE / fname).write_text(json.dumps(data, separators=(",", ":")) + "\n")
+        print(fname, len(cases), "cases x", len(pairs), "pairs")
 
 
 if __name__ == "__main__":
