@@ -88,7 +88,7 @@ N_CHI2 = len(CASES)
 # The default run samples a cross-section (every lobe, both sides, total internal reflection, the sampling rates);
 # the rest is marked slow.
 DEFAULT_CASES = {"diffuse-rough-flat-80", "metal-smooth-60", "glass-out-40", "glass-in-60-tir", "clearcoat-20",
-                 "aniso-50", "rates-70", "thin-doc-40", "thin-back-60"}
+                 "aniso-50", "rates-70", "thin-back-60"}
 CASE_PARAMS = [pytest.param(c, marks=() if c in DEFAULT_CASES else pytest.mark.slow) for c in CASES]
 
 
