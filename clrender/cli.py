@@ -40,13 +40,10 @@ def cmd_render(args) -> int:
     from .renderer import Interrupted, Renderer
 
     if args.cluster or args.sample_range:
-        for option, used in (("--partial-every", args.partial_every is not None),
-                             ("--emitter-selection power", args.emitter_selection != "uniform")):
-            if used:
-                print(f"clrender: error: {option} is not supported with --cluster or --sample-range yet",
-                      file=sys.stderr)
-                return 2
-    if args.cluster or args.sample_range:
+        if args.emitter_selection != "uniform":   # the workers' scene loading does not take it yet
+            print("clrender: error: --emitter-selection power is not supported with --cluster or --sample-range "
+                  "yet", file=sys.stderr)
+            return 2
         from .cli_cluster import cmd_render_distributed
 
         return cmd_render_distributed(args, _defines(args.define))

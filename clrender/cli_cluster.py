@@ -66,12 +66,33 @@ def cmd_render_distributed(args, defines: dict) -> int:
         raise
     say = lambda msg: print(f"clrender: {msg}", file=sys.stderr, flush=True)  # noqa: E731
     source = SceneSource(str(Path(args.scene).resolve()), defines, dialect)
+
+    def write(film, scene_hash):
+        """Write `film` where -o says; a sample range, or an image short of its samples, as a part."""
+        incomplete = int(film.count.min()) < spp if film.count.size else False
+        if args.sample_range or incomplete:
+            # A partial image keeps its true per-pixel counts (in a cluster render they differ by band): as a
+            # part, it also merges with the rest of its samples later.
+            write_part(film, out, scene_hash, args.seed, start, spp, dialect)
+            what = f"accumulator EXR of samples {start}..{start + spp - 1}"
+        else:
+            film.write_exr(out)
+            what = "EXR"
+        png = film.write_png(out.with_suffix(".png")) if not args.sample_range else None
+        return incomplete, what, png
+
+    def partial(every, scene_hash=None):
+        if every is None:
+            return None
+        return every, lambda film: write(film, scene_hash or film.metadata["scene_hash"])
+
     if args.cluster:
         from . import cluster
 
         film = cluster.render(source.path, spp=spp, seed=args.seed, cluster=args.cluster, start_sample=start,
                               files=args.scene_files, defines=defines, dialect=dialect, device=args.device,
-                              tasks=args.tasks, time_limit=args.time_limit, progress=not args.quiet, say=say)
+                              tasks=args.tasks, time_limit=args.time_limit, progress=not args.quiet, say=say,
+                              partial=partial(args.partial_every))
         scene_hash = film.metadata["scene_hash"]
     else:
         from .renderer import Interrupted, Renderer
@@ -82,26 +103,18 @@ def cmd_render_distributed(args, defines: dict) -> int:
         say(f"{args.scene}: load {time.perf_counter() - t0:.2f} s; device {renderer.device_name}")
         try:
             film = renderer.render(spp=spp, seed=args.seed, time_limit=args.time_limit,
-                                   progress=not args.quiet, start_sample=start)
+                                   progress=not args.quiet, start_sample=start,
+                                   partial=partial(args.partial_every, scene_hash))
         except Interrupted:
             say("aborted (second Ctrl-C); nothing written")
             return 130
     s = film.stats
-    partial = int(film.count.min()) < spp if film.count.size else False
     rate = s.samples / s.seconds / 1e6 if s.seconds > 0 else 0.0
-    if args.sample_range or partial:
-        # A partial cluster image keeps its true per-pixel counts (they differ by band): as a part, it
-        # also merges with the rest of its samples later.
-        write_part(film, out, scene_hash, args.seed, start, spp, dialect)
-        what = f"accumulator EXR of samples {start}..{start + spp - 1}"
-    else:
-        film.write_exr(out)
-        what = "EXR"
-    png = film.write_png(out.with_suffix(".png")) if not args.sample_range else None
+    incomplete, what, png = write(film, scene_hash)
     msg = (f"wrote {out} ({what})" + (f" and {png}" if png else "")
            + f": {int(film.count.min())}..{int(film.count.max())} spp per pixel in {s.seconds:.2f} s "
              f"({rate:.2f} M samples/s)")
-    if partial:
+    if incomplete:
         msg += f" [partial: {film.metadata.get('stopped_by', 'interrupted')}]"
     if s.dropped:
         msg += f"; {s.dropped} NaN/Inf samples dropped"

@@ -23,6 +23,7 @@ a worker whose device fails is reported by name and its task moves to the other 
 """
 from __future__ import annotations
 
+import copy
 import os
 import time
 from pathlib import Path
@@ -222,7 +223,7 @@ def _payload(scene, files, defines, dialect, say):
 def render(scene, spp: int | None = None, seed: int = 0, cluster="local", *, start_sample: int = 0,
            files: str = "ship", defines: dict | None = None, dialect: str | None = None,
            device=None, tasks: int | None = None, bands: int | None = None, time_limit: float | None = None,
-           progress: bool = False, say=None, on_result=None):
+           progress: bool = False, say=None, on_result=None, partial=None):
     """Render on a Dask cluster and return the Film (``film.count`` holds the true per-pixel counts).
 
     ``scene``: a loaded Scene (shipped) or the path of its XML file (shipped or, with ``files="shared"``,
@@ -231,7 +232,9 @@ def render(scene, spp: int | None = None, seed: int = 0, cluster="local", *, sta
     usable device per worker). ``tasks``: how many tasks (default 4 per worker thread). ``say``: called
     with progress messages. ``on_result(result, client)``: called after every finished task (tests).
     Ctrl-C cancels the outstanding tasks and returns what was finished; ``time_limit`` stops handing out
-    tasks after that many seconds.
+    tasks after that many seconds. ``partial=(seconds, callback)``: while tasks are outstanding, every that
+    many seconds, ``callback`` gets the film of the tasks finished so far (true per-pixel counts, metadata
+    ``partial`` set), so a killed client leaves its work behind.
     """
     from .renderer import RenderStats, _SigintFlag
 
@@ -242,13 +245,13 @@ def render(scene, spp: int | None = None, seed: int = 0, cluster="local", *, sta
     client, close, what, local = connect(cluster)
     try:
         return _render(client, what, local, scene, spp, seed, start_sample, files, defines, dialect, device,
-                       tasks, bands, time_limit, progress, say, on_result, RenderStats, _SigintFlag)
+                       tasks, bands, time_limit, progress, say, on_result, partial, RenderStats, _SigintFlag)
     finally:
         close()
 
 
 def _render(client, what, local, scene, spp, seed, start_sample, files, defines, dialect, device, n_tasks, bands,
-            time_limit, progress, say, on_result, RenderStats, SigintFlag):
+            time_limit, progress, say, on_result, partial, RenderStats, SigintFlag):
     from . import __version__
     from .parts import Accumulator
 
@@ -306,7 +309,7 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
         pending.clear()
         raise ClusterError(msg)
 
-    t_start = time.perf_counter()
+    t_start = last_partial = time.perf_counter()
     with SigintFlag() as flag:
         try:
             while True:
@@ -394,6 +397,17 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
                 while next_add in held:    # add in index order as soon as the prefix is complete
                     _add(acc, held.pop(next_add), added)
                     next_add += 1
+                if partial is not None and pending and time.perf_counter() - last_partial >= partial[0]:
+                    # a copy with the out-of-order results added too: the render's own sums keep their order
+                    snap, snap_added = copy.deepcopy(acc), list(added)
+                    for index in sorted(held):
+                        _add(snap, held[index], snap_added)
+                    snap_stats = copy.copy(stats)
+                    snap_stats.seconds = time.perf_counter() - t_start
+                    partial[1](_film(snap, snap_added, snap_stats, False, None, start_sample, seed, devices,
+                                     integrator, __version__, key, dialect, what, workers_used, plan_tasks,
+                                     t_begin, partial=True))
+                    last_partial = time.perf_counter()
                 if flag.requested and stopped_by is None:
                     stopped_by = "Ctrl-C"
                     client.cancel(list(pending))
@@ -404,20 +418,30 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
     for index in sorted(held):             # after an interruption: the finished tasks, still in order
         _add(acc, held.pop(index), added)
     stats.seconds = time.perf_counter() - t_start
+    complete = plan_tasks.exhausted and len(added) == plan_tasks.issued
+    return _film(acc, added, stats, complete, stopped_by, start_sample, seed, devices, integrator, __version__,
+                 key, dialect, what, workers_used, plan_tasks, t_begin)
+
+
+def _film(acc, added, stats, complete, stopped_by, start_sample, seed, devices, integrator, version, key,
+          dialect, what, workers_used, plan_tasks, t_begin, partial=False):
+    """The Film of what `acc` holds (the tasks in `added`), with the render's metadata; fills in `stats`."""
+    n_pixels = acc.width * acc.height
     stats.samples = int(acc.count.sum())
     stats.passes = len(added)
     stats.dropped = int(acc.dropped.sum())
     stats.interrupted = stopped_by == "Ctrl-C"
-    complete = plan_tasks.exhausted and len(added) == plan_tasks.issued
     spp_min = int(acc.count.min()) if n_pixels else 0
     meta = {"spp": spp_min, "spp_max": int(acc.count.max()) if n_pixels else 0, "seed": seed,
             "start_sample": start_sample, "render_seconds": round(stats.seconds, 4),
-            "device": "; ".join(sorted(devices)), "integrator": integrator, "version": __version__,
+            "device": "; ".join(sorted(devices)), "integrator": integrator, "version": version,
             "interrupted": not complete, "dropped_samples": stats.dropped, "scene_hash": key,
             "dialect": dialect, "cluster": what, "workers": len(workers_used),
             "tasks": len(added), "bands": len(plan_tasks.bands), "wall_seconds": round(time.perf_counter() - t_begin, 4)}
     if stopped_by:
         meta["stopped_by"] = stopped_by
+    if partial:
+        meta["partial"] = True
     film = acc.film(meta)
     film.stats = stats
     return film

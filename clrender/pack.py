@@ -43,6 +43,8 @@ class SceneBuffers:
     leaf_order: np.ndarray | None = None
     #: the device plugins the tables use (the Renderer builds its program for them); None: unknown (all)
     plugins: dispatch.PluginSet | None = None
+    #: the kernels' sample generator: "independent" (Philox) or "sobol" (scrambled Sobol; kernels/rng.h)
+    sampler: str = "independent"
 
     def __post_init__(self):
         names = [n for n, _, _ in layout.SCENE_TABLES]
@@ -297,4 +299,5 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
          "rfilter": {int(camera[0]["filter_type"])}},
         {"bsdf": max((composite_depth(b) for b in {id(s.bsdf): s.bsdf for s in shapes}.values()), default=0)})
     return SceneBuffers(tables=tables, camera=camera, filter_cdf=filter_cdf, stats=stats, bvh_width=bvh_width,
-                        leaf_order=np.asarray(bvh.order, np.int64), plugins=used)
+                        leaf_order=np.asarray(bvh.order, np.int64), plugins=used,
+                        sampler=getattr(getattr(scene, "sampler", None), "generator", "independent"))

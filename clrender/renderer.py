@@ -36,6 +36,8 @@ def render_defines(scene, buffers, extra: dict | None = None) -> dict:
     the full program, which gives the same image)."""
     defines = {} if scene is None else {"INTEGRATOR": scene.integrator.kernel}
     defines["BVH_WIDTH"] = buffers.bvh_width
+    if getattr(buffers, "sampler", "independent") == "sobol":
+        defines["CLR_SAMPLER_SOBOL"] = 1
     if getattr(buffers, "plugins", None) is not None:
         defines.update(buffers.plugins.defines())
     return {**defines, **(extra or {})}

@@ -77,7 +77,7 @@ def packed_hash(buffers, integrator: str, width: int, height: int) -> str:
     import numpy as np
 
     h = hashlib.sha256(_HASH_VERSION + b"packed\0")
-    h.update(f"{integrator}:{width}x{height}:{buffers.bvh_width}".encode())
+    h.update(f"{integrator}:{width}x{height}:{buffers.bvh_width}:{buffers.sampler}".encode())
     for a in buffers.scene_arrays() + [buffers.camera, buffers.filter_cdf]:
         a = np.ascontiguousarray(a)
         h.update(f"{a.dtype.str}{a.shape}".encode())

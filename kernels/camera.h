@@ -13,6 +13,18 @@ typedef struct { float3 o; float3 d; float tmin; float tmax; } Ray;
    film_width x film_height film; lens: a uniform 2D sample for the thin lens (unused when lens_radius is 0). */
 INLINE Ray camera_ray_lens(__global const Camera* cam, float sx, float sy, float2 lens) {
     float nx = (sx + cam->crop_x) / cam->film_width, ny = (sy + cam->crop_y) / cam->film_height;
+    if (cam->ortho != 0u) {
+        /* Mitsuba's orthographic sensor: from the point (2nx - 1, (1 - 2ny) height/width, near) of camera space
+           (its x and y axes scaled by to_world: the visible area), along z, for far - near */
+        float3 X = cam->to_world[0].xyz, Y = cam->to_world[1].xyz, Z = cam->to_world[2].xyz;
+        Ray r;
+        r.o = cam->to_world[3].xyz + X * (2.0f * nx - 1.0f) + Y * ((1.0f - 2.0f * ny) * cam->inv_aspect)
+              + Z * cam->near_clip;
+        r.d = Z * (1.0f / len3(Z));
+        r.tmin = 0.0f;
+        r.tmax = cam->far_clip - cam->near_clip;
+        return r;
+    }
     float t = cam->tan_half_fov;
     float3 dc = (float3)((2.0f * nx - 1.0f) * t, (1.0f - 2.0f * ny) * t * cam->inv_aspect, 1.0f);
     float3 oc = (float3)(0.0f);

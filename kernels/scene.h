@@ -5,6 +5,7 @@
 #include "math.h"
 #include "frame.h"
 #include "camera.h"
+#include "derivatives.h"
 /* BVH_WIDTH picks the node table the host packed (SceneBuffers.bvh_width): 8 = kernels/bvh8.h (default: ×1.15
    on the Cornell twin and ×1.12 on a 1 M-triangle mesh over 4-wide, benchmarks/README.md), 4 = kernels/bvh4.h,
    2 = kernels/bvh.h. All define bvh_closest_hit / bvh_any_hit over the same primitive
@@ -48,6 +49,9 @@ typedef struct {
     float off;       /* how far they are pushed off the surface along ng */
     uint shape;
     uint tri;        /* the triangle's leaf reference (Hit.prim, see kernels/shapes/mesh.h), or NONE for spheres */
+#ifdef CLR_SURFACE_DERIVATIVES
+    float3 dpdu, dpdv;   /* Mitsuba's dp/du, dp/dv in world space where SHAPE_NEEDS_UV (else 0): derivatives.h */
+#endif
 } Intersection;
 
 /* Spawned rays start off the surface, on the side they leave to, and take tmin = 0, so they neither re-hit

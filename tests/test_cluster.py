@@ -164,6 +164,52 @@ def test_ctrl_c_keeps_the_finished_tasks_with_true_counts(client, small):
     np.testing.assert_allclose(film.sum_wl, want, rtol=2e-6, atol=1e-5)
 
 
+def test_partial_films_hold_exactly_the_finished_tasks(client, small):
+    """partial=(seconds, cb): while tasks are outstanding, cb gets the film of the tasks finished so far (true
+    counts, marked partial); each equals one process rendering exactly those samples."""
+    path, renderer, _ = small
+    done, snaps = [], []
+    film = clrender.render(str(path), spp=6, seed=SEED, cluster=client, tasks=6,
+                           on_result=lambda r, c: done.append(r),
+                           partial=(0.0, lambda f: snaps.append((f, [r["start"] for r in done]))))
+    assert_same_film(film, renderer.render(spp=6, seed=SEED))
+    assert "partial" not in film.metadata and snaps
+    for snap, starts in snaps:
+        assert snap.metadata["partial"] is True and snap.metadata["interrupted"] is True
+        assert int(snap.count.min()) == int(snap.count.max()) == len(starts) < 6
+        want = sum(renderer.render(spp=1, seed=SEED, start_sample=s).sum_wl for s in starts)
+        np.testing.assert_allclose(snap.sum_wl, want, rtol=2e-6, atol=1e-5)
+
+
+def test_command_line_partial_every_on_a_cluster(client, small, tmp_path, monkeypatch):
+    """render --cluster --partial-every: the output holds a part of the finished tasks while the render runs
+    (mergeable, true counts), and the whole image at the end."""
+    from clrender.cli import main
+    from clrender.film import read_exr
+    from clrender.parts import read_part
+
+    path, renderer, _ = small
+    out = tmp_path / "cl.exr"
+    seen = []
+    real = cluster.render
+
+    def spy(*a, **k):
+        every, cb = k["partial"]
+
+        def wrapped(film):
+            cb(film)
+            seen.append(read_part(out))
+        return real(*a, **{**k, "partial": (every, wrapped)})
+
+    monkeypatch.setattr(cluster, "render", spy)
+    assert main(["render", str(path), "--spp", "6", "--seed", str(SEED), "-o", str(out), "-q", "--tasks", "6",
+                 "--cluster", client.scheduler.address, "--partial-every", "0.000001"]) == 0
+    assert seen and all(0 < int(p.film.count.max()) < 6 and (p.start, p.stop) == (0, 6) for p in seen)
+    img, header = read_exr(out)
+    np.testing.assert_allclose(img, renderer.render(spp=6, seed=SEED).image, rtol=1e-5, atol=1e-6)
+    assert header["clrender.spp"] == "6" and header.get("clrender.kind") != "accumulators"
+
+
 def test_time_limit_stops_handing_out_tasks(client, small):
     path, _, _ = small
     film = clrender.render(str(path), spp=10**6, seed=SEED, cluster=client, time_limit=1.0)

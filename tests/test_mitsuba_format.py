@@ -312,11 +312,19 @@ def test_scene_without_sensor_is_an_error():
     assert "no sensor" in str(e)
 
 
-def test_substitute_samplers_warn(caplog):
-    with caplog.at_level(logging.WARNING, logger="clrender"):
-        scene = load('<sensor type="perspective"><sampler type="stratified"><integer name="sample_count" value="16"/>'
-                     '<boolean name="jitter" value="false"/></sampler><film type="hdrfilm"/></sensor>')
-    assert scene.sample_count == 16 and "independent sampler" in caplog.text
+def test_stratifying_samplers_use_scrambled_sobol(caplog):
+    from clrender.pack import pack_scene
+    from clrender.renderer import render_defines
+
+    for kind in ("stratified", "multijitter", "orthogonal", "ldsampler"):
+        with caplog.at_level(logging.INFO, logger="clrender"):
+            scene = load(f'<sensor type="perspective"><sampler type="{kind}"><integer name="sample_count" '
+                         'value="16"/></sampler><film type="hdrfilm"/></sensor><shape type="cube"/>')
+        assert scene.sample_count == 16 and "scrambled Sobol" in caplog.text
+        buffers = pack_scene(scene)
+        assert buffers.sampler == "sobol" and render_defines(scene, buffers)["CLR_SAMPLER_SOBOL"] == 1
+    plain = load('<shape type="cube"/>')
+    assert "CLR_SAMPLER_SOBOL" not in render_defines(plain, pack_scene(plain))
 
 
 # ---------------------------------------------------------------------------------------------- meshes
@@ -424,3 +432,19 @@ class _Counting:
 def test_crop_window_must_fit():
     err(f'{HEAD}<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="10"/>'
         f'\n<integer name="crop_width" value="11"/></film></sensor></scene>', 2, None, "does not fit")
+
+
+def test_participating_media_are_refused_by_name_and_line():
+    """A <medium> (in a shape, in the sensor, or referenced from the scene's top level) is named as unsupported,
+    at its own line, not reported as a nesting mistake."""
+    shape_medium = (f'{HEAD}{SENSOR}<shape type="sphere"><bsdf type="null"/>\n'
+                    '<medium type="homogeneous" name="interior"><float name="scale" value="2"/></medium>'
+                    '</shape></scene>')
+    err(shape_medium, 2, None, '<medium type="homogeneous">', "participating media are not supported")
+    referenced = (f'{HEAD}\n<medium type="heterogeneous" id="fog"/>\n{SENSOR}'
+                  '<shape type="sphere"><ref id="fog" name="exterior"/></shape></scene>')
+    err(referenced, 2, None, '<medium type="heterogeneous">', "participating media are not supported")
+    in_sensor = (f'{HEAD}<sensor type="perspective">\n<medium type="homogeneous"/>'
+                 '<film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="6"/></film>'
+                 '</sensor></scene>')
+    err(in_sensor, 2, None, "participating media are not supported")

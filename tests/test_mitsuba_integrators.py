@@ -1,5 +1,5 @@
-"""Mitsuba 3's integrators `path`, `direct` and `aov` (clrender/integrators/path.py, direct.py, aov.py) on scenes with
-closed-form images: the furnace's geometric series per max_depth, max_depth 1 and 2 as emitter-only and direct
+"""Mitsuba 3's integrators `path` (and `volpath`, `prb`), `direct` and `aov` (clrender/integrators/path.py, direct.py,
+aov.py) on scenes with closed-form images: the furnace's geometric series per max_depth, max_depth 1 and 2 as emitter-only and direct
 illumination, Russian roulette leaving the mean alone, hide_emitters, the direct integrator's sample counts, and the
 AOVs. The scenes are Nori files (tests/analytic_scenes.py) whose integrator is replaced by a Mitsuba-format one, as
 a Mitsuba file would make it (registry.instantiate(..., fmt="mitsuba")). Agreement with Mitsuba's own renders is
@@ -187,6 +187,41 @@ def test_hide_emitters_hides_the_environment(tmp_path, type_name):
     assert np.all(render(tmp_path, sky, type_name, spp=16, hide_emitters=True).image == 0.0)
     lit = render(tmp_path, xml, type_name, spp=256, hide_emitters=True)
     assert np.all(lit.image > 0.05)
+
+
+# --- volpath, volpathmis, prb, prbvolpath on surfaces ---------------------------------------------------------------
+
+@pytest.mark.parametrize("type_name", ["volpath", "volpathmis", "prb", "prbvolpath"])
+@pytest.mark.parametrize("max_depth", [2, -1])
+def test_volumetric_and_replay_path_tracers_give_the_furnace_series(tmp_path, type_name, max_depth):
+    """Without media (and without null events) they estimate what path does: the furnace's series."""
+    rho = 0.5
+    expected = 1 / (1 - rho) if max_depth == -1 else 1 + rho
+    film = render(tmp_path, A.furnace_scene(tmp_path, "path_mis", rho=rho), type_name, spp=1024, max_depth=max_depth)
+    res = compare_mean_to_value(film, expected, ALPHA)
+    assert res.passed, (type_name, max_depth, res.message, film.image.mean(), expected)
+
+
+def test_prb_renders_exactly_as_path(tmp_path):
+    xml = A.polygon_light_scene(tmp_path, "path_mis")
+    a = render(tmp_path, xml, "path", spp=16, max_depth=3, rr_depth=2)
+    b = render(tmp_path, xml, "prb", spp=16, max_depth=3, rr_depth=2)
+    np.testing.assert_array_equal(a.image, b.image)
+
+
+def test_volpath_hide_emitters_hides_only_what_the_camera_sees_first(tmp_path):
+    """volpath's hide_emitters: the light's back (black) still hides the plane, unlike path's pass-through;
+    head on, the light is black; escaping camera rays see no sky."""
+    xml = looking_down_through_the_light(tmp_path)
+    assert np.all(render(tmp_path, xml, "volpath", spp=16, hide_emitters=True).image == 0.0)
+    up = light_over_plane_from_below(tmp_path)
+    assert np.all(render(tmp_path, up, "volpath", spp=16, hide_emitters=True).image == 0.0)
+    np.testing.assert_allclose(render(tmp_path, up, "volpathmis", spp=16).image[0, 0], A.LE, rtol=1e-6)
+
+
+def test_prb_refuses_hide_emitters():
+    with pytest.raises(SceneError, match="hide_emitters is not supported with prb"):
+        mitsuba_integrator("prb", hide_emitters=True)
 
 
 # --- direct: sample counts ---------------------------------------------------------------------------------------

@@ -1,5 +1,5 @@
-"""Mitsuba sensors and films: the field of view conversions against numbers Mitsuba 3.9 gives, crop windows, and
-the thin lens (every ray of a film position through one point of the plane in focus; origins uniform on the
+"""Mitsuba sensors and films: the field of view conversions against numbers Mitsuba 3.9 gives, crop windows, the
+orthographic sensor's rays, and the thin lens (every ray of a film position through one point of the plane in focus; origins uniform on the
 aperture disk, by a chi-square test)."""
 import numpy as np
 import pyopencl as cl
@@ -110,6 +110,28 @@ def test_thin_lens_rays_meet_in_the_focus_plane(ctx, queue, lens_program):
     assert np.abs(lens_offsets @ axis).max() < 1e-5                      # origins on the lens plane
     assert np.linalg.norm(lens_offsets, axis=1).max() <= 0.25 * (1 + 1e-5)
     assert np.linalg.norm(lens_offsets, axis=1).max() > 0.24             # and not all at the centre
+
+
+def test_orthographic_rays_are_parallel_from_the_scaled_film_plane(ctx, queue, lens_program):
+    """Mitsuba's orthographic sensor: image position (x, y) of the full film starts at camera-space
+    (1 - 2x, (1 - 2y) h/w, near_clip) (the to_world's scale sets the area) and runs along +z for far - near."""
+    xform = ('<transform name="to_world"><scale x="2" y="3"/>'
+             '<lookat origin="1, 2, 3" target="0, 0.5, -1" up="0, 1, 0"/></transform>')
+    cam = sensor(xform + '<float name="near_clip" value="0.5"/><float name="far_clip" value="20"/>',
+                 film='<integer name="width" value="64"/><integer name="height" value="48"/>'
+                      '<integer name="crop_offset_x" value="8"/><integer name="crop_width" value="40"/>',
+                 kind="orthographic")
+    rng = np.random.default_rng(5)
+    n = 1000
+    pos = np.column_stack([rng.uniform(0, 40, n), rng.uniform(0, 48, n), np.zeros(n), np.zeros(n)])
+    o, d = lens_rays(ctx, queue, lens_program, cam, pos)
+    m = cam.to_world.matrix
+    fx, fy = (pos[:, 0] + 8) / 64, pos[:, 1] / 48
+    local = np.column_stack([1 - 2 * fx, (1 - 2 * fy) * 48 / 64, np.full(n, 0.5), np.ones(n)])
+    np.testing.assert_allclose(o[:, :3], (local @ m.T)[:, :3], atol=2e-5)
+    z = m[:3, 2] / np.linalg.norm(m[:3, 2])
+    np.testing.assert_allclose(d[:, :3], np.broadcast_to(z, (n, 3)), atol=1e-6)
+    assert np.all(o[:, 3] == 0.0) and np.allclose(d[:, 3], 19.5)
 
 
 def test_thin_lens_origins_are_uniform_on_the_aperture(ctx, queue, lens_program):

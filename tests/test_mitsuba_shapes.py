@@ -272,3 +272,61 @@ def test_anisotropy_follows_the_meshs_uvs(tmp_path):
     c = render_aniso(tmp_path, shape("u_along_y.obj", 0.03, 0.5), 3)
     assert compare_films(a, b).passed, compare_films(a, b).message
     assert not compare_films(a, c).passed
+
+
+# --- instancing: shapegroup + instance, flattened when the scene is read -------------------------------------------
+
+def _mitsuba_scene(body: str):
+    from clrender.scene.xmlparser import parse_string
+
+    sensor = ('<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/>'
+              '<integer name="height" value="6"/></film></sensor>')
+    return registry.create(parse_string(f'<scene version="3.0.0">{sensor}{body}</scene>', "i.xml"))
+
+
+GROUP = ('<shape type="shapegroup" id="g"><shape type="cube"><transform name="to_world"><translate value="0, 1, 0"/>'
+         '</transform></shape><shape type="sphere"><point name="center" value="2, 0, 0"/>'
+         '<float name="radius" value="0.5"/></shape></shape>')
+
+
+def test_instances_are_copies_of_the_group_under_their_to_world():
+    """A shapegroup alone renders nothing; each instance adds its group's shapes, mapped by its to_world (a mesh's
+    vertices, a sphere's centre, radius and frame); a mirroring instance reverses the winding, so that the face
+    normals stay the inverse-transpose image of the group's (the instance maps normals as covectors)."""
+    assert _mitsuba_scene(GROUP + '<shape type="rectangle"/>').shapes[0].spec.type == "rectangle"
+    xform = '<transform name="to_world"><scale value="-2, 2, 2"/><rotate y="1" angle="30"/><translate value="1, 2, 3"/></transform>'
+    scene = _mitsuba_scene(GROUP + '<shape type="instance"><ref id="g"/></shape>'
+                           f'<shape type="instance"><ref id="g"/>{xform}</shape>')
+    assert [s.spec.type for s in scene.shapes] == ["cube", "sphere", "cube", "sphere"]
+    cube, sphere, cube2, sphere2 = scene.shapes
+    m = _mitsuba_scene(f'<shape type="sphere">{xform}</shape>').shapes[0]   # its to_world, via the sphere's frame
+    lin = m.frame * m.radius
+    t = m.center
+    np.testing.assert_allclose(cube2.mesh.positions, cube.mesh.positions @ lin.T + t, atol=1e-5)
+    np.testing.assert_allclose(sphere2.center, lin @ sphere.center + t, atol=1e-6)
+    assert sphere2.radius == pytest.approx(2 * sphere.radius)
+    assert not sphere2.flip_normals    # an instance's mirror does not turn a sphere inside out
+    def face_normals(mesh):
+        tri = mesh.positions[mesh.faces].astype(np.float64)
+        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        return n / np.linalg.norm(n, axis=1, keepdims=True)
+    mapped = face_normals(cube.mesh) @ np.linalg.inv(lin)
+    mapped /= np.linalg.norm(mapped, axis=1, keepdims=True)
+    np.testing.assert_allclose(face_normals(cube2.mesh), mapped, atol=1e-5)
+    assert cube2.bsdf is cube.bsdf
+
+
+@pytest.mark.parametrize("body, message", [
+    ('<shape type="shapegroup" id="g"><shape type="sphere"><emitter type="area"/></shape></shape>',
+     "cannot carry an emitter"),
+    ('<shape type="shapegroup" id="g"><shape type="shapegroup"><shape type="sphere"/></shape></shape>',
+     "nested instancing"),
+    ('<shape type="instance"><shape type="sphere"/></shape>', "takes one shapegroup"),
+    ('<shape type="instance"/>', "exactly one shapegroup"),
+    ('<shape type="shapegroup" id="g"><shape type="sphere"/></shape><shape type="instance"><ref id="g"/>'
+     '<transform name="to_world"><scale value="1, 2, 1"/></transform></shape>', "scale it uniformly"),
+])
+def test_instancing_errors_are_located(body, message):
+    with pytest.raises(SceneError, match=message) as e:
+        _mitsuba_scene(body)
+    assert e.value.location is not None and e.value.location.file == "i.xml"

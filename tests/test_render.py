@@ -5,6 +5,7 @@ import pytest
 
 import clrender
 from clrender import renderer as render_mod
+from clrender.errors import ClrenderError
 from clrender.film import read_exr
 from nori_camera import nori_reference
 
@@ -193,6 +194,23 @@ def test_partial_films_are_the_renders_of_their_samples(scene_dir, monkeypatch):
     assert none == [], "no partial film before its interval has passed"
 
 
+def spy_on_partials(monkeypatch, read):
+    """Wraps Renderer.render's partial callback: after each partial write, read() what is on disk. Returns the
+    list of those readings and the real Renderer.render."""
+    seen, real = [], render_mod.Renderer.render
+
+    def spy(self, *a, **k):
+        every, cb = k["partial"]
+
+        def wrapped(film):
+            cb(film)
+            seen.append(read())
+        return real(self, *a, **{**k, "partial": (every, wrapped)})
+
+    monkeypatch.setattr(render_mod.Renderer, "render", spy)
+    return seen, real
+
+
 def test_cli_partial_every_writes_the_image_so_far(scene_dir, tmp_path, monkeypatch):
     """--partial-every SEC: during the render, the output holds the image so far (EXR metadata: its samples and
     partial); at the end, the whole render."""
@@ -200,18 +218,7 @@ def test_cli_partial_every_writes_the_image_so_far(scene_dir, tmp_path, monkeypa
 
     monkeypatch.setattr(render_mod, "TARGET_LAUNCH_SECONDS", 1e-9)
     out = tmp_path / "img.exr"
-    seen = []
-    real = render_mod.Renderer.render
-
-    def spy(self, *a, **k):
-        cb = k["partial"][1]
-
-        def wrapped(film):
-            cb(film)
-            seen.append(read_exr(out)[1])
-        return real(self, *a, **{**k, "partial": (k["partial"][0], wrapped)})
-
-    monkeypatch.setattr(render_mod.Renderer, "render", spy)
+    seen, _ = spy_on_partials(monkeypatch, lambda: read_exr(out)[1])
     assert main(["render", str(write_scene(scene_dir)), "-o", str(out), "--spp", "3", "-q",
                  "--partial-every", "0.000001"]) == 0
     assert [h["clrender.spp"] for h in seen] == ["1", "2"] and all(h["clrender.partial"] == "True" for h in seen)
@@ -227,7 +234,31 @@ def test_options_the_cluster_path_lacks_are_refused(scene_dir, capsys):
     from clrender.cli import main
 
     scene = str(write_scene(scene_dir))
-    for extra, name in ((["--partial-every", "5"], "--partial-every"),
-                        (["--emitter-selection", "power"], "--emitter-selection power")):
-        assert main(["render", scene, "--sample-range", "0:1", "-q", *extra]) == 2
-        assert f"{name} is not supported with --cluster or --sample-range" in capsys.readouterr().err
+    assert main(["render", scene, "--sample-range", "0:1", "-q", "--emitter-selection", "power"]) == 2
+    assert "--emitter-selection power is not supported with --cluster or --sample-range" in capsys.readouterr().err
+
+
+def test_cli_partial_every_with_a_sample_range_writes_the_part_so_far(scene_dir, tmp_path, monkeypatch):
+    """--partial-every with --sample-range (farm mode): the part on disk holds the samples done so far, with its
+    true counts, so `merge --partial` can use the work of a job that dies; at the end, the whole part."""
+    from clrender.cli import main
+    from clrender.parts import merge_parts, read_part
+
+    monkeypatch.setattr(render_mod, "TARGET_LAUNCH_SECONDS", 1e-9)  # one sample per pass
+    out = tmp_path / "part.exr"
+    seen, real = spy_on_partials(monkeypatch, lambda: read_part(out))
+    scene = write_scene(scene_dir)
+    assert main(["render", str(scene), "-o", str(out), "--sample-range", "5:3", "--seed", "4", "-q",
+                 "--partial-every", "0.000001"]) == 0
+    assert [(p.start, p.stop, int(p.film.count.min()), int(p.film.count.max())) for p in seen] == \
+        [(5, 8, 1, 1), (5, 8, 2, 2)]
+    final = read_part(out)
+    assert (final.start, final.stop) == (5, 8) and (final.film.count == 3).all()
+    # the snapshot is exactly the render of the samples it holds
+    r = render_mod.Renderer(clrender.load_scene(scene))
+    ref = real(r, spp=2, seed=4, start_sample=5)
+    np.testing.assert_allclose(seen[1].film.sum_wl, ref.sum_wl, rtol=1e-5, atol=1e-6)
+    with pytest.raises(ClrenderError, match="holds only 2 of its 3 samples"):
+        merge_parts([seen[1]])
+    assert (merge_parts([seen[1]], allow_missing=True).count == 2).all()
+    assert not list(tmp_path.glob(".*")), "no temporary files may be left behind"

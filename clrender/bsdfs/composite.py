@@ -48,7 +48,8 @@ class Composite(Bsdf):
         depth = composite_depth(self)
         levels = dispatch.BSDF.composite_levels
         if depth > levels:
-            raise SceneError(f"composite BSDFs (twosided, blendbsdf, mask) nested {depth} deep; at most {levels} "
+            raise SceneError(f"composite BSDFs (twosided, blendbsdf, mask, normalmap, bumpmap) nested {depth} deep; "
+                             f"at most {levels} "
                              f"levels are supported", where)
 
     def read_fraction(self, props, name: str):

@@ -165,7 +165,6 @@ class MitsubaPerspectiveCamera(PerspectiveCamera):
         if self.sampler is None:
             self.sampler = MitsubaIndependentSampler.default()
         film = self.film
-        self.fov = mitsuba_x_fov(props, film.full_width / film.full_height)
         self.near_clip = props.get_float("near_clip", 0.01)
         self.far_clip = props.get_float("far_clip", 1e4)
         if not 0 < self.near_clip < self.far_clip:
@@ -179,6 +178,18 @@ class MitsubaPerspectiveCamera(PerspectiveCamera):
         if np.any(m[3] != [0, 0, 0, 1]):
             raise SceneError(f"sensor to_world must be affine (last matrix row 0 0 0 1), got {m[3].tolist()}",
                              props.location("to_world"))
+        self.width, self.height = film.crop_width, film.crop_height
+        self.filter = film.filter
+        self.mirror_x = True
+        self.lens_radius, self.focus_distance = 0.0, 1.0
+        self.principal_point = (0.0, 0.0)
+        self.ortho = False
+        self.read_projection(props, m)
+        self.read_lens(props)
+
+    def read_projection(self, props, m) -> None:
+        """The field of view; the to_world may not scale (Mitsuba's rule for perspective sensors)."""
+        self.fov = mitsuba_x_fov(props, self.film.full_width / self.film.full_height)
         # Mitsuba refuses a scaled or sheared camera (its columns must be orthonormal within 1e-3; mirrors are
         # fine); read as written it would change the field of view and the clip distances.
         gram = m[:3, :3].T @ m[:3, :3]
@@ -187,12 +198,6 @@ class MitsubaPerspectiveCamera(PerspectiveCamera):
                              f"{np.sqrt(np.diag(gram)).round(4).tolist()}); a sensor's to_world may only rotate, "
                              f"mirror and translate, as in Mitsuba (write the fov instead of a scale)",
                              props.location("to_world"))
-        self.width, self.height = film.crop_width, film.crop_height
-        self.filter = film.filter
-        self.mirror_x = True
-        self.lens_radius, self.focus_distance = 0.0, 1.0
-        self.principal_point = (0.0, 0.0)
-        self.read_lens(props)
 
     def read_lens(self, props) -> None:
         """A pinhole with its principal point (thinlens overrides this: Mitsuba's has no principal point)."""
@@ -209,6 +214,7 @@ class MitsubaPerspectiveCamera(PerspectiveCamera):
         row["inv_aspect"] = f.full_height / f.full_width
         row["clip_window"] = 0 if f.sample_border else 1
         row["lens_radius"], row["focus_distance"] = self.lens_radius, self.focus_distance
+        row["ortho"] = int(self.ortho)
 
 
 @register("sensor", "thinlens", fmt="mitsuba")
@@ -235,3 +241,33 @@ class MitsubaThinLensCamera(MitsubaPerspectiveCamera):
         if not 0 < self.focus_distance < 1e30:
             raise SceneError(f"focus_distance must be positive, got {self.focus_distance}",
                              props.location("focus_distance"))
+
+
+@register("sensor", "orthographic", fmt="mitsuba")
+class MitsubaOrthographicCamera(MitsubaPerspectiveCamera):
+    """Mitsuba 3's orthographic sensor: parallel rays along the camera's z axis.
+
+    ```xml
+    <sensor type="orthographic">
+        <transform name="to_world">
+            <scale x="2" y="2"/>                  <!-- the visible area: [-1, 1] x [-h/w, h/w], scaled -->
+            <lookat origin="0, 5, 0" target="0, 0, 0" up="0, 0, 1"/>
+        </transform>
+        <float name="near_clip" value="0.01"/>    <!-- default 0.01: rays start on the plane z = near_clip -->
+        <float name="far_clip" value="10000"/>    <!-- default 10000: and run for far_clip - near_clip -->
+        <film type="hdrfilm"> ... </film>
+        <sampler type="independent"> ... </sampler>
+    </sensor>
+    ```
+    Image position (x, y) in [0, 1]^2 of the full film looks from camera-space point (1 - 2x, (1 - 2y) h/w,
+    near_clip) along +z (camera +x on the image's left, as Mitsuba's perspective sensor); the to_world may scale,
+    which sets the visible area, as in Mitsuba (kernels/camera.h). Checked against Mitsuba 3.9.1 (twin
+    `orthographic`).
+    """
+
+    def read_projection(self, props, m) -> None:
+        self.fov = 90.0   # unused by the kernel's orthographic branch; keeps the row's other fields defined
+        self.ortho = True   # (a to_world that collapses an axis is already refused as singular)
+
+    def read_lens(self, props) -> None:
+        """Parallel rays: no lens, no principal point (Mitsuba's orthographic sensor has neither)."""

@@ -85,6 +85,10 @@ BSDF = Kind(
                "q->wo = (float3)(0.0f, 0.0f, 1.0f); q->eta = 1.0f; q->measure = MEASURE_SOLID_ANGLE; "
                "return (float3)(0.0f);", required=True),
         Method("albedo", "float3", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return (float3)(1.0f);"),
+        # the normal the BSDF shades with, in the local frame: a normalmap's or bumpmap's, (0, 0, 1) for the rest
+        # (Mitsuba's BSDF::sh_frame, which aov's sh_normal shows)
+        Method("normal", "float3", "__global const Bsdf* b, const BsdfQuery* q", "b, q",
+               "return (float3)(0.0f, 0.0f, 1.0f);"),
     ),
     after=("bsdfs/common.h", "texture.h"),
     # twosided(blendbsdf(mask(diffuse))) is three levels: each level is a switch over the composites that calls
@@ -174,7 +178,8 @@ RFILTER = Kind(
             ("crop_x", "float"), ("crop_y", "float"), ("film_width", "float"), ("film_height", "float"),
             ("clip_window", "uint"),     # 1: samples whose filter offset leaves the window count with weight 0
             ("lens_radius", "float"),    # thin lens aperture radius (0: pinhole)
-            ("focus_distance", "float")),  # distance of the plane in focus along the viewing axis
+            ("focus_distance", "float"),  # distance of the plane in focus along the viewing axis
+            ("ortho", "uint")),          # 1: orthographic (rays along the z axis from the film's plane)
     param_bytes=16, flags=(), dispatch_name="filter_profile", row="cam", type_field="filter_type",
     methods=(Method("eval", "float", "__global const Camera* cam, float x", "cam, x", "return 0.0f;",
                     required=True),),

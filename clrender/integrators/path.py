@@ -16,6 +16,13 @@ Emitter and BSDF samples are combined by the power heuristic; after each BSDF sa
 segments, it continues with probability min(max(throughput) eta², 0.95) (Mitsuba's src/integrators/path.cpp).
 hide_emitters as Mitsuba 3.9 renders it: the camera ray passes through shapes that carry an area emitter (front or
 back) and sees black where it escapes; reflections still show emitters. Kernel: kernels/integrators/path_mitsuba.h.
+
+`volpath` and `volpathmis` (same parameters) are Mitsuba's volumetric path tracers, on surfaces (clrender refuses
+participating media, naming the <medium>): the same estimate as `path`, except that null events (a null BSDF, a
+mask's transparent part, a thin dielectric's transmission) do not count toward max_depth, and hide_emitters hides
+only the emission met before the first real bounce (the hidden emitters' surfaces still reflect). `prb` and
+`prbvolpath`, Mitsuba's path replay integrators, render forward as `path` (hide_emitters refused: Mitsuba treats it
+differently there). Checked against Mitsuba 3.9.1 itself (twin scenes integrator_volpath*).
 """
 from ..errors import SceneError
 from ..scene.registry import register
@@ -52,14 +59,24 @@ def mitsuba_depths(props, integrator):
 
 
 @register("integrator", "path", fmt="mitsuba")
+@register("integrator", "volpath", fmt="mitsuba")
+@register("integrator", "volpathmis", fmt="mitsuba")
+@register("integrator", "prb", fmt="mitsuba")
+@register("integrator", "prbvolpath", fmt="mitsuba")
 class MitsubaPath(Integrator):
     kernel = "path_mitsuba"
-    PARAMS = [("hide_emitters", "uint")]
+    PARAMS = [("hide_emitters", "uint"), ("volpath", "uint")]
     needs_emitter = True  # sees nothing but emitted light
 
     def __init__(self, props, children, spec):
-        self.max_depth, self.rr_depth = mitsuba_depths(props, '<integrator type="path">')
+        self.max_depth, self.rr_depth = mitsuba_depths(props, f'<integrator type="{spec.type}">')
         self.hide_emitters = props.get_bool("hide_emitters", False)
+        self.volpath = spec.type in ("volpath", "volpathmis")
+        if self.hide_emitters and spec.type.startswith("prb"):
+            raise SceneError(f'<integrator type="{spec.type}">: hide_emitters is not supported with {spec.type} '
+                             '(Mitsuba hides emitters differently there); use path or volpath',
+                             props.location("hide_emitters"))
 
     def fill(self, p):
         p["hide_emitters"] = int(self.hide_emitters)
+        p["volpath"] = int(self.volpath)

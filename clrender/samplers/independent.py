@@ -1,4 +1,5 @@
-"""Independent uniform samples from a counter-based generator (Philox4x32, keyed by seed and pixel).
+"""Independent uniform samples from a counter-based generator (Philox4x32, keyed by seed and pixel); Mitsuba's
+stratifying samplers use scrambled Sobol points instead (kernels/rng.h).
 
 ```xml
 <sampler type="independent">
@@ -16,6 +17,9 @@ log = logging.getLogger("clrender")
 
 @register("sampler", "independent")
 class IndependentSampler:
+    #: what the kernels draw samples with (pack.py SceneBuffers.sampler): Philox's independent numbers
+    generator = "independent"
+
     def __init__(self, props, children, spec):
         self.sample_count = props.get_int("sampleCount", 1)
         if not 1 <= self.sample_count < 2**32:  # sample numbers are 32-bit on the device
@@ -57,34 +61,35 @@ class MitsubaIndependentSampler(IndependentSampler):
 
 
 class _Substitute(MitsubaIndependentSampler):
-    """A Mitsuba sampler that changes how noise is spread, not the image it converges to: rendered with
-    independent samples, with a warning."""
+    """A Mitsuba sampler that stratifies its samples: rendered with clrender's stratified sampler, scrambled Sobol
+    points (kernels/rng.h, CLR_SAMPLER_SOBOL): the same converged image, with noise that falls faster than
+    independent samples', as Mitsuba's stratified samplers' does (their patterns differ, so the noise differs)."""
+    generator = "sobol"
 
     def __init__(self, props, children, spec):
         super().__init__(props, children, spec)
-        log.warning("%s: <sampler type=\"%s\"> renders with clrender's independent sampler (same converged "
-                    "image, different noise)", spec.location if spec is not None else "?",
-                    spec.type if spec is not None else "?")
+        log.info("%s: <sampler type=\"%s\"> renders with clrender's scrambled Sobol sampler",
+                 spec.location if spec is not None else "?", spec.type if spec is not None else "?")
 
 
 @register("sampler", "stratified", fmt="mitsuba")
 class MitsubaStratifiedSampler(_Substitute):
-    """``<sampler type="stratified">`` (sample_count, seed, jitter): independent samples instead, a warning."""
+    """``<sampler type="stratified">`` (sample_count, seed, jitter): scrambled Sobol samples instead."""
     EXTRA = ("jitter",)
 
 
 @register("sampler", "multijitter", fmt="mitsuba")
 class MitsubaMultijitterSampler(_Substitute):
-    """``<sampler type="multijitter">`` (sample_count, seed, jitter): independent samples instead, a warning."""
+    """``<sampler type="multijitter">`` (sample_count, seed, jitter): scrambled Sobol samples instead."""
     EXTRA = ("jitter",)
 
 
 @register("sampler", "orthogonal", fmt="mitsuba")
 class MitsubaOrthogonalSampler(_Substitute):
-    """``<sampler type="orthogonal">`` (sample_count, seed, jitter, strength): independent samples instead."""
+    """``<sampler type="orthogonal">`` (sample_count, seed, jitter, strength): scrambled Sobol samples instead."""
     EXTRA = ("jitter", "strength")
 
 
 @register("sampler", "ldsampler", fmt="mitsuba")
 class MitsubaLdSampler(_Substitute):
-    """``<sampler type="ldsampler">`` (sample_count, seed): independent samples instead, a warning."""
+    """``<sampler type="ldsampler">`` (sample_count, seed): scrambled Sobol samples instead."""

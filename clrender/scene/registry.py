@@ -85,6 +85,14 @@ def instantiate(tag: str, type_name: str, props: dict | None = None, location: S
     return create(PluginSpec(tag, type_name, None, plist, [], location, format=fmt))
 
 
+#: what Mitsuba scenes declare participating media with
+MEDIA_TAGS = ("medium", "phase", "volume")
+
+
+def _typed(spec) -> str:
+    return f' type="{spec.type}"' if getattr(spec, "type", None) else ""
+
+
 def create(spec: PluginSpec, _made: dict | None = None):
     """Instantiate ``spec`` and, first, its nested objects; then reject unused properties. A spec that occurs
     several times in the tree (a Mitsuba ``<ref>``) becomes one object."""
@@ -97,6 +105,10 @@ def create(spec: PluginSpec, _made: dict | None = None):
     # Check every nesting before building anything, so the reported error is the structural one
     # rather than some failure deep inside an earlier child.
     for child in spec.children:
+        if child.tag in MEDIA_TAGS:
+            raise SceneError(f"<{child.tag}{_typed(child)}>: participating media are not supported (clrender renders "
+                             "surfaces in a vacuum); remove the medium, or render the scene with Mitsuba",
+                             child.location)
         if child.tag not in accepted:
             takes = (", ".join(f"<{t}>" for t in accepted) if accepted else "no nested objects")
             raise SceneError(f"<{child.tag}> cannot be nested in {spec.describe()} (it accepts {takes})",

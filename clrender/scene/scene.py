@@ -77,7 +77,7 @@ class MitsubaScene(Scene):
             <sampler type="independent"/>         <!-- default 4 samples per pixel -->
         </sensor>
         <bsdf type="diffuse" id="white"/>         <!-- declared for <ref id="white"/> -->
-        <shape type="obj"> ... </shape>           <!-- any number -->
+        <shape type="obj"> ... </shape>           <!-- any number; shapegroup + instance: shapes/instance.py -->
         <emitter type="constant"/>                <!-- any number (area emitters live in a shape) -->
     </scene>
     ```
@@ -94,6 +94,9 @@ class MitsubaScene(Scene):
         # bsdfs and textures at the top level are only declared for references: _take_children passes them over
         self._take_children(children, "shape", {"sensor": "camera", "integrator": "integrator"},
                             "clrender renders one <{tag}> per scene; this is a second one")
+        from ..shapes.instance import flatten
+
+        self.shapes = flatten(self.shapes)   # shapegroups are declarations; instances become their copies
         if self.camera is None:
             raise SceneError('no sensor was specified: add e.g. <sensor type="perspective"> with a <film '
                              'type="hdrfilm"> (Mitsuba 3 cannot render a scene without one either)', spec.location)

@@ -27,9 +27,20 @@ BSDF_SRC = r"""
 #include "rng.h"
 #include "bsdf.h"
 
+/* The surface's derivatives where the program carries them (kernels/derivatives.h): geo[4 i .. 4 i + 3] = dp/du,
+   dp/dv, the geometric normal (local frame) and dp/du in world space. */
+INLINE void set_geometry(BsdfQuery* q, __global const float4* geo, uint i) {
+#ifdef CLR_SURFACE_DERIVATIVES
+    q->dpdu = geo[4u * i].xyz;
+    q->dpdv = geo[4u * i + 1u].xyz;
+    q->ng = geo[4u * i + 2u].xyz;
+    q->dpdu_world = geo[4u * i + 3u].xyz;
+#endif
+}
+
 /* One bsdf_sample per work-item. args[i] = (wi.xyz, bitcast row index); uvs[i] = uv. */
 __kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const Texture* textures, __global const float4* args,
-                                __global const float2* uvs, uint n, uint first, uint seed,
+                                __global const float2* uvs, __global const float4* geo, uint n, uint first, uint seed,
                                 __global float4* wo_out, __global float4* w_out, __global float4* f_out,
                                 __global float* pdf_out, __global uint* measure_out) {
     uint i = get_global_id(0);
@@ -45,6 +56,7 @@ __kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const Textur
     q.measure = MEASURE_SOLID_ANGLE;
     q.uv = uvs[i];
     q.textures = textures;
+    set_geometry(&q, geo, i);
     float3 w = bsdf_sample(b, &q, next2d(&s));
     wo_out[i] = (float4)(q.wo, q.eta);
     w_out[i] = (float4)(w, 0.0f);
@@ -55,7 +67,8 @@ __kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const Textur
 
 /* bsdf_pdf and bsdf_eval for given (wi, wo); wi[i].w = bitcast row index, wo[i].w unused. */
 __kernel void bsdf_pdf_eval_batch(__global const Bsdf* rows, __global const Texture* textures, __global const float4* wi_in,
-                                  __global const float4* wo_in, __global const float2* uvs, uint n,
+                                  __global const float4* wo_in, __global const float2* uvs, __global const float4* geo,
+                                  uint n,
                                   __global float* pdf_out, __global float4* f_out, __global float4* alb_out) {
     uint i = get_global_id(0);
     if (i >= n) return;
@@ -68,6 +81,7 @@ __kernel void bsdf_pdf_eval_batch(__global const Bsdf* rows, __global const Text
     q.measure = MEASURE_SOLID_ANGLE;
     q.uv = uvs[i];
     q.textures = textures;
+    set_geometry(&q, geo, i);
     pdf_out[i] = bsdf_pdf(b, &q);
     f_out[i] = (float4)(bsdf_eval(b, &q), bsdf_is_delta(b) ? 1.0f : 0.0f);
     alb_out[i] = (float4)(bsdf_albedo(b, &q), 0.0f);
@@ -131,6 +145,18 @@ class BsdfSamples:
         return iter((self.wo, self.weight, self.pdf, self.measure))
 
 
+#: the surface derivatives a query gets by default: dp/du = x, dp/dv = y, geometric normal z (and dp/du in world
+#: space = x: the shading frame is the world's)
+GEOMETRY = np.array([[1.0, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 0]])
+
+
+def _geometry(geometry, n):
+    g = np.broadcast_to(np.asarray(GEOMETRY if geometry is None else geometry, np.float64), (n, 4, 3))
+    out = np.zeros((n, 4, 4), np.float32)
+    out[..., :3] = g
+    return out.reshape(n * 4, 4)
+
+
 def _textures(ctx, textures):
     """The texture table the rows refer to (a plugin's `bsdf.pack()` leaves it in `bsdf.textures_table`)."""
     cl = _cl()
@@ -139,11 +165,12 @@ def _textures(ctx, textures):
 
 
 def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 0.5), row_index=None,
-                      first: int = 0, textures=None, defines=None) -> BsdfSamples:
+                      first: int = 0, textures=None, defines=None, geometry=None) -> BsdfSamples:
     """n calls of bsdf_sample on the device. `bsdf_row`: one packed row or an array of rows (then
     `row_index` (n,) picks each sample's row); `wi`: (3,) or (n,3) in the local frame (normalised here);
     `uv`: (2,) or (n,2); `textures`: the table the rows' texture parameters index; `defines`: of the program (a
-    plugin set's, say; default: every plugin). Sample i uses the Sampler stream (seed, first + i, 0)."""
+    plugin set's, say; default: every plugin); `geometry`: (4, 3) or (n, 4, 3), the query's dp/du, dp/dv, geometric
+    normal and world dp/du (GEOMETRY by default). Sample i uses the Sampler stream (seed, first + i, 0)."""
     cl = _cl()
     rows = _rows(bsdf_row)
     wi = np.asarray(wi, np.float64)
@@ -154,6 +181,7 @@ def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 
         raise ValueError("row_index must be (n,) indices into bsdf_row")
     args[:, 3] = idx.view(np.float32)
     uvs = _per_item(uv, n, 2)
+    geo = _geometry(geometry, n)
     k = _kernel(ctx, "bsdf_sample_batch", defines=defines)
     mf = cl.mem_flags
     d_rows = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=rows)
@@ -165,13 +193,14 @@ def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 
         g = padded(m)
         d_args = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(args[s:s + m]))
         d_uv = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(uvs[s:s + m]))
+        d_geo = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(geo[4 * s:4 * (s + m)]))
         wo = np.empty((m, 4), np.float32)
         w = np.empty((m, 4), np.float32)
         f = np.empty((m, 4), np.float32)
         pdf = np.empty(m, np.float32)
         meas = np.empty(m, np.uint32)
         bufs = [cl.Buffer(ctx, mf.WRITE_ONLY, a.nbytes) for a in (wo, w, f, pdf, meas)]
-        k(queue, (g,), (LOCAL,), d_rows, d_tex, d_args, d_uv, np.uint32(m), np.uint32(first + s), np.uint32(seed),
+        k(queue, (g,), (LOCAL,), d_rows, d_tex, d_args, d_uv, d_geo, np.uint32(m), np.uint32(first + s), np.uint32(seed),
           *bufs)
         for a, b in zip((wo, w, f, pdf, meas), bufs):
             cl.enqueue_copy(queue, a, b)
@@ -186,7 +215,7 @@ def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 
 
 
 def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=None, with_albedo=False,
-                        textures=None):
+                        textures=None, geometry=None):
     """bsdf_pdf and bsdf_eval at m direction pairs: wi (3,) or (m,3), wo (m,3). Returns (pdf (m,), f (m,3)),
     plus bsdf_albedo(uv) (m,3) if `with_albedo`."""
     cl = _cl()
@@ -198,6 +227,7 @@ def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=N
     wi_a[:, 3] = idx.view(np.float32)
     wo_a = _per_item(wo, m, 4)
     uvs = _per_item(uv, m, 2)
+    geo = _geometry(geometry, m)
     k = _kernel(ctx, "bsdf_pdf_eval_batch")
     mf = cl.mem_flags
     d_rows = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=rows)
@@ -211,11 +241,12 @@ def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=N
         d_wi = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(wi_a[s:s + c]))
         d_wo = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(wo_a[s:s + c]))
         d_uv = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(uvs[s:s + c]))
+        d_geo = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(geo[4 * s:4 * (s + c)]))
         p = np.empty(c, np.float32)
         ff = np.empty((c, 4), np.float32)
         aa = np.empty((c, 4), np.float32)
         bufs = [cl.Buffer(ctx, mf.WRITE_ONLY, a.nbytes) for a in (p, ff, aa)]
-        k(queue, (g,), (LOCAL,), d_rows, d_tex, d_wi, d_wo, d_uv, np.uint32(c), *bufs)
+        k(queue, (g,), (LOCAL,), d_rows, d_tex, d_wi, d_wo, d_uv, d_geo, np.uint32(c), *bufs)
         for a, b in zip((p, ff, aa), bufs):
             cl.enqueue_copy(queue, a, b)
         queue.finish()

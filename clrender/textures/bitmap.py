@@ -110,6 +110,27 @@ class Bitmap(Texture):
         bot = img[ys[1], xs[0]] * (1 - a) + img[ys[1], xs[1]] * a
         return top * (1 - b) + bot * b
 
+    def eval_grad(self, uv) -> np.ndarray:
+        """The uv gradient (..., 2) of the first channel as Mitsuba 3.9's eval_1_grad takes it (on the float view: the
+        luminance) and kernels/textures/bitmap.h's bitmap_grad computes it: the bilinear interpolation's slope per
+        pixel, through to_uv's transpose, times (W, H); 0 for `nearest`."""
+        uv = np.asarray(uv, np.float64)
+        h, w = self.image.shape[:2]
+        if self.filter == 1:
+            return np.zeros(uv.shape[:-1] + (2,))
+        st = uv @ self.to_uv[:, :2].T + self.to_uv[:, 2]
+        img = self.image[..., 0].astype(np.float64)
+        fx, fy = st[..., 0] * w - 0.5, st[..., 1] * h - 0.5
+        x0, y0 = np.floor(fx), np.floor(fy)
+        a, b = fx - x0, fy - y0
+        xa, xb = wrap_index(x0, w, self.wrap), wrap_index(x0 + 1, w, self.wrap)
+        ya, yb = wrap_index(y0, h, self.wrap), wrap_index(y0 + 1, h, self.wrap)
+        f00, f10, f01, f11 = img[ya, xa], img[ya, xb], img[yb, xa], img[yb, xb]
+        dx = (1 - b) * (f10 - f00) + b * (f11 - f01)
+        dy = (1 - a) * (f01 - f00) + a * (f11 - f10)
+        m = self.to_uv
+        return np.stack([w * (m[0, 0] * dx + m[1, 0] * dy), h * (m[0, 1] * dx + m[1, 1] * dy)], axis=-1)
+
     def fill(self, p) -> None:
         h, w = self.image.shape[:2]
         p["dims"] = (w, h, self.filter, self.wrap)

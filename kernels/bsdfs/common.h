@@ -3,6 +3,7 @@
 #ifndef CLRENDER_BSDFS_COMMON_H
 #define CLRENDER_BSDFS_COMMON_H
 #include "math.h"
+#include "derivatives.h"
 
 #define MEASURE_SOLID_ANGLE 0u
 #define MEASURE_DISCRETE 1u
@@ -18,6 +19,11 @@ typedef struct {
     uint measure;
     float2 uv;
     __global const Texture* textures;  /* the scene's texture table, for parameters that refer to a texture */
+#ifdef CLR_SURFACE_DERIVATIVES
+    /* Mitsuba's si.dp_du, si.dp_dv and geometric normal si.n in this (local) frame, and dp_du in world space (what
+       bumpmap needs: kernels/bsdfs/perturb.h) */
+    float3 dpdu, dpdv, ng, dpdu_world;
+#endif
 } BsdfQuery;
 
 /* Unpolarised Fresnel reflectance of a smooth dielectric interface. cos_i is measured against the normal

@@ -38,6 +38,12 @@ INLINE BsdfQuery bsdf_query(const SceneData* sd, const Intersection* its, float3
     q.eta = 1.0f;
     q.measure = MEASURE_SOLID_ANGLE;
     q.uv = its->uv;
+#ifdef CLR_SURFACE_DERIVATIVES
+    q.dpdu = to_local(&its->sh, its->dpdu);
+    q.dpdv = to_local(&its->sh, its->dpdv);
+    q.ng = to_local(&its->sh, its->ng);
+    q.dpdu_world = its->dpdu;
+#endif
     return q;
 }
 

@@ -45,8 +45,9 @@ INLINE void path_begin(PathState* ps, Ray ray) {
 }
 
 /* Stage 1: trace the segment and add the emission it reaches, MIS-weighted against emitter sampling at the
-   previous vertex. Returns whether it hit a surface (the path ends otherwise, or at max_depth). */
-INLINE bool path_intersect(const SceneData* sd, PathState* ps, Intersection* its) {
+   previous vertex. Returns whether it hit a surface (the path ends otherwise, or at max_depth unless
+   `no_limit`: Mitsuba's volpath decides at its next BSDF sample, path_mitsuba.h). */
+INLINE bool path_intersect_limited(const SceneData* sd, PathState* ps, Intersection* its, bool no_limit) {
     bool hit = scene_intersect(sd, &ps->ray, its);
     float3 le = hit ? hit_emission(sd, its, ps->ray.d) : escaped(sd, ps->ray.d);
     if (!is_black(le)) {
@@ -62,8 +63,12 @@ INLINE bool path_intersect(const SceneData* sd, PathState* ps, Intersection* its
 #endif
         ps->L += ps->beta * le * w;
     }
-    if (!hit || ps->depth + 1u >= sd->info->max_depth) ps->alive = false;
+    if (!hit || (!no_limit && ps->depth + 1u >= sd->info->max_depth)) ps->alive = false;
     return ps->alive;
+}
+
+INLINE bool path_intersect(const SceneData* sd, PathState* ps, Intersection* its) {
+    return path_intersect_limited(sd, ps, its, false);
 }
 
 /* Stage 2: emitter sampling at a non-delta vertex (path_ems, path_mis, Mitsuba's path). */

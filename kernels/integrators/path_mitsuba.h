@@ -1,6 +1,10 @@
 /* Mitsuba 3's `path` (clrender/integrators/path.py): emitter sampling and BSDF sampling at every vertex, combined
    by the power heuristic; max_depth counts segments (1 = emitters seen directly, 2 = direct illumination);
-   Russian roulette from rr_depth (p.path_mitsuba: hide_emitters). The stages are path.h's. */
+   Russian roulette from rr_depth (p.path_mitsuba: hide_emitters, volpath). The stages are path.h's.
+   With p.path_mitsuba.volpath set, Mitsuba's `volpath` rules for surfaces: null events (a null BSDF, a mask's
+   transparent part, a thin dielectric's transmission) do not count toward max_depth, so a path goes on through
+   them at the depth limit; hide_emitters hides the emission that the path meets before its first real bounce,
+   and the surfaces there still reflect. */
 #define PATH_USE_EMS
 #define PATH_USE_MATS
 #define PATH_MITSUBA
@@ -14,11 +18,29 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     if (sd->info->max_depth == 0u) return (float3)(0.0f);   /* Mitsuba: max_depth 0 renders nothing */
     PathState ps;
     path_begin(&ps, ray);
+    bool hide = sd->info->p.path_mitsuba.hide_emitters != 0u;
     bool valid = sd->info->n_infinite > 0u;
+    if (sd->info->p.path_mitsuba.volpath != 0u) {   /* volpath keeps what every path gathered (no valid-ray rule) */
+        for (;;) {
+            Intersection its;
+            float3 before = ps.L;
+            bool hit = path_intersect_limited(sd, &ps, &its, true);
+            if (hide && ps.depth == 0u) ps.L = before;
+            if (!hit) break;
+            __global const Bsdf* b = bsdf_at(sd, &its);
+            path_sample_lights(sd, &ps, &its, b, smp);
+            float3 d = ps.ray.d;
+            uint depth = ps.depth;
+            path_continue(sd, &ps, &its, b, smp);
+            if (ps.depth != depth && ps.after_delta && dot3(ps.ray.d, d) > 1.0f - 1e-6f) ps.depth = depth;  /* null */
+            if (!ps.alive || ps.depth >= sd->info->max_depth) break;
+        }
+        return ps.L;
+    }
     for (;;) {
         Intersection its;
         its.t = -1.0f;   /* set on a hit */
-        if (ps.depth == 0u && sd->info->p.path_mitsuba.hide_emitters != 0u) {
+        if (ps.depth == 0u && hide) {
             /* Hidden emitters: the camera ray sees neither emitter shapes nor the environment. */
             if (!scene_intersect_hiding_emitters(sd, &ps.ray, &its)) break;
             if (sd->info->max_depth == 1u) { valid = true; break; }

@@ -66,6 +66,17 @@ INLINE float3 mesh_dpdu(const SceneData* sd, __global const Shape* s, const Mesh
     return det != 0.0f ? (dp0 * duv1.y - dp1 * duv0.y) * (1.0f / det) : dp0;
 }
 
+#ifdef CLR_SURFACE_DERIVATIVES
+/* Mitsuba's dp/dv of triangle t (the partner of mesh_dpdu): from its uvs, or its second edge. */
+INLINE float3 mesh_dpdv(const SceneData* sd, __global const Shape* s, const MeshTriangle* t) {
+    float3 dp0 = t->p1 - t->p0, dp1 = t->p2 - t->p0;
+    if (!(s->flags & SHAPE_HAS_UVS)) return dp1;
+    float2 uv0 = sd->uvs[t->i0], duv0 = sd->uvs[t->i1] - uv0, duv1 = sd->uvs[t->i2] - uv0;
+    float det = duv0.x * duv1.y - duv0.y * duv1.x;
+    return det != 0.0f ? (dp1 * duv0.x - dp0 * duv1.x) * (1.0f / det) : dp1;
+}
+#endif
+
 INLINE bool mesh_surface(const SceneData* sd, __global const Shape* s, const Ray* r, const Hit* h,
                          Intersection* its) {
     MeshTriangle tri = mesh_triangle(sd, h->prim);
@@ -91,6 +102,11 @@ INLINE bool mesh_surface(const SceneData* sd, __global const Shape* s, const Ray
     else
         its->uv = (float2)(h->u, h->v);
     its->sh = (s->flags & SHAPE_NEEDS_UV) ? frame_from_tangent(n, mesh_dpdu(sd, s, &tri)) : frame_from_normal(n);
+#ifdef CLR_SURFACE_DERIVATIVES
+    bool uv = (s->flags & SHAPE_NEEDS_UV) != 0u;
+    its->dpdu = uv ? mesh_dpdu(sd, s, &tri) : (float3)(0.0f);
+    its->dpdv = uv ? mesh_dpdv(sd, s, &tri) : (float3)(0.0f);
+#endif
     its->tri = h->prim;
     return true;
 }

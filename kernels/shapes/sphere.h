@@ -34,6 +34,19 @@ INLINE float3 sphere_dpdu(__global const Shape* s, float3 n) {
     return sphere_turn(q, (float3)(-l.y, l.x, 0.0f), 1.0f);
 }
 
+#ifdef CLR_SURFACE_DERIVATIVES
+/* Mitsuba's dp/du and dp/dv at the unit normal n, with their lengths: 2 pi r (-y, x, 0) and
+   pi r (z cos phi, z sin phi, -sin theta) in the sphere's own frame, (1, 0, 0) for dp/dv at the poles. */
+INLINE void sphere_derivatives(__global const Shape* s, float r, float3 n, float3* dpdu, float3* dpdv) {
+    float4 q = s->p.sphere.rot;
+    float3 l = sphere_turn(q, n, -1.0f);
+    float rd = sqrt(l.x * l.x + l.y * l.y);
+    float3 dv = rd > 0.0f ? (float3)(l.z * l.x / rd, l.z * l.y / rd, -rd) : (float3)(1.0f, 0.0f, 0.0f);
+    *dpdu = sphere_turn(q, (float3)(-l.y, l.x, 0.0f), 1.0f) * (2.0f * M_PI_F_ * r);
+    *dpdv = sphere_turn(q, dv, 1.0f) * (M_PI_F_ * r);
+}
+#endif
+
 /* uv of the unit normal n (only where SHAPE_NEEDS_UV: atan2 and acos cost more than the rest of a hit), taken in
    the sphere's own frame: n turned back by the quaternion rot (w's sign bit: a mirrored frame). */
 INLINE float2 sphere_uv(__global const Shape* s, float3 n) {
@@ -55,6 +68,10 @@ INLINE bool sphere_surface(const SceneData* sd, __global const Shape* s, const R
     its->ng = nf;
     its->sh = (s->flags & SHAPE_NEEDS_UV) ? frame_from_tangent(nf, sphere_dpdu(s, n)) : frame_from_normal(nf);
     its->uv = sphere_uv(s, n);
+#ifdef CLR_SURFACE_DERIVATIVES
+    its->dpdu = its->dpdv = (float3)(0.0f);
+    if (s->flags & SHAPE_NEEDS_UV) sphere_derivatives(s, sp.w, n, &its->dpdu, &its->dpdv);
+#endif
     its->tri = NONE;
     return true;
 }

@@ -43,4 +43,27 @@ INLINE float3 bitmap_eval(__global const Texture* t, float2 uv) {
     return top * (1.0f - b) + bot * b;
 }
 
+/* The uv gradient of the first channel as Mitsuba 3.9's eval_1_grad takes it (bumpmap's height): the derivative of
+   the bilinear interpolation in pixel units, taken through the transpose of to_uv's linear part and scaled by the
+   resolution afterwards ((W, H) times it: not the chain rule's W and H inside the sum, which differs only for a
+   to_uv that turns a non-square image); `nearest` has none (0). */
+INLINE float2 bitmap_grad(__global const Texture* t, float2 uv) {
+    uint4 d = t->p.bitmap.dims;
+    if (d.z == 1u) return (float2)(0.0f);
+    int w = (int)d.x, h = (int)d.y;
+    float4 r0 = t->p.bitmap.to_uv[0], r1 = t->p.bitmap.to_uv[1];
+    float s = r0.x * uv.x + r0.y * uv.y + r0.z, tt = r1.x * uv.x + r1.y * uv.y + r1.z;
+    float fx = s * (float)w - 0.5f, fy = tt * (float)h - 0.5f;
+    float x0f = floor(fx), y0f = floor(fy);
+    float a = fx - x0f, b = fy - y0f;
+    int x0 = bitmap_floor(x0f), y0 = bitmap_floor(y0f);
+    int xa = bitmap_wrap(x0, w, d.w), xb = bitmap_wrap(x0 + 1, w, d.w);
+    int ya = bitmap_wrap(y0, h, d.w), yb = bitmap_wrap(y0 + 1, h, d.w);
+    float f00 = bitmap_texel(t, xa, ya).x, f10 = bitmap_texel(t, xb, ya).x;
+    float f01 = bitmap_texel(t, xa, yb).x, f11 = bitmap_texel(t, xb, yb).x;
+    float dx = (1.0f - b) * (f10 - f00) + b * (f11 - f01);
+    float dy = (1.0f - a) * (f01 - f00) + a * (f11 - f10);
+    return (float2)((float)w * (r0.x * dx + r1.x * dy), (float)h * (r0.y * dx + r1.y * dy));
+}
+
 #endif
