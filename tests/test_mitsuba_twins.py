@@ -72,14 +72,22 @@ def _path_rules(scene):
     scene.integrator.volpath = False       # Mitsuba's path: null events count, hide_emitters sees through
 
 
+def _principled_glass_eta(scene):
+    glass = [s.bsdf for s in scene.shapes if type(s.bsdf).__name__ == "Principled" and s.bsdf.has_spec_trans]
+    assert glass
+    for b in glass:
+        b.eta = 1.33
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name, mutate", [
     ("cornell_meshes", _mirror), ("filter_lanczos_crop", _crop_off_by_one), ("thinlens", _pinhole),
     ("gaussian_sample_border", _border_ignored), ("filter_gaussian_fov_y", _fov_one_percent_wider),
     ("integrator_volpath_depth2", _path_rules), ("integrator_volpath_hide", _path_rules),
-    ("orthographic", _mirror),
+    ("orthographic", _mirror), ("principled", _principled_glass_eta),
 ], ids=["mirrored camera", "crop window 1 px off", "pinhole for thin lens", "sample_border ignored", "fov 1% wider",
-        "volpath depth as path's", "volpath hide_emitters as path's", "mirrored orthographic sensor"])
+        "volpath depth as path's", "volpath hide_emitters as path's", "mirrored orthographic sensor",
+        "principled glass eta 1.33 for 1.5"])
 def test_twin_test_fails_when_clrender_is_wrong(name, mutate):
     """The harness can fail: each twin, rendered with one thing it verifies done wrong, must not pass."""
     import clrender
