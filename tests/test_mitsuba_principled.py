@@ -23,7 +23,9 @@ from clrender.errors import SceneError
 from clrender.scene.properties import PropertyList
 from clrender.scene.registry import create
 from clrender.scene.spec import PluginSpec
-from clrender.testing.chi2 import bin_directions, chi2_test, expected_from_grid, refined_direction_grid, sidak
+from clrender.testing.chi2 import (bin_directions, check_pdf_integral, check_sample_weights, chi2_test,
+                                   expected_from_grid, refined_direction_grid, sidak)
+from clrender.testing.directions import refracted, wi_at
 from clrender.testing.kernels import bsdf_pdf_eval_batch, bsdf_sample_batch
 from clrender.testing.mitsuba_dict import spec_from_dict
 from clrender.textures.texture import TextureTable
@@ -42,19 +44,6 @@ def make(kind="principled", **kw):
     for k, v in kw.items():
         d[k] = {"type": "rgb", "value": list(v)} if isinstance(v, tuple) else v
     return create(spec_from_dict(d))
-
-
-def wi_at(theta_deg, side=1, phi_deg=0.0):
-    t, p = np.radians(theta_deg), np.radians(phi_deg)
-    return np.array([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), side * np.cos(t)])
-
-
-def refracted(wi, eta):
-    e = eta if wi[2] > 0 else 1 / eta
-    s2 = (1 - wi[2] ** 2) / (e * e)
-    if s2 >= 1:
-        return None
-    return np.array([-wi[0] / e, -wi[1] / e, -np.sign(wi[2]) * np.sqrt(1 - s2)])
 
 
 # --------------------------------------------------------------------------------------- chi2 cases
@@ -164,11 +153,7 @@ def test_pdf_integral_is_the_surviving_fraction(chi2_runs, name):
     """∫ pdf = P(a sample survives) <= 1: = 1 up to what visible normals scatter onto the wrong side of the surface;
     a binomial bound of 5 sigma plus the quadrature's 0.3%."""
     b, s, keep, res, total, wi = chi2_runs[name]
-    n = len(keep)
-    integral, kept = total / n, keep.mean()
-    assert integral <= 1.0 + 3e-3
-    sigma = np.sqrt(max(kept * (1 - kept), 1e-6) / n)
-    assert abs(integral - kept) < 5 * sigma + 3e-3, f"{name}: pdf integrates to {integral:.5f}, kept {kept:.5f}"
+    kept = check_pdf_integral(total, keep, name)
     if name == "half-glass-smooth-10":   # smooth, near normal incidence: (almost) nothing may be lost
         assert kept > 0.995, f"{name}: kept {kept:.4f}"
 
@@ -176,12 +161,7 @@ def test_pdf_integral_is_the_surviving_fraction(chi2_runs, name):
 @pytest.mark.parametrize("name", CASE_PARAMS)
 def test_weight_is_eval_cos_over_pdf(chi2_runs, name):
     b, s, keep, res, total, wi = chi2_runs[name]
-    assert np.all(s.measure == 0) and np.all(np.isfinite(s.weight))
-    w, f, pdf, cos = s.weight[keep], s.f[keep], s.pdf[keep], np.abs(s.wo[keep, 2])
-    assert np.all(pdf > 0) and np.all(cos > 0)
-    np.testing.assert_allclose(w, f * (cos / pdf)[:, None], rtol=2e-4, atol=1e-7)
-    refl = s.wo[keep, 2] * wi[2] > 0
-    assert np.all(s.eta[keep][refl] == 1)
+    refl = check_sample_weights(s, keep, wi)
     if transmits(b):
         assert (~refl).any(), f"{name}: no transmission sampled"
         eta = 1.0 if "diff_trans" in b.floats else b.eta if wi[2] > 0 else 1 / b.eta   # thin: no refraction

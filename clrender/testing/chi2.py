@@ -185,3 +185,28 @@ def integration_points_2d(lo, hi, res: int, sub: int = 32, seed: int = 1):
     cell = ((I // sub) * res + (J // sub)).ravel()
     w = np.full(len(pts), np.prod(hi - lo) / (m * m))
     return pts, w, cell
+
+
+def check_pdf_integral(total_expected: float, keep: np.ndarray, label: str = "") -> float:
+    """A BSDF's pdf, integrated over the sphere (`total_expected`: the chi-square's expected counts summed, for
+    len(keep) samples), must equal the fraction of samples that survive (`keep`), at most 1: what sampling loses
+    (visible normals scattered below the horizon or onto the wrong side) its pdf must not claim. A binomial bound
+    of 5 sigma plus the quadrature's 0.3 %. Returns the surviving fraction."""
+    n = len(keep)
+    integral, kept = total_expected / n, float(np.mean(keep))
+    assert integral <= 1.0 + 3e-3, f"{label}: pdf integrates to {integral:.5f} > 1"
+    sigma = np.sqrt(max(kept * (1 - kept), 1e-6) / n)
+    assert abs(integral - kept) < 5 * sigma + 3e-3, f"{label}: pdf integrates to {integral:.5f}, kept {kept:.5f}"
+    return kept
+
+
+def check_sample_weights(s, keep: np.ndarray, wi: np.ndarray) -> np.ndarray:
+    """Every kept sample of a smooth BSDF (batch `s` of testing.kernels.bsdf_sample_batch) has weight f cos / pdf,
+    and an eta of 1 where it reflects. Returns which kept samples reflect (the rest transmit)."""
+    assert np.all(s.measure == 0) and np.all(np.isfinite(s.weight))
+    w, f, pdf, cos = s.weight[keep], s.f[keep], s.pdf[keep], np.abs(s.wo[keep, 2])
+    assert np.all(pdf > 0) and np.all(cos > 0)
+    np.testing.assert_allclose(w, f * (cos / pdf)[:, None], rtol=2e-4, atol=1e-7)
+    refl = s.wo[keep, 2] * wi[2] > 0
+    assert np.all(s.eta[keep][refl] == 1)
+    return refl

@@ -111,7 +111,7 @@ INLINE float3 principled_eval(__global const Bsdf* b, const BsdfQuery* q) {
         float3 Fp;
         if (front) {
             float spec_tint = pr_w(b, q, PR_SPEC_TINT);
-            float lum = pr_lum(base);
+            float lum = luminance(base);
             float3 tint = lum > 0.0f ? base / lum : (float3)(1.0f);
             float eta_it = wih >= 0.0f ? eta : 1.0f / eta;
             float r0 = (eta_it - 1.0f) / (eta_it + 1.0f);
@@ -154,7 +154,7 @@ INLINE float3 principled_eval(__global const Bsdf* b, const BsdfQuery* q) {
         float sheen_tint = pr_w(b, q, PR_SHEEN_TINT);
         float3 c = (float3)(1.0f);
         if (sheen_tint != 0.0f) {
-            float lum = pr_lum(base);
+            float lum = luminance(base);
             float3 tint = lum > 0.0f ? base / lum : (float3)(1.0f);
             c += sheen_tint * (tint - c);
         }

@@ -38,8 +38,6 @@ INLINE float3 pr_schlick(float3 r0, float cos_i, float eta) {
     return r0 + (1.0f - r0) * w;
 }
 
-INLINE float pr_lum(float3 c) { return 0.212671f * c.x + 0.715160f * c.y + 0.072169f * c.z; }
-
 /* Mitsuba's mac_mic_compatibility: wi on the front of h (h as seen from wi's side) and wo on the front (reflection)
    or the back (refraction) */
 INLINE bool pr_compatible(float3 h, float3 wi, float3 wo, bool reflect) {

@@ -68,7 +68,7 @@ INLINE float3 principledthin_eval(__global const Bsdf* b, const BsdfQuery* q) {
         float DG = mf_d(d, h) * mf_g1(d, wi, h) * mf_g1(d, wo, h) / (4.0f * ci * aco);
         if (reflect) {
             float spec_tint = pt_w(b, q, PT_SPEC_TINT);
-            float lum = pr_lum(base);
+            float lum = luminance(base);
             float3 tint = lum > 0.0f ? base / lum : (float3)(1.0f);
             float r0 = (eta - 1.0f) / (eta + 1.0f);
             float3 Fs = pr_schlick(tint * (r0 * r0), wih, eta);
@@ -97,7 +97,7 @@ INLINE float3 principledthin_eval(__global const Bsdf* b, const BsdfQuery* q) {
             float sheen_tint = pt_w(b, q, PT_SHEEN_TINT);
             float3 c = (float3)(1.0f);
             if (sheen_tint != 0.0f) {
-                float lum = pr_lum(base);
+                float lum = luminance(base);
                 float3 tint = lum > 0.0f ? base / lum : (float3)(1.0f);
                 c += sheen_tint * (tint - c);
             }

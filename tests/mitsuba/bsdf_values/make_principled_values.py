@@ -18,16 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
+from clrender.testing.directions import refracted
+
 HERE = Path(__file__).resolve().parent
 LLVM = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
-
-
-def refracted(wi, eta):
-    e = eta if wi[2] > 0 else 1 / eta
-    s2 = (1 - wi[2] ** 2) / (e * e)
-    if s2 >= 1:
-        return None
-    return np.array([-wi[0] / e, -wi[1] / e, -np.sign(wi[2]) * np.sqrt(1 - s2)])
 
 
 def directions():
