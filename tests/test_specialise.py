@@ -129,6 +129,7 @@ def test_a_tag_outside_the_set_takes_the_default(ctx, queue):
         assert np.array_equal(a[~plastic], b[~plastic])
 
 
+@pytest.mark.slow   # the full render program (every plugin) takes about 2 minutes to build cold
 @pytest.mark.parametrize("which", ["diffuse_only", "composites"])
 def test_specialised_and_full_programs_render_the_same_image(which):
     """Same tables, same seed: the accumulators of the specialised program equal the full program's bit for bit
