@@ -10,6 +10,12 @@
 #define PATH_MITSUBA
 #include "path.h"
 
+/* Whether path_continue's sample from direction d (at depth `depth`) was a null event: a discrete sample that goes
+   on undeviated (a failed sample is not: depth stays). */
+INLINE bool path_null_event(const PathState* ps, uint depth, float3 d) {
+    return ps->depth != depth && ps->after_delta && dot3(ps->ray.d, d) > 1.0f - 1e-6f;
+}
+
 /* Mitsuba's path keeps what a path gathered only if the scene has an environment or the path met a surface that
    it did not pass straight through (a null BSDF, a mask's transparent part, a thin dielectric's transmission: its
    "null" events); otherwise the pixel sample is 0, even where it passed an emitter (e.g. a light with a null BSDF,
@@ -32,7 +38,7 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
             float3 d = ps.ray.d;
             uint depth = ps.depth;
             path_continue(sd, &ps, &its, b, smp);
-            if (ps.depth != depth && ps.after_delta && dot3(ps.ray.d, d) > 1.0f - 1e-6f) ps.depth = depth;  /* null */
+            if (path_null_event(&ps, depth, d)) ps.depth = depth;
             if (!ps.alive || ps.depth >= sd->info->max_depth) break;
         }
         return ps.L;
@@ -53,8 +59,7 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
         float3 d = ps.ray.d;
         uint depth = ps.depth;
         path_continue(sd, &ps, &its, b, smp);
-        /* a discrete sample that goes on undeviated is a null event (a failed sample is not: depth stays) */
-        if (!(ps.depth != depth && ps.after_delta && dot3(ps.ray.d, d) > 1.0f - 1e-6f)) valid = true;
+        if (!path_null_event(&ps, depth, d)) valid = true;
         if (!ps.alive) break;
     }
     return valid ? ps.L : (float3)(0.0f);
