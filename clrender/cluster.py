@@ -309,6 +309,26 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
         pending.clear()
         raise ClusterError(msg)
 
+    def film_of(acc, added, stats, complete, stopped_by, partial=False):
+        """The Film of what `acc` holds (the tasks in `added`), with the render's metadata; fills in `stats`."""
+        stats.samples = int(acc.count.sum())
+        stats.passes = len(added)
+        stats.dropped = int(acc.dropped.sum())
+        stats.interrupted = stopped_by == "Ctrl-C"
+        meta = {"spp": int(acc.count.min()) if n_pixels else 0, "spp_max": int(acc.count.max()) if n_pixels else 0,
+                "seed": seed, "start_sample": start_sample, "render_seconds": round(stats.seconds, 4),
+                "device": "; ".join(sorted(devices)), "integrator": integrator, "version": __version__,
+                "interrupted": not complete, "dropped_samples": stats.dropped, "scene_hash": key,
+                "dialect": dialect, "cluster": what, "workers": len(workers_used), "tasks": len(added),
+                "bands": len(plan_tasks.bands), "wall_seconds": round(time.perf_counter() - t_begin, 4)}
+        if stopped_by:
+            meta["stopped_by"] = stopped_by
+        if partial:
+            meta["partial"] = True
+        film = acc.film(meta)
+        film.stats = stats
+        return film
+
     t_start = last_partial = time.perf_counter()
     with SigintFlag() as flag:
         try:
@@ -404,9 +424,7 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
                         _add(snap, held[index], snap_added)
                     snap_stats = copy.copy(stats)
                     snap_stats.seconds = time.perf_counter() - t_start
-                    partial[1](_film(snap, snap_added, snap_stats, False, None, start_sample, seed, devices,
-                                     integrator, __version__, key, dialect, what, workers_used, plan_tasks,
-                                     t_begin, partial=True))
+                    partial[1](film_of(snap, snap_added, snap_stats, False, None, partial=True))
                     last_partial = time.perf_counter()
                 if flag.requested and stopped_by is None:
                     stopped_by = "Ctrl-C"
@@ -419,32 +437,7 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
         _add(acc, held.pop(index), added)
     stats.seconds = time.perf_counter() - t_start
     complete = plan_tasks.exhausted and len(added) == plan_tasks.issued
-    return _film(acc, added, stats, complete, stopped_by, start_sample, seed, devices, integrator, __version__,
-                 key, dialect, what, workers_used, plan_tasks, t_begin)
-
-
-def _film(acc, added, stats, complete, stopped_by, start_sample, seed, devices, integrator, version, key,
-          dialect, what, workers_used, plan_tasks, t_begin, partial=False):
-    """The Film of what `acc` holds (the tasks in `added`), with the render's metadata; fills in `stats`."""
-    n_pixels = acc.width * acc.height
-    stats.samples = int(acc.count.sum())
-    stats.passes = len(added)
-    stats.dropped = int(acc.dropped.sum())
-    stats.interrupted = stopped_by == "Ctrl-C"
-    spp_min = int(acc.count.min()) if n_pixels else 0
-    meta = {"spp": spp_min, "spp_max": int(acc.count.max()) if n_pixels else 0, "seed": seed,
-            "start_sample": start_sample, "render_seconds": round(stats.seconds, 4),
-            "device": "; ".join(sorted(devices)), "integrator": integrator, "version": version,
-            "interrupted": not complete, "dropped_samples": stats.dropped, "scene_hash": key,
-            "dialect": dialect, "cluster": what, "workers": len(workers_used),
-            "tasks": len(added), "bands": len(plan_tasks.bands), "wall_seconds": round(time.perf_counter() - t_begin, 4)}
-    if stopped_by:
-        meta["stopped_by"] = stopped_by
-    if partial:
-        meta["partial"] = True
-    film = acc.film(meta)
-    film.stats = stats
-    return film
+    return film_of(acc, added, stats, complete, stopped_by)
 
 
 def _wait_for_a_worker(client, what):
