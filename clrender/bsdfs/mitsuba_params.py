@@ -50,15 +50,17 @@ def float_value(props, name, default, unbounded=False) -> float:
     return float(props.get_float(name, default))
 
 
-def float_or_texture(props, textures, name, default):
-    """(value, texture or None) of a positive float parameter (a texture's float view is read: Mitsuba's eval_1)."""
+def float_or_texture(props, textures, name, default, positive: bool = True):
+    """(value, texture or None) of a float parameter, positive unless `positive` is False (then only finite; Mitsuba
+    takes the principled BSDFs' values as given); a texture's float view is read: Mitsuba's eval_1."""
     _check_single(props, textures, name)
     if name in textures:
         return 1.0, textures[name].float_view()     # the constant is not read
     v = float_value(props, name, default, unbounded=True)
-    if not (v > 0 and np.isfinite(v)):
-        raise SceneError(f"{name} must be positive, got {v}", props.location(name) if props.has(name) else None)
-    return v, textures.get(name)
+    if not ((v > 0 or not positive) and np.isfinite(v)):
+        raise SceneError(f"{name} must be {'positive' if positive else 'finite'}, got {v}",
+                         props.location(name) if props.has(name) else None)
+    return v, None
 
 
 class Distribution:

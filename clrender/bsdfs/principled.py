@@ -35,7 +35,7 @@ from ..device import layout
 from ..errors import SceneError
 from ..scene.registry import register
 from .bsdf import Bsdf
-from .mitsuba_params import color_or_texture, fill_color, float_value, named_textures
+from .mitsuba_params import color_or_texture, fill_color, float_or_texture, named_textures
 
 #: (name, Mitsuba's default); the index of each is its PR_* index in kernels/bsdfs/principled.h
 FLOAT_PARAMS = (("roughness", 0.5), ("anisotropic", 0.0), ("metallic", 0.0), ("spec_trans", 0.0),
@@ -57,17 +57,7 @@ def read_parameters(props, children, float_params, owner):
     names = ("base_color",) + tuple(n for n, _ in float_params)
     tex = named_textures(children, names, owner)
     base_color = color_or_texture(props, tex, "base_color", 0.5)
-    floats = {}
-    for name, default in float_params:
-        if name in tex and props.has(name):
-            raise SceneError(f"{name} given both as a value and as a texture", props.location(name))
-        if name in tex:
-            floats[name] = (0.0, tex[name].float_view())
-            continue
-        v = float_value(props, name, default, unbounded=True)
-        if not np.isfinite(v):
-            raise SceneError(f"{name} must be finite, got {v}", props.location(name))
-        floats[name] = (v, None)
+    floats = {name: float_or_texture(props, tex, name, default, positive=False) for name, default in float_params}
 
     def given(n):
         return n in tex or (props.has(n) and not (props.tag(n) == "float" and floats[n][0] == 0))
