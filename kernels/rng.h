@@ -64,16 +64,26 @@ INLINE void sampler_init(Sampler* s, uint seed, uint pixel, uint sample) {
 
 INLINE float rng_unit(uint x) { return (float)(x >> 8) * (1.0f / 16777216.0f); }
 
-INLINE float2 next2d(Sampler* s) {
+/* The next dimension's seed; *i receives the sample's shuffled index there. */
+INLINE uint rng_dimension(Sampler* s, uint* i) {
     uint h = rng_hash(rng_hash(rng_hash(s->seed ^ 0x5eed5eedu) ^ s->pixel) + s->dim * 0x9e3779b9u);
     s->dim += 1u;
-    uint i = rng_owen(s->sample, h);                                   /* the shuffle */
+    *i = rng_owen(s->sample, h);                                       /* the shuffle */
+    return h;
+}
+
+INLINE float2 next2d(Sampler* s) {
+    uint i, h = rng_dimension(s, &i);
     uint x = rng_owen(rng_reverse_bits(i), rng_hash(h ^ 0xa511e9b3u));  /* Sobol dimension 0: the radical inverse */
     uint y = rng_owen(rng_sobol1(i), rng_hash(h ^ 0x63d83595u));
     return (float2)(rng_unit(x), rng_unit(y));
 }
 
-INLINE float next1d(Sampler* s) { return next2d(s).x; }
+/* next2d's x alone (the same number: a 1-D draw uses a dimension of its own, as next2d does) */
+INLINE float next1d(Sampler* s) {
+    uint i, h = rng_dimension(s, &i);
+    return rng_unit(rng_owen(rng_reverse_bits(i), rng_hash(h ^ 0xa511e9b3u)));
+}
 
 #else
 #include <pyopencl-random123/philox.cl>
