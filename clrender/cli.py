@@ -9,6 +9,7 @@ import sys
 import time
 
 from .errors import ClrenderError
+from .executors import DRIVERS, choose_driver
 
 
 def _defines(items):
@@ -57,7 +58,12 @@ def cmd_render(args) -> int:
             return 2
         scene.emitter_selection = "power"
     args.ctrl_c.check()  # a Ctrl-C that a library swallowed still stops us
-    renderer = Renderer(scene, device=args.device)
+    try:
+        choose_driver(args.driver, scene.integrator.kernel)
+    except ValueError as e:
+        print(f"clrender: error: {args.scene}: --driver: {e}", file=sys.stderr)
+        return 2
+    renderer = Renderer(scene, device=args.device, driver=args.driver)
     args.ctrl_c.check()
     st = renderer.buffers.stats
     print(f"clrender: {args.scene}: {st['triangles']} triangles, {st['spheres']} spheres, "
@@ -201,6 +207,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="while rendering, write the image so far over the output every SEC seconds (atomically, "
                         "its EXR metadata giving the samples done), to look at a long render or keep its work if "
                         "the process dies")
+    r.add_argument("--driver", choices=DRIVERS, default="auto",
+                   help="how passes run: the megakernel, or the wavefront's stage kernels (path integrators); "
+                        "auto: the faster (today the megakernel)")
     r.add_argument("-D", "--define", action="append", metavar="NAME=VALUE", help="set $NAME in the scene")
     r.add_argument("--emitter-selection", choices=("uniform", "power"), default="uniform",
                    help="how light sampling picks an emitter in a Mitsuba scene: uniformly (default, as Mitsuba) or "

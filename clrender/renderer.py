@@ -17,14 +17,13 @@ import numpy as np
 
 from . import __version__
 from .device.context import get_context
-from .device.kernelargs import KernelArgs
 from .device.program import build_program
+from .executors import LOCAL_SIZE, MegakernelExecutor, WavefrontExecutor, choose_driver
 from .film import Film
 from .interrupt import SigintHandler, wait_for
 from .memcheck import check_film_fits
 from .pack import pack_scene
 
-LOCAL_SIZE = 64              # one fixed launch shape: every new shape costs PoCL a fresh compile
 MAX_LAUNCH_PIXELS = 1 << 16  # pixels per launch; a pass over a larger image is several launches
 TARGET_LAUNCH_SECONDS = 0.2  # keeps progress, Ctrl-C and time limits responsive
 
@@ -89,10 +88,12 @@ class Renderer:
 
     With ``count_rays=True`` the kernels are built with ``-DCLRENDER_COUNT_RAYS`` and every render reports the
     rays it traced (``film.stats.rays``, ``film.metadata["rays_*"]``); normal builds compile no counting code.
+    ``driver`` picks how passes run (clrender/executors.py): "megakernel", "wavefront" (path integrators only) or
+    "auto" (the faster one; ``self.driver`` says which).
     """
 
     def __init__(self, scene, device=None, fast_math: bool = False, buffers=None, defines=None,
-                 count_rays: bool = False):
+                 count_rays: bool = False, driver: str = "auto"):
         import pyopencl as cl
 
         self.scene = scene
@@ -108,10 +109,9 @@ class Renderer:
         t0 = time.perf_counter()
         #: the -D defines of the render program (`clrender bench` times builds of this very program)
         self.defines = render_defines(scene, self.buffers, defines)
-        self.program = build_program(self.ctx, '#include "render.cl"\n', defines=self.defines,
-                                     fast_math=fast_math)
-        self.kernel = cl.Kernel(self.program, "render_pass")
-        self.args = KernelArgs(self.kernel)
+        self.driver = choose_driver(driver, scene.integrator.kernel, self.count_rays)
+        main = '#include "wavefront.cl"\n' if self.driver == "wavefront" else '#include "render.cl"\n'
+        self.program = build_program(self.ctx, main, defines=self.defines, fast_math=fast_math)
         self.build_seconds = time.perf_counter() - t0
         t0 = time.perf_counter()
         mf = cl.mem_flags
@@ -123,7 +123,12 @@ class Renderer:
         self.width, self.height = scene.width, scene.height
         self.n_pixels = self.width * self.height
         self.launch_pixels = min(self.n_pixels, MAX_LAUNCH_PIXELS)
-        self.global_size = -(-self.launch_pixels // LOCAL_SIZE) * LOCAL_SIZE
+        executor = WavefrontExecutor if self.driver == "wavefront" else MegakernelExecutor
+        self.executor = executor(self.ctx, self.queue, self.program, self._scene_bufs, self._camera, self._filter,
+                                 self.launch_pixels)
+        self.global_size = -(-self.launch_pixels // LOCAL_SIZE) * LOCAL_SIZE   # the megakernel's launch shape
+        if self.driver == "megakernel":   # the benchmarks launch render_pass themselves
+            self.kernel, self.args = self.executor.kernel, self.executor.args
         self.upload_seconds = time.perf_counter() - t0
         self._warm = False
 
@@ -133,6 +138,7 @@ class Renderer:
         fixed = sum(a.nbytes for a in self.buffers.scene_arrays())
         fixed += self.buffers.camera.nbytes + self.buffers.filter_cdf.nbytes
         per_pixel = 16 + 16 + 4 + (16 if self.count_rays else 0)
+        fixed += getattr(self.executor, "device_bytes", 0)   # the wavefront's path state
         return int(fixed + per_pixel * self.n_pixels + (0 if self.count_rays else 16))
 
     def render(self, spp: int | None = None, seed: int = 0, time_limit: float | None = None,
@@ -167,9 +173,8 @@ class Renderer:
         # Ray counters: per pixel when counting, else a one-element dummy the kernel never touches.
         rays = np.zeros((n if self.count_rays else 1, 4), np.uint32)
         d_rays = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=rays)
-        k = self.kernel
-        args = self.args.set_scene(self._scene_bufs)
-        args.set(cam=self._camera, filter_cdf=self._filter, acc0=d_acc0, acc1=d_acc1, bad=d_bad, rays=d_rays)
+        ex = self.executor
+        ex.bind(d_acc0, d_acc1, d_bad, d_rays)
         stats = RenderStats(build_seconds=self.build_seconds, upload_seconds=self.upload_seconds)
         done = 0
         per_pass = 1
@@ -177,9 +182,7 @@ class Renderer:
             # PoCL compiles the work-group function at the first launch of a shape (0.3-2 s): do it with a
             # launch that adds no samples, so timings, pass sizes and the ETA are those of the render.
             t0 = time.perf_counter()
-            args.set(pixel_offset=np.uint32(0), pixel_count=np.uint32(min(self.launch_pixels, n)),
-                     sample_offset=np.uint32(start_sample), spp=np.uint32(0), seed=np.uint32(seed & 0xFFFFFFFF))
-            cl.enqueue_nd_range_kernel(self.queue, k, (self.global_size,), (LOCAL_SIZE,))
+            ex.warm()
             wait_for(self.queue)
             self._warm = True
             self.build_seconds += time.perf_counter() - t0
@@ -200,10 +203,7 @@ class Renderer:
                     t0 = time.perf_counter()
                     for off in range(p0, p1, self.launch_pixels):
                         cnt = min(self.launch_pixels, p1 - off)
-                        args.set(pixel_offset=np.uint32(off), pixel_count=np.uint32(cnt),
-                                 sample_offset=np.uint32(start_sample + done), spp=np.uint32(batch),
-                                 seed=np.uint32(seed & 0xFFFFFFFF))
-                        cl.enqueue_nd_range_kernel(self.queue, k, (self.global_size,), (LOCAL_SIZE,))
+                        ex.launch(off, cnt, start_sample + done, batch, seed & 0xFFFFFFFF)
                         stats.launches += 1
                     wait_for(self.queue)  # not queue.finish(): a second Ctrl-C must not wait for the pass
                     dt = time.perf_counter() - t0

@@ -6,6 +6,8 @@
 #ifndef CLRENDER_FILTER_H
 #define CLRENDER_FILTER_H
 #include "math.h"
+#include "rng.h"
+#include "camera.h"
 #include "gen/rfilter_dispatch.h"
 
 /* The filter's profile f(x) (filter_profile_eval: generated from the registered rfilter plugins,
@@ -74,6 +76,23 @@ INLINE float2 filter_sample_guided(__global const Camera* cam, __global const fl
     float dy = filter_sample_1d_guided(cam, table, u.y, &py);
     *weight = filter_weight(cam, dx, px, dy, py);
     return (float2)(dx, dy);
+}
+
+/* The camera sample of pixel (px, py): a film position drawn from the filter (its weight in *w), a lens sample
+   where the camera has a lens, and the ray. False for a position outside the window (Mitsuba's
+   sample_border=false): a sample of weight 0 that traces nothing. render.cl, wavefront.cl and
+   benchmarks/profile_pass.cl share it, so every driver draws the same dimensions for the same ray. */
+INLINE bool camera_sample(__global const Camera* cam, __global const float* filter_cdf, uint px, uint py,
+                          Sampler* smp, float* w, Ray* ray) {
+    float2 off = filter_sample_guided(cam, filter_cdf, next2d(smp), w);
+    float sx = (float)px + 0.5f + off.x, sy = (float)py + 0.5f + off.y;
+    if (cam->clip_window != 0u &&
+        !(sx >= 0.0f && sy >= 0.0f && sx <= (float)cam->width && sy <= (float)cam->height)) {
+        return false;
+    }
+    float2 lens = cam->lens_radius > 0.0f ? next2d(smp) : (float2)(0.5f, 0.5f);
+    *ray = camera_ray_lens(cam, sx, sy, lens);
+    return true;
 }
 
 #endif

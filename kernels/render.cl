@@ -25,14 +25,8 @@ __kernel void render_pass(SCENE_ARGS, __global const Camera* cam, __global const
         Sampler smp;
         sampler_init(&smp, seed, pix, sample_offset + s);
         float w;
-        float2 off = filter_sample_guided(cam, filter_cdf, next2d(&smp), &w);
-        float sx = (float)px + 0.5f + off.x, sy = (float)py + 0.5f + off.y;
-        if (cam->clip_window != 0u &&
-            !(sx >= 0.0f && sy >= 0.0f && sx <= (float)cam->width && sy <= (float)cam->height)) {
-            continue;   /* outside the window (Mitsuba's sample_border=false): a sample of weight 0 */
-        }
-        float2 lens = cam->lens_radius > 0.0f ? next2d(&smp) : (float2)(0.5f, 0.5f);
-        Ray ray = camera_ray_lens(cam, sx, sy, lens);
+        Ray ray;
+        if (!camera_sample(cam, filter_cdf, px, py, &smp, &w, &ray)) continue;   /* weight 0 */
 #ifdef CLRENDER_COUNT_RAYS
         sd.n_closest = 0u;
         sd.n_shadow = 0u;

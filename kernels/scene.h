@@ -82,15 +82,25 @@ INLINE uint scene_triangle_shape(const SceneData* sd, uint pos) {
     return sd->mesh_vertices[lo].y;
 }
 
+/* A closest-hit query is two steps, so that a wavefront driver can run them as kernels of their own: the trace
+   (the BVH alone: t, barycentrics, primitive) and the surface reconstruction (the shape's point, normals, frame and
+   uv at that hit). scene_intersect does both. */
+INLINE bool scene_trace(const SceneData* sd, const Ray* r, Hit* h) {
+    COUNT_RAY(sd, n_closest);
+    return bvh_closest_hit(sd->nodes, sd->prims, r->o, r->d, r->tmin, r->tmax, h);
+}
+
+INLINE bool scene_surface(const SceneData* sd, const Ray* r, const Hit* h, Intersection* its) {
+    its->t = h->t;
+    uint shape = (h->prim & BVH_SPHERE_BIT) ? sd->sphere_shape[h->prim & ~BVH_SPHERE_BIT]
+                                            : scene_triangle_shape(sd, h->prim >> PRIM_REF_POS_SHIFT);
+    its->shape = shape;
+    return shape_surface(sd, &sd->shapes[shape], r, h, its);
+}
+
 INLINE bool scene_intersect(const SceneData* sd, const Ray* r, Intersection* its) {
     Hit h;
-    COUNT_RAY(sd, n_closest);
-    if (!bvh_closest_hit(sd->nodes, sd->prims, r->o, r->d, r->tmin, r->tmax, &h)) return false;
-    its->t = h.t;
-    uint shape = (h.prim & BVH_SPHERE_BIT) ? sd->sphere_shape[h.prim & ~BVH_SPHERE_BIT]
-                                           : scene_triangle_shape(sd, h.prim >> PRIM_REF_POS_SHIFT);
-    its->shape = shape;
-    return shape_surface(sd, &sd->shapes[shape], r, &h, its);
+    return scene_trace(sd, r, &h) && scene_surface(sd, r, &h, its);
 }
 
 INLINE bool scene_occluded(const SceneData* sd, float3 o, float3 d, float tmin, float tmax) {

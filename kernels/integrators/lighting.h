@@ -62,23 +62,42 @@ INLINE float hit_emitter_pdf(const SceneData* sd, float3 ref, const Intersection
     return scene_emitter_pdf(sd, e, &q);
 }
 
-/* Does anything block the segment from the hit `its` to the light point q->p (or toward q->wi, for lights at
-   infinity)? The ray starts off the surface (spawn_origin) and aims at q->p from there, stopping short of
-   the light's own surface. */
-INLINE bool light_occluded(const SceneData* sd, const Intersection* its, const EmitterQuery* q) {
-    float3 o = spawn_origin(its, q->wi);
-    if (!isfinite(q->dist)) return scene_occluded(sd, o, q->wi, 0.0f, INFINITY);
-    float3 d = q->p - o;
+/* The shadow ray of an emitter sample q->p (or toward q->wi, for lights at infinity) seen from the hit `its`: it
+   starts off the surface (spawn_origin) and aims at q->p from there, stopping short of the light's own surface. A
+   segment too short to hold anything gets tmax <= 0: nothing can block it (shadow_occluded). */
+INLINE Ray light_shadow_ray(const Intersection* its, const EmitterQuery* q) {
+    Ray r;
+    r.o = spawn_origin(its, q->wi);
+    r.tmin = 0.0f;
+    if (!isfinite(q->dist)) {
+        r.d = q->wi;
+        r.tmax = INFINITY;
+        return r;
+    }
+    float3 d = q->p - r.o;
     float len = len3(d);
-    float tmax = len * (1.0f - 1e-4f) - ray_eps(q->p);
-    if (!(tmax > 0.0f)) return false;
-    return scene_occluded(sd, o, d * (1.0f / len), 0.0f, tmax);
+    r.d = d * (1.0f / len);
+    r.tmax = len * (1.0f - 1e-4f) - ray_eps(q->p);
+    return r;
 }
 
-/* One emitter sample at a non-delta vertex: f * cos * Le / pdf, times the MIS weight (LIGHTING_MIS) against BSDF
-   sampling when `mis` (delta lights always get full weight: BSDF sampling cannot find them). */
-INLINE float3 sample_light(const SceneData* sd, const Intersection* its, __global const Bsdf* b,
-                           float3 wi_local, Sampler* smp, bool mis) {
+INLINE bool shadow_occluded(const SceneData* sd, const Ray* r) {
+    if (!(r->tmax > 0.0f)) return false;
+    return scene_occluded(sd, r->o, r->d, 0.0f, r->tmax);
+}
+
+/* Does anything block the segment from the hit `its` to the light point of q? */
+INLINE bool light_occluded(const SceneData* sd, const Intersection* its, const EmitterQuery* q) {
+    Ray r = light_shadow_ray(its, q);
+    return shadow_occluded(sd, &r);
+}
+
+/* One emitter sample at a non-delta vertex, up to its visibility: f * cos * Le / pdf, times the MIS weight
+   (LIGHTING_MIS) against BSDF sampling when `mis` (delta lights always get full weight: BSDF sampling cannot find
+   them), and the shadow ray that decides whether it counts. 0 (and no ray to trace) when it cannot contribute. The
+   trace is the caller's, so that a wavefront driver can run all shadow rays in a kernel of their own. */
+INLINE float3 sample_light_unshadowed(const SceneData* sd, const Intersection* its, __global const Bsdf* b,
+                                      float3 wi_local, Sampler* smp, bool mis, Ray* shadow) {
     EmitterQuery q;
     q.ref = its->p;
     float a = next1d(smp);
@@ -90,10 +109,19 @@ INLINE float3 sample_light(const SceneData* sd, const Intersection* its, __globa
     bq.wo = to_local(&its->sh, q.wi);
     float3 f = bsdf_eval(b, &bq);
     if (is_black(f)) return (float3)(0.0f);
-    if (light_occluded(sd, its, &q)) return (float3)(0.0f);
+    *shadow = light_shadow_ray(its, &q);
     float w = 1.0f;
     if (mis && !q.delta) w = LIGHTING_MIS(q.pdf, bsdf_pdf(b, &bq));
     return f * fabs(bq.wo.z) * le * w;
+}
+
+/* The same with its shadow ray traced. */
+INLINE float3 sample_light(const SceneData* sd, const Intersection* its, __global const Bsdf* b,
+                           float3 wi_local, Sampler* smp, bool mis) {
+    Ray shadow;
+    float3 c = sample_light_unshadowed(sd, its, b, wi_local, smp, mis, &shadow);
+    if (is_black(c) || shadow_occluded(sd, &shadow)) return (float3)(0.0f);
+    return c;
 }
 
 /* Radiance from the environment (infinite emitters) along an escaping direction d. */

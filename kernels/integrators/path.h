@@ -16,23 +16,29 @@
 #endif
 #include "lighting.h"
 
-/* The state of one path between its stages. The megakernel below runs the stages in a loop per work-item (the
-   right shape for PoCL); a wavefront driver for GPUs can keep PathStates in a buffer and run each stage as its
-   own kernel over the paths that need it, with the same stage functions. */
+/* The state of one path between its stages. The megakernel (path_loop.h) runs the stages in a loop per work-item;
+   the wavefront driver (kernels/wavefront.cl) keeps PathStates in a device buffer and runs each stage as a kernel of
+   its own over the paths that need it, with these very functions. Flags are uints: the struct lives in __global
+   memory there, where OpenCL C allows no bool. The host learns its size from the device (wavefront.cl's
+   wf_sizes), so nothing else spells out its layout. */
 typedef struct {
     Ray ray;            /* the segment to trace next */
+    Ray shadow;         /* the shadow ray of a pending emitter sample (shadow_pending) */
     float3 L;           /* radiance gathered so far */
     float3 beta;        /* path throughput */
+    float3 prev_p;      /* where `ray` starts */
+    float3 shadow_L;    /* what the pending emitter sample adds to L if `shadow` is not blocked */
     float eta;          /* product of the relative IORs crossed (Russian roulette uses beta * eta^2) */
     float prev_pdf;     /* solid-angle pdf of the BSDF sample that made `ray` */
-    float3 prev_p;      /* where `ray` starts */
     uint depth;         /* segments traced so far */
-    bool after_delta;   /* `ray` left a delta BSDF (or is the camera ray): only BSDF sampling finds its emission */
-    bool alive;
+    uint after_delta;   /* `ray` left a delta BSDF (or is the camera ray): only BSDF sampling finds its emission */
+    uint alive;         /* `ray` is still to be traced */
+    uint shadow_pending;
+    uint valid;         /* Mitsuba's path: whether the sample keeps what it gathered (path_mitsuba.h) */
 } PathState;
 
 /* Stage 0: a camera ray. */
-INLINE void path_begin(PathState* ps, Ray ray) {
+INLINE void path_begin(const SceneData* sd, PathState* ps, Ray ray) {
     ps->ray = ray;
     ps->L = (float3)(0.0f);
     ps->beta = (float3)(1.0f);
@@ -40,15 +46,20 @@ INLINE void path_begin(PathState* ps, Ray ray) {
     ps->prev_pdf = 0.0f;
     ps->prev_p = ray.o;
     ps->depth = 0u;
-    ps->after_delta = true;   /* the camera ray counts as "delta": nothing else can find what it sees */
-    ps->alive = true;
+    ps->after_delta = 1u;   /* the camera ray counts as "delta": nothing else can find what it sees */
+    ps->alive = 1u;
+    ps->shadow_pending = 0u;
+    ps->valid = 1u;
+#if defined(PATH_MITSUBA)
+    ps->valid = sd->info->n_infinite > 0u || sd->info->p.path_mitsuba.volpath != 0u;
+    if (sd->info->max_depth == 0u) { ps->alive = 0u; ps->valid = 0u; }   /* Mitsuba: max_depth 0 renders nothing */
+#endif
 }
 
-/* Stage 1: trace the segment and add the emission it reaches, MIS-weighted against emitter sampling at the
-   previous vertex. Returns whether it hit a surface (the path ends otherwise, or at max_depth unless
-   `no_limit`: Mitsuba's volpath decides at its next BSDF sample, path_mitsuba.h). */
-INLINE bool path_intersect_limited(const SceneData* sd, PathState* ps, Intersection* its, bool no_limit) {
-    bool hit = scene_intersect(sd, &ps->ray, its);
+/* Stage 1, after the trace (`hit`: a surface at `its`): add the emission the segment reaches, MIS-weighted against
+   emitter sampling at the previous vertex. Returns whether the path goes on from `its` (it ends on a miss, and at
+   max_depth unless `no_limit`: Mitsuba's volpath decides at its next BSDF sample, path_mitsuba.h). */
+INLINE bool path_emission(const SceneData* sd, PathState* ps, bool hit, const Intersection* its, bool no_limit) {
     float3 le = hit ? hit_emission(sd, its, ps->ray.d) : escaped(sd, ps->ray.d);
     if (!is_black(le)) {
         float w;
@@ -63,27 +74,34 @@ INLINE bool path_intersect_limited(const SceneData* sd, PathState* ps, Intersect
 #endif
         ps->L += ps->beta * le * w;
     }
-    if (!hit || (!no_limit && ps->depth + 1u >= sd->info->max_depth)) ps->alive = false;
-    return ps->alive;
+    if (!hit || (!no_limit && ps->depth + 1u >= sd->info->max_depth)) ps->alive = 0u;
+    return ps->alive != 0u;
 }
 
-INLINE bool path_intersect(const SceneData* sd, PathState* ps, Intersection* its) {
-    return path_intersect_limited(sd, ps, its, false);
-}
-
-/* Stage 2: emitter sampling at a non-delta vertex (path_ems, path_mis, Mitsuba's path). */
+/* Stage 2: emitter sampling at a non-delta vertex (path_ems, path_mis, Mitsuba's path). Its shadow ray is left
+   pending (path_shadow_done adds the sample once the ray is traced). */
 INLINE void path_sample_lights(const SceneData* sd, PathState* ps, const Intersection* its, __global const Bsdf* b,
                                Sampler* smp) {
 #if defined(PATH_USE_EMS)
     if (PATH_SAMPLES_LIGHTS(b) && ps->depth + 2u <= sd->info->max_depth) {
         float3 wi = to_local(&its->sh, -ps->ray.d);
 #if defined(PATH_USE_MATS)
-        ps->L += ps->beta * sample_light(sd, its, b, wi, smp, true);
+        float3 c = sample_light_unshadowed(sd, its, b, wi, smp, true, &ps->shadow);
 #else
-        ps->L += ps->beta * sample_light(sd, its, b, wi, smp, false);
+        float3 c = sample_light_unshadowed(sd, its, b, wi, smp, false, &ps->shadow);
 #endif
+        if (!is_black(c)) {
+            ps->shadow_L = ps->beta * c;
+            ps->shadow_pending = 1u;
+        }
     }
 #endif
+}
+
+/* Stage 2b: the pending emitter sample counts unless its shadow ray was blocked. */
+INLINE void path_shadow_done(PathState* ps, bool occluded) {
+    if (ps->shadow_pending && !occluded) ps->L += ps->shadow_L;
+    ps->shadow_pending = 0u;
 }
 
 /* Stage 3: Russian roulette as Nori's, then the BSDF sample that makes the next segment (Mitsuba: the sample, then
@@ -93,13 +111,13 @@ INLINE void path_continue(const SceneData* sd, PathState* ps, const Intersection
 #if !defined(PATH_MITSUBA)
     if (ps->depth >= sd->info->rr_depth) {
         float q = minf(max3(ps->beta) * ps->eta * ps->eta, 0.99f);
-        if (!(next1d(smp) < q)) { ps->alive = false; return; }
+        if (!(next1d(smp) < q)) { ps->alive = 0u; return; }
         ps->beta /= q;
     }
 #endif
     BsdfQuery bq = bsdf_query(sd, its, -ps->ray.d);
     float3 w = bsdf_sample(b, &bq, next2d(smp));
-    if (is_black(w)) { ps->alive = false; return; }
+    if (is_black(w)) { ps->alive = 0u; return; }
     ps->beta *= w;
     ps->eta *= bq.eta;
     ps->after_delta = bq.measure == MEASURE_DISCRETE;
@@ -110,27 +128,25 @@ INLINE void path_continue(const SceneData* sd, PathState* ps, const Intersection
 #if defined(PATH_MITSUBA)
     if (ps->depth >= sd->info->rr_depth) {
         float q = minf(max3(ps->beta) * ps->eta * ps->eta, 0.95f);
-        if (!(next1d(smp) < q)) { ps->alive = false; return; }
+        if (!(next1d(smp) < q)) { ps->alive = 0u; return; }
         ps->beta /= q;
     }
 #endif
 }
 
-/* The megakernel: the stages in a loop. The random numbers are drawn in the same order as before the stages
-   were split out (emitter sample, roulette, BSDF sample per vertex), so images are unchanged. Mitsuba's path
-   has a loop of its own (path_mitsuba.h). */
 #if !defined(PATH_MITSUBA)
-INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
-    PathState ps;
-    path_begin(&ps, ray);
-    for (;;) {
-        Intersection its;
-        if (!path_intersect(sd, &ps, &its)) break;
-        __global const Bsdf* b = bsdf_at(sd, &its);
-        path_sample_lights(sd, &ps, &its, b, smp);
-        path_continue(sd, &ps, &its, b, smp);
-        if (!ps.alive) break;
-    }
-    return ps.L;
+/* One vertex of Nori's path family, after its segment was traced (`traced`: the BVH hit `h`): emission, emitter
+   sample, roulette and BSDF sample, in the order the megakernel has always drawn their random numbers. */
+INLINE void path_vertex(const SceneData* sd, PathState* ps, bool traced, const Hit* h, Sampler* smp) {
+    Intersection its;
+    bool hit = traced && scene_surface(sd, &ps->ray, h, &its);
+    if (!path_emission(sd, ps, hit, &its, false)) return;
+    __global const Bsdf* b = bsdf_at(sd, &its);
+    path_sample_lights(sd, ps, &its, b, smp);
+    path_continue(sd, ps, &its, b, smp);
 }
+
+INLINE float3 path_result(const SceneData* sd, const PathState* ps) { return ps->L; }
+
+#include "path_loop.h"
 #endif

@@ -16,51 +16,50 @@ INLINE bool path_null_event(const PathState* ps, uint depth, float3 d) {
     return ps->depth != depth && ps->after_delta && dot3(ps->ray.d, d) > 1.0f - 1e-6f;
 }
 
-/* Mitsuba's path keeps what a path gathered only if the scene has an environment or the path met a surface that
-   it did not pass straight through (a null BSDF, a mask's transparent part, a thin dielectric's transmission: its
-   "null" events); otherwise the pixel sample is 0, even where it passed an emitter (e.g. a light with a null BSDF,
-   as Blender's exporter writes them, seen against an empty background). Checked against Mitsuba 3.9.1. */
-INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
-    if (sd->info->max_depth == 0u) return (float3)(0.0f);   /* Mitsuba: max_depth 0 renders nothing */
-    PathState ps;
-    path_begin(&ps, ray);
+/* Mitsuba's path keeps what a path gathered (PathState.valid) only if the scene has an environment or the path met a
+   surface that it did not pass straight through (a null BSDF, a mask's transparent part, a thin dielectric's
+   transmission: its "null" events); otherwise the pixel sample is 0, even where it passed an emitter (e.g. a light
+   with a null BSDF, as Blender's exporter writes them, seen against an empty background). Checked against Mitsuba
+   3.9.1. volpath keeps what every path gathered (no valid-ray rule). */
+INLINE void path_vertex(const SceneData* sd, PathState* ps, bool traced, const Hit* h, Sampler* smp) {
+    Intersection its;
+    bool hit = traced && scene_surface(sd, &ps->ray, h, &its);
     bool hide = sd->info->p.path_mitsuba.hide_emitters != 0u;
-    bool valid = sd->info->n_infinite > 0u;
-    if (sd->info->p.path_mitsuba.volpath != 0u) {   /* volpath keeps what every path gathered (no valid-ray rule) */
-        for (;;) {
-            Intersection its;
-            float3 before = ps.L;
-            bool hit = path_intersect_limited(sd, &ps, &its, true);
-            if (hide && ps.depth == 0u) ps.L = before;
-            if (!hit) break;
-            __global const Bsdf* b = bsdf_at(sd, &its);
-            path_sample_lights(sd, &ps, &its, b, smp);
-            float3 d = ps.ray.d;
-            uint depth = ps.depth;
-            path_continue(sd, &ps, &its, b, smp);
-            if (path_null_event(&ps, depth, d)) ps.depth = depth;
-            if (!ps.alive || ps.depth >= sd->info->max_depth) break;
+    if (sd->info->p.path_mitsuba.volpath != 0u) {
+        float3 before = ps->L;
+        hit = path_emission(sd, ps, hit, &its, true);
+        if (hide && ps->depth == 0u) ps->L = before;
+        if (!hit) return;
+    } else if (ps->depth == 0u && hide) {
+        /* Hidden emitters: the camera ray sees neither emitter shapes nor the environment; Mitsuba 3.9 lets it see
+           through emitter shapes, front or back, to what lies behind (the next trace, keeping a far clip where it
+           was); every later segment sees them as usual. */
+        if (!hit) { ps->alive = 0u; return; }
+        if (sd->shapes[its.shape].emitter != NONE) {
+            Ray next = spawn_ray_from(&its, ps->ray.d);
+            next.tmax = ps->ray.tmax - its.t;
+            ps->ray = next;
+            return;
         }
-        return ps.L;
+        if (sd->info->max_depth == 1u) { ps->valid = 1u; ps->alive = 0u; return; }
+    } else if (!path_emission(sd, ps, hit, &its, false)) {
+        if (traced) ps->valid = 1u;   /* a surface at the depth limit counts */
+        return;
     }
-    for (;;) {
-        Intersection its;
-        its.t = -1.0f;   /* set on a hit */
-        if (ps.depth == 0u && hide) {
-            /* Hidden emitters: the camera ray sees neither emitter shapes nor the environment. */
-            if (!scene_intersect_hiding_emitters(sd, &ps.ray, &its)) break;
-            if (sd->info->max_depth == 1u) { valid = true; break; }
-        } else if (!path_intersect(sd, &ps, &its)) {
-            valid = valid || its.t >= 0.0f;   /* a surface at the depth limit counts */
-            break;
-        }
-        __global const Bsdf* b = bsdf_at(sd, &its);
-        path_sample_lights(sd, &ps, &its, b, smp);
-        float3 d = ps.ray.d;
-        uint depth = ps.depth;
-        path_continue(sd, &ps, &its, b, smp);
-        if (!path_null_event(&ps, depth, d)) valid = true;
-        if (!ps.alive) break;
+    __global const Bsdf* b = bsdf_at(sd, &its);
+    path_sample_lights(sd, ps, &its, b, smp);
+    float3 d = ps->ray.d;
+    uint depth = ps->depth;
+    path_continue(sd, ps, &its, b, smp);
+    bool null_event = path_null_event(ps, depth, d);
+    if (sd->info->p.path_mitsuba.volpath != 0u) {
+        if (null_event) ps->depth = depth;   /* null events do not count toward max_depth */
+        if (ps->depth >= sd->info->max_depth) ps->alive = 0u;
+    } else if (!null_event) {
+        ps->valid = 1u;
     }
-    return valid ? ps.L : (float3)(0.0f);
 }
+
+INLINE float3 path_result(const SceneData* sd, const PathState* ps) { return ps->valid ? ps->L : (float3)(0.0f); }
+
+#include "path_loop.h"

@@ -1,0 +1,204 @@
+"""The two ways of running a pass on the device, behind one interface (`Renderer` holds one of them).
+
+- ``MegakernelExecutor``: render.cl's ``render_pass``, one work-item per pixel running the whole integrator.
+- ``WavefrontExecutor``: wavefront.cl's stage kernels over queues of paths (the path integrators only): camera,
+  trace, shade, shadow, finish, flush. A wave holds `k` consecutive samples of each pixel of a launch; its path
+  state lives in device buffers sized by the kernels themselves (``wf_sizes``).
+
+Both draw the same random numbers and sum each pixel's samples in the same order, so they give the same image up
+to float rounding (tests/test_wavefront.py). ``launch`` enqueues a pass over pixels [off, off + count) of `spp`
+samples numbered from `sample_offset`; the megakernel's returns at once, the wavefront's reads its queue sizes
+between stages (small blocking reads), so it returns when its work is done.
+"""
+from __future__ import annotations
+
+#: integrators whose kernels are path.h's stages (kernels/integrators/path_loop.h): the wavefront can run them
+WAVEFRONT_INTEGRATORS = frozenset({"path_mats", "path_ems", "path_mis", "path_mitsuba"})
+#: the drivers a user can ask for
+DRIVERS = ("auto", "megakernel", "wavefront")
+LOCAL_SIZE = 64              # one fixed work-group size: every new one costs PoCL a fresh compile
+MAX_WAVE_SLOTS = 1 << 17     # paths in flight at once in the wavefront (device memory: ~300 bytes each)
+
+
+def _round_up(n: int) -> int:
+    return max(LOCAL_SIZE, -(-n // LOCAL_SIZE) * LOCAL_SIZE)
+
+
+def choose_driver(driver: str, integrator: str, count_rays: bool = False) -> str:
+    """The driver that runs `integrator`: ``auto`` picks the megakernel, still the faster of the two on every device
+    measured (benchmarks/README.md, "Wavefront"); ``wavefront`` is refused for integrators it does not run."""
+    if driver not in DRIVERS:
+        raise ValueError(f"unknown driver {driver!r}: expected one of {', '.join(DRIVERS)}")
+    if driver == "auto":
+        return "megakernel"
+    if driver == "wavefront":
+        if integrator not in WAVEFRONT_INTEGRATORS:
+            raise ValueError(f"the wavefront driver runs the path integrators ({', '.join(sorted(WAVEFRONT_INTEGRATORS))}"
+                             f" kernels), not {integrator!r}: use --driver megakernel")
+        if count_rays:
+            raise ValueError("ray counts come from the megakernel: count rays with --driver megakernel")
+    return driver
+
+
+class MegakernelExecutor:
+    """render_pass over launches of up to `launch_pixels` pixels."""
+
+    name = "megakernel"
+
+    def __init__(self, ctx, queue, program, scene_bufs, camera, filter_cdf, launch_pixels):
+        import pyopencl as cl
+
+        from .device.kernelargs import KernelArgs
+
+        self.queue = queue
+        self.kernel = cl.Kernel(program, "render_pass")
+        self.args = KernelArgs(self.kernel).set_scene(scene_bufs)
+        self.args.set(cam=camera, filter_cdf=filter_cdf)
+        self.global_size = _round_up(launch_pixels)
+
+    def bind(self, acc0, acc1, bad, rays) -> None:
+        self.args.set(acc0=acc0, acc1=acc1, bad=bad, rays=rays)
+
+    def warm(self) -> None:
+        """A launch that adds no samples: PoCL compiles the work-group function at the first launch of a shape."""
+        self.launch(0, 1, 0, 0, 0)
+
+    def launch(self, off: int, count: int, sample_offset: int, spp: int, seed: int) -> None:
+        import numpy as np
+        import pyopencl as cl
+
+        self.args.set(pixel_offset=np.uint32(off), pixel_count=np.uint32(count),
+                      sample_offset=np.uint32(sample_offset), spp=np.uint32(spp), seed=np.uint32(seed))
+        cl.enqueue_nd_range_kernel(self.queue, self.kernel, (self.global_size,), (LOCAL_SIZE,))
+
+
+class WavefrontExecutor:
+    """wavefront.cl's stages. `stage_seconds` adds up the time of each stage when `timed` (each stage then waits
+    for the device: for benchmarks/profile_wavefront.py, not for renders)."""
+
+    name = "wavefront"
+    STAGES = ("camera", "trace", "shade", "shadow", "finish", "flush")
+
+    def __init__(self, ctx, queue, program, scene_bufs, camera, filter_cdf, launch_pixels, timed: bool = False):
+        import numpy as np
+        import pyopencl as cl
+
+        from .device.kernelargs import KernelArgs
+
+        self.ctx, self.queue = ctx, queue
+        self.k = {s: cl.Kernel(program, f"wf_{s}") for s in self.STAGES}
+        self.a = {s: KernelArgs(k) for s, k in self.k.items()}
+        for s in ("camera", "trace", "shade", "shadow", "finish"):
+            self.a[s].set_scene(scene_bufs)
+        self.a["camera"].set(cam=camera, filter_cdf=filter_cdf)
+        sizes = np.zeros(4, np.uint32)
+        mf = cl.mem_flags
+        d_sizes = cl.Buffer(ctx, mf.WRITE_ONLY, sizes.nbytes)
+        probe = cl.Kernel(program, "wf_sizes")
+        probe.set_arg(0, d_sizes)
+        cl.enqueue_nd_range_kernel(queue, probe, (1,), None)
+        cl.enqueue_copy(queue, sizes, d_sizes)
+        path_bytes, sampler_bytes, hit_bytes = (int(x) for x in sizes[:3])
+        self.launch_pixels = launch_pixels
+        self.slots = max(MAX_WAVE_SLOTS, launch_pixels)
+        n = self.slots
+        rw = mf.READ_WRITE
+        self.paths = cl.Buffer(ctx, rw, n * path_bytes)
+        self.samplers = cl.Buffer(ctx, rw, n * sampler_bytes)
+        self.hits = cl.Buffer(ctx, rw, n * hit_bytes)
+        self.wt = cl.Buffer(ctx, rw, n * 8)
+        self.queues = [cl.Buffer(ctx, rw, n * 4) for _ in range(3)]   # trace now, trace next, shadow
+        self.counts = cl.Buffer(ctx, rw, 16)
+        self._counts = np.zeros(4, np.uint32)
+        zeros = np.zeros((launch_pixels, 4), np.float32)
+        self.sum0 = cl.Buffer(ctx, rw | mf.COPY_HOST_PTR, hostbuf=zeros)
+        self.sum1 = cl.Buffer(ctx, rw | mf.COPY_HOST_PTR, hostbuf=zeros)
+        self.nbad = cl.Buffer(ctx, rw | mf.COPY_HOST_PTR, hostbuf=np.zeros(launch_pixels, np.uint32))
+        self.device_bytes = n * (path_bytes + sampler_bytes + hit_bytes + 8 + 12) + launch_pixels * 36
+        self.a["camera"].set(paths=self.paths, samplers=self.samplers, wt=self.wt, counts=self.counts)
+        self.a["trace"].set(paths=self.paths, hits=self.hits)
+        self.a["shade"].set(paths=self.paths, samplers=self.samplers, hits=self.hits, counts=self.counts)
+        self.a["shadow"].set(paths=self.paths, queue=self.queues[2])
+        self.a["finish"].set(paths=self.paths, wt=self.wt, sum0=self.sum0, sum1=self.sum1, nbad=self.nbad)
+        self.a["flush"].set(sum0=self.sum0, sum1=self.sum1, nbad=self.nbad)
+        self.timed = timed
+        self.stage_seconds = dict.fromkeys(self.STAGES, 0.0)
+        self.bounces = 0
+        self.waves = 0
+
+    def warm(self, stages=None) -> None:
+        """Launch every stage (or those named) over no work: PoCL compiles a kernel's work-group function at its
+        first launch."""
+        import numpy as np
+        import pyopencl as cl
+
+        zero = np.uint32(0)
+        self.a["camera"].set(queue=self.queues[0], pixel_offset=zero, n_slots=zero, k=np.uint32(1),
+                             sample_offset=zero, seed=zero)
+        self.a["trace"].set(queue=self.queues[0], n=zero)
+        self.a["shade"].set(queue=self.queues[0], n=zero, next_queue=self.queues[1], shadow_queue=self.queues[2])
+        self.a["shadow"].set(n=zero)
+        self.a["finish"].set(n_pixels=zero, k=np.uint32(1))
+        self.a["flush"].set(pixel_offset=zero, n_pixels=zero, spp=zero)
+        for s in stages or self.STAGES:
+            cl.enqueue_nd_range_kernel(self.queue, self.k[s], (LOCAL_SIZE,), (LOCAL_SIZE,))
+        self.queue.finish()
+
+    def bind(self, acc0, acc1, bad, rays) -> None:
+        self.a["flush"].set(acc0=acc0, acc1=acc1, bad=bad)
+
+    def _run(self, stage: str, n: int) -> None:
+        import time
+
+        import pyopencl as cl
+
+        t0 = time.perf_counter() if self.timed else 0.0
+        cl.enqueue_nd_range_kernel(self.queue, self.k[stage], (_round_up(n),), (LOCAL_SIZE,))
+        if self.timed:
+            self.queue.finish()
+            self.stage_seconds[stage] += time.perf_counter() - t0
+
+    def _take_counts(self) -> tuple[int, int]:
+        """The queue sizes the last camera or shade stage left, and the counters zeroed for the next one."""
+        import numpy as np
+        import pyopencl as cl
+
+        cl.enqueue_copy(self.queue, self._counts, self.counts)   # blocking
+        n_next, n_shadow = int(self._counts[0]), int(self._counts[1])
+        cl.enqueue_fill_buffer(self.queue, self.counts, np.uint32(0), 0, 16)
+        return n_next, n_shadow
+
+    def launch(self, off: int, count: int, sample_offset: int, spp: int, seed: int) -> None:
+        import numpy as np
+        import pyopencl as cl
+
+        cl.enqueue_fill_buffer(self.queue, self.counts, np.uint32(0), 0, 16)
+        k_max = max(1, self.slots // count)
+        done = 0
+        while done < spp:
+            k = min(k_max, spp - done)
+            n_slots = count * k
+            q_now, q_next = self.queues[0], self.queues[1]
+            self.a["camera"].set(queue=q_now, pixel_offset=np.uint32(off), n_slots=np.uint32(n_slots),
+                                 k=np.uint32(k), sample_offset=np.uint32(sample_offset + done),
+                                 seed=np.uint32(seed))
+            self._run("camera", n_slots)
+            n, _ = self._take_counts()
+            while n > 0:
+                self.a["trace"].set(queue=q_now, n=np.uint32(n))
+                self._run("trace", n)
+                self.a["shade"].set(queue=q_now, n=np.uint32(n), next_queue=q_next, shadow_queue=self.queues[2])
+                self._run("shade", n)
+                n_next, n_shadow = self._take_counts()
+                if n_shadow:
+                    self.a["shadow"].set(n=np.uint32(n_shadow))
+                    self._run("shadow", n_shadow)
+                self.bounces += 1
+                q_now, q_next = q_next, q_now
+                n = n_next
+            self.a["finish"].set(n_pixels=np.uint32(count), k=np.uint32(k))
+            self._run("finish", count)
+            self.waves += 1
+            done += k
+        self.a["flush"].set(pixel_offset=np.uint32(off), n_pixels=np.uint32(count), spp=np.uint32(spp))
+        self._run("flush", count)
