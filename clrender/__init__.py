@@ -20,9 +20,11 @@ def load_scene(path, nori_dialect=None, **defines):
     return _load(path, nori_dialect=nori_dialect, **defines)
 
 
-def render(scene, spp=None, seed=0, device=None, time_limit=None, progress=False, cluster=None, **cluster_options):
+def render(scene, spp=None, seed=0, device=None, time_limit=None, progress=False, cluster=None, driver="auto",
+           **cluster_options):
     """Render a loaded scene on an OpenCL device and return its Film.
 
+    ``driver``: "megakernel", "wavefront" (the path integrators) or "auto" (clrender/executors.py).
     With ``cluster=`` (a ``distributed.Client``, ``"local[:N]"``, ``"tcp://HOST:PORT"`` or a scheduler file)
     the samples are rendered by Dask workers; ``scene`` may then also be the XML path, and
     ``cluster_options`` are those of :func:`clrender.cluster.render` (files=, defines=, tasks=, ...)."""
@@ -30,12 +32,13 @@ def render(scene, spp=None, seed=0, device=None, time_limit=None, progress=False
         from .cluster import render as _cluster_render
 
         return _cluster_render(scene, spp=spp, seed=seed, cluster=cluster, device=device,
-                               time_limit=time_limit, progress=progress, **cluster_options)
+                               time_limit=time_limit, progress=progress, driver=driver, **cluster_options)
     if cluster_options:
         raise TypeError(f"{', '.join(cluster_options)}: options of cluster renders only (pass cluster=)")
     from .renderer import render as _render
 
-    return _render(scene, spp=spp, seed=seed, device=device, time_limit=time_limit, progress=progress)
+    return _render(scene, spp=spp, seed=seed, device=device, time_limit=time_limit, progress=progress,
+                   driver=driver)
 
 
 __all__ = ["load_scene", "render", "__version__"]

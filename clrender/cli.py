@@ -60,7 +60,7 @@ def cmd_render(args) -> int:
     args.ctrl_c.check()  # a Ctrl-C that a library swallowed still stops us
     try:
         choose_driver(args.driver, scene.integrator.kernel)
-    except ValueError as e:
+    except ClrenderError as e:
         print(f"clrender: error: {args.scene}: --driver: {e}", file=sys.stderr)
         return 2
     renderer = Renderer(scene, device=args.device, driver=args.driver)

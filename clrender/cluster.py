@@ -223,7 +223,7 @@ def _payload(scene, files, defines, dialect, say):
 def render(scene, spp: int | None = None, seed: int = 0, cluster="local", *, start_sample: int = 0,
            files: str = "ship", defines: dict | None = None, dialect: str | None = None,
            device=None, tasks: int | None = None, bands: int | None = None, time_limit: float | None = None,
-           progress: bool = False, say=None, on_result=None, partial=None):
+           progress: bool = False, say=None, on_result=None, partial=None, driver: str = "auto"):
     """Render on a Dask cluster and return the Film (``film.count`` holds the true per-pixel counts).
 
     ``scene``: a loaded Scene (shipped) or the path of its XML file (shipped or, with ``files="shared"``,
@@ -234,7 +234,8 @@ def render(scene, spp: int | None = None, seed: int = 0, cluster="local", *, sta
     Ctrl-C cancels the outstanding tasks and returns what was finished; ``time_limit`` stops handing out
     tasks after that many seconds. ``partial=(seconds, callback)``: while tasks are outstanding, every that
     many seconds, ``callback`` gets the film of the tasks finished so far (true per-pixel counts, metadata
-    ``partial`` set), so a killed client leaves its work behind.
+    ``partial`` set), so a killed client leaves its work behind. ``driver``: how workers run passes
+    (clrender/executors.py; both give the same image).
     """
     from .renderer import RenderStats, _SigintFlag
 
@@ -245,13 +246,13 @@ def render(scene, spp: int | None = None, seed: int = 0, cluster="local", *, sta
     client, close, what, local = connect(cluster)
     try:
         return _render(client, what, local, scene, spp, seed, start_sample, files, defines, dialect, device,
-                       tasks, bands, time_limit, progress, say, on_result, partial, RenderStats, _SigintFlag)
+                       tasks, bands, time_limit, progress, say, on_result, partial, RenderStats, _SigintFlag, driver)
     finally:
         close()
 
 
 def _render(client, what, local, scene, spp, seed, start_sample, files, defines, dialect, device, n_tasks, bands,
-            time_limit, progress, say, on_result, partial, RenderStats, SigintFlag):
+            time_limit, progress, say, on_result, partial, RenderStats, SigintFlag, driver="auto"):
     from . import __version__
     from .parts import Accumulator
 
@@ -299,7 +300,7 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
 
     def submit(task, workers=None):
         index, pixels, s0, cnt = task
-        f = client.submit(render_task, payload, index, pixels, s0, cnt, seed, plan, pure=False,
+        f = client.submit(render_task, payload, index, pixels, s0, cnt, seed, plan, driver, pure=False,
                           key=f"clrender-{key[:12]}-{seed}-{s0}-{pixels[0]}-{os.urandom(4).hex()}",
                           workers=workers, allow_other_workers=False)
         pending[f] = task, (payload if shipped is not None else None)

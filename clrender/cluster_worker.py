@@ -83,24 +83,24 @@ def _device_spec(plan, worker_name):
         return plan[0]
 
 
-def _renderer_for(payload, spec, worker):
+def _renderer_for(payload, spec, worker, driver="auto"):
     from .renderer import Renderer
 
-    key = (payload.key, spec)
+    key = (payload.key, spec, driver)
     with _CACHE_LOCK:
         if key in _CACHE:
             _CACHE.move_to_end(key)
             return _CACHE[key]
         try:
             if isinstance(payload, ShippedScene):
-                renderer = Renderer(payload.scene(), device=spec, buffers=payload.buffers)
+                renderer = Renderer(payload.scene(), device=spec, buffers=payload.buffers, driver=driver)
             else:
                 got = payload.source.content_hash()
                 if got != payload.key:
                     raise TaskFailed("scene", worker, spec or "default device",
                                      f"the scene files at {payload.source.path} differ from the client's "
                                      f"(hash {got} != {payload.key}); use the same files or files='ship'")
-                renderer = Renderer(payload.source.load(), device=spec)
+                renderer = Renderer(payload.source.load(), device=spec, driver=driver)
         except TaskFailed:
             raise
         except DeviceError as exc:
@@ -116,13 +116,14 @@ def _renderer_for(payload, spec, worker):
         return _CACHE[key]
 
 
-def render_task(payload, index, pixels, start, count, seed, plan):
-    """One task on a worker: samples start..start+count-1 of pixels [pixels[0], pixels[1])."""
+def render_task(payload, index, pixels, start, count, seed, plan, driver="auto"):
+    """One task on a worker: samples start..start+count-1 of pixels [pixels[0], pixels[1]), by `driver`
+    (clrender/executors.py)."""
     from . import __version__
 
     worker, name = _worker_identity()
     spec = _device_spec(plan, name)
-    renderer, lock = _renderer_for(payload, spec, worker)
+    renderer, lock = _renderer_for(payload, spec, worker, driver)
     p0, p1 = pixels
     t0 = time.perf_counter()
     with lock:  # one Renderer per device: tasks of a multi-threaded worker take turns
@@ -130,7 +131,7 @@ def render_task(payload, index, pixels, start, count, seed, plan):
             film_acc = _render_raw(renderer, count, seed, start, p0, p1)
         except Exception as exc:
             with _CACHE_LOCK:
-                _CACHE.pop((payload.key, spec), None)
+                _CACHE.pop((payload.key, spec, driver), None)
             raise TaskFailed("device", worker, renderer.device_name, f"{type(exc).__name__}: {exc}") from None
     acc0, acc1, bad = film_acc
     return {"index": index, "p0": p0, "start": start, "count": count, "acc0": acc0, "acc1": acc1,

@@ -12,6 +12,12 @@ between stages (small blocking reads), so it returns when its work is done.
 """
 from __future__ import annotations
 
+from .errors import ClrenderError
+
+
+class DriverError(ClrenderError, ValueError):
+    """A driver that cannot run this render (reported like any bad option: no traceback, exit status 2)."""
+
 #: integrators whose kernels are path.h's stages (kernels/integrators/path_loop.h): the wavefront can run them
 WAVEFRONT_INTEGRATORS = frozenset({"path_mats", "path_ems", "path_mis", "path_mitsuba"})
 #: the drivers a user can ask for
@@ -28,15 +34,15 @@ def choose_driver(driver: str, integrator: str, count_rays: bool = False) -> str
     """The driver that runs `integrator`: ``auto`` picks the megakernel, still the faster of the two on every device
     measured (benchmarks/README.md, "Wavefront"); ``wavefront`` is refused for integrators it does not run."""
     if driver not in DRIVERS:
-        raise ValueError(f"unknown driver {driver!r}: expected one of {', '.join(DRIVERS)}")
+        raise DriverError(f"unknown driver {driver!r}: expected one of {', '.join(DRIVERS)}")
     if driver == "auto":
         return "megakernel"
     if driver == "wavefront":
         if integrator not in WAVEFRONT_INTEGRATORS:
-            raise ValueError(f"the wavefront driver runs the path integrators ({', '.join(sorted(WAVEFRONT_INTEGRATORS))}"
+            raise DriverError(f"the wavefront driver runs the path integrators ({', '.join(sorted(WAVEFRONT_INTEGRATORS))}"
                              f" kernels), not {integrator!r}: use --driver megakernel")
         if count_rays:
-            raise ValueError("ray counts come from the megakernel: count rays with --driver megakernel")
+            raise DriverError("ray counts come from the megakernel: count rays with --driver megakernel")
     return driver
 
 

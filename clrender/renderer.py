@@ -279,6 +279,7 @@ class Renderer:
 
 
 def render(scene, spp: int | None = None, seed: int = 0, device=None, time_limit: float | None = None,
-           progress: bool = False) -> Film:
+           progress: bool = False, driver: str = "auto") -> Film:
     """Render a loaded scene; returns the Film (``film.image`` is the (H, W, 3) float32 image)."""
-    return Renderer(scene, device=device).render(spp=spp, seed=seed, time_limit=time_limit, progress=progress)
+    return Renderer(scene, device=device, driver=driver).render(spp=spp, seed=seed, time_limit=time_limit,
+                                                                progress=progress)

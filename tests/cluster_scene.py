@@ -11,6 +11,7 @@ f 1 2 3 4
 
 
 def write_scene(folder, width=40, height=30, spp=8, integrator="ao") -> Path:
+    """(A point light as well, for the integrators that need one; ao ignores it.)"""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "floor.obj").write_text(OBJ)
@@ -27,5 +28,6 @@ def write_scene(folder, width=40, height=30, spp=8, integrator="ao") -> Path:
   <mesh type="obj"><string name="filename" value="floor.obj"/><bsdf type="diffuse"/></mesh>
   <mesh type="sphere"><point name="center" value="0,-0.3,0.5"/><float name="radius" value="0.7"/>
     <bsdf type="diffuse"/></mesh>
+  <emitter type="point"><point name="position" value="1,2,2"/><color name="power" value="40,40,40"/></emitter>
 </scene>""")
     return p

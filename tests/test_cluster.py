@@ -66,6 +66,17 @@ def test_a_scene_object_is_shipped_and_the_seed_matters(client, small):
     assert np.abs(other.sum_wl - ref.sum_wl).max() > 1e-3, "a different seed must give different samples"
 
 
+def test_the_wavefront_driver_on_workers_gives_the_one_process_image(client, tmp_path):
+    """Workers running the wavefront (path_mis here: it runs the path integrators) give the image of one process
+    running it, and that of the megakernel up to float rounding (tests/test_wavefront.py)."""
+    path = write_scene(tmp_path, integrator="path_mis")
+    one = Renderer(clrender.load_scene(path), driver="wavefront").render(spp=6, seed=SEED)
+    film = clrender.render(str(path), spp=6, seed=SEED, cluster=client, tasks=3, bands=2, driver="wavefront")
+    assert_same_film(film, one)
+    mega = Renderer(clrender.load_scene(path), driver="megakernel").render(spp=6, seed=SEED)
+    np.testing.assert_allclose(film.image, mega.image, rtol=2e-4, atol=2e-6)
+
+
 def test_sample_ranges_add_up(client, small):
     path, renderer, ref = small
     a = clrender.render(str(path), spp=5, seed=SEED, cluster=client, tasks=2)
