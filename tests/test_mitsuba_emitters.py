@@ -69,6 +69,56 @@ def test_spot_falloff_closed_form(tmp_path, ctx, queue, kernels):
                                                               np.cos(np.radians(17.5))]])), [1, 0.5])
 
 
+SPOT_WITH_TEXTURE = """<scene version="3.0.0">
+    <sensor type="perspective"><transform name="to_world"><lookat origin="0, 4, 4" target="0, 0, 0" up="0, 1, 0"/>
+        </transform><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film>
+    </sensor>
+    <shape type="rectangle"><transform name="to_world"><rotate x="1" angle="-90"/><scale value="4"/></transform>
+    </shape>
+    <emitter type="spot">
+        <rgb name="intensity" value="2, 3, 4"/>
+        <float name="cutoff_angle" value="40"/>
+        <float name="beam_width" value="25"/>
+        <texture type="checkerboard" name="texture">
+            <rgb name="color0" value="0.9, 0.5, 0.1"/><rgb name="color1" value="0.1, 0.2, 0.7"/>
+            <transform name="to_uv"><scale x="3" y="2"/></transform>
+        </texture>
+        <transform name="to_world"><lookat origin="0.3, 3, -0.2" target="0.3, 0, -0.2" up="0, 0, 1"/></transform>
+    </emitter>
+</scene>"""
+
+
+def test_spot_projects_its_texture_as_mitsuba(tmp_path, ctx, queue, kernels):
+    """Mitsuba 3.9.1's spot with a `texture`: the intensity times the texture at direction_to_uv of the local direction
+    (0.5 + 0.5 (x, y) / (z tan cutoff)); outside the cone, nothing (and no lookup)."""
+    (tmp_path / "spot.xml").write_text(SPOT_WITH_TEXTURE)
+    spot = next(e for e in clrender.load_scene(tmp_path / "spot.xml").emitters if type(e).__name__ == "SpotEmitter")
+    assert spot.texture is not None
+    d = device(tmp_path, ctx, queue, kernels, [spot])
+    rng = np.random.default_rng(3)
+    theta = np.radians(rng.uniform(0.0, 45.0, 400))
+    phi = rng.uniform(0.0, 2 * np.pi, 400)
+    leave = np.stack([np.sin(theta) * np.cos(phi), -np.cos(theta), np.sin(theta) * np.sin(phi)], axis=1)
+    r = rng.uniform(0.5, 3.0, 400)
+    refs = (spot.position + leave * r[:, None]).astype(np.float32)
+    s = d.sample(0, refs, np.zeros((400, 2), np.float32))
+    expect = spot.falloff(leave)[:, None] * spot.texture.eval(spot.uv(leave)) * [2.0, 3.0, 4.0]
+    inside = spot.falloff(leave) > 0
+    assert inside.sum() > 200 and (~inside).sum() > 20
+    # away from the checker edges (float rounding of uv may pick the other square there)
+    st = spot.uv(leave) * [3, 2]
+    clear = np.all(np.abs(st * 2 - np.round(st * 2)) > 1e-3, axis=1)
+    np.testing.assert_allclose((s["w"] * r[:, None] ** 2)[clear], expect[clear], rtol=2e-3, atol=1e-5)
+    # the texture is what varies: both colours show up inside the cone
+    assert len(np.unique(np.round(expect[inside & clear, 0], 6))) > 5
+
+
+def test_spot_texture_must_be_nested_by_its_name(tmp_path):
+    (tmp_path / "s.xml").write_text(SPOT_WITH_TEXTURE.replace('name="texture"', 'name="intensity"'))
+    with pytest.raises(SceneError, match="takes a texture named 'texture'"):
+        clrender.load_scene(tmp_path / "s.xml")
+
+
 def test_directional_irradiance_and_point_intensity(tmp_path, ctx, queue, kernels):
     rot = Transform.rotate([1, 0, 0], 90.0)     # local +z -> world -y: light travelling straight down
     lights = [mitsuba("directional", irradiance=("color", [1.0, 2.0, 3.0]), direction=("vector", [0.3, -1.0, 0.2])),

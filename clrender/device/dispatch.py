@@ -109,7 +109,7 @@ EMITTER = Kind(
     header=(("type", "uint"), ("flags", "uint"),
             ("shape", "uint"),        # surface emitters: the emitting shape (which samples its own surface)
             ("pad", "uint", 5)),
-    param_bytes=80, flags=("DELTA", "INFINITE", "SURFACE"), dispatch_name="emitter_row", row="em",
+    param_bytes=96, flags=("DELTA", "INFINITE", "SURFACE"), dispatch_name="emitter_row", row="em",
     methods=(
         Method("sample", "float3", "const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u",
                "sd, em, q, u", "q->pdf = 0.0f; q->dist = 0.0f; return (float3)(0.0f);", required=True),
