@@ -73,6 +73,19 @@ def test_defaults_and_defines():
     assert load(body, defines={"w": "0.5"}).shapes[0].bsdf.albedo.tolist() == [0.5] * 3
 
 
+@pytest.mark.parametrize("defines", [{"nope": "1"}, {"w": "0.5", "nope": "1"}, {"unused_default": "2"}])
+def test_a_define_that_fills_nothing_is_an_error(defines):
+    """Mitsuba 3.9.1 stops with "Found unused parameters" for a -D naming no $name the file uses, even one a
+    <default> declares."""
+    body = ('<default name="w" value="0.25"/><default name="unused_default" value="1"/>'
+            '<shape type="cube"><bsdf type="diffuse"><float name="reflectance" value="$w"/></bsdf></shape>')
+    unused = [k for k in defines if k != "w"]
+    with pytest.raises(SceneError) as e:
+        load(body, defines=defines)
+    assert e.value.location.file == "m.xml" and "-D " + unused[0] + "=" in str(e.value) and "uses $w" in str(e.value)
+    assert load(body, defines={"w": "0.5"}).shapes[0].bsdf.albedo.tolist() == [0.5] * 3
+
+
 def test_undefined_variable_is_located():
     err(f'{HEAD}\n<shape type="cube"><bsdf type="diffuse"><float name="reflectance" value="$nope"/></bsdf></shape></scene>',
         2, None, "$nope", "-D nope=")
@@ -98,6 +111,13 @@ def test_alias_names_the_same_object():
 def test_reference_to_unknown_id_is_located():
     err(f'{HEAD}<bsdf type="diffuse" id="w"/>\n<shape type="cube">  <ref id="white"/></shape></scene>',
         2, 31, "unknown id 'white'", "declared so far: w")
+
+
+def test_reference_to_a_bsdf_where_a_texture_belongs_is_located_at_the_ref():
+    e = err(f'{HEAD}{SENSOR}<bsdf type="diffuse" id="b"/>\n<shape type="cube"><bsdf type="diffuse">\n'
+            f'   <ref name="reflectance" id="b"/></bsdf></shape></scene>', 3, 4,
+            "parameter 'reflectance'", "gets 'b', a <bsdf type=\"diffuse\">", "accepts <texture> only")
+    assert "declared at m.xml:1:" in str(e)
 
 
 def test_id_declared_twice_is_located():
@@ -159,6 +179,23 @@ def test_include_cycle_is_an_error(tmp_path):
         parse_file(tmp_path / "main.xml")
     at(e.value, 2, file=str(tmp_path / "a.xml"))
     assert "includes itself" in str(e.value)
+
+
+@pytest.mark.parametrize("depth, ok", [(14, True), (15, False), (200, False)])
+def test_include_depth_is_limited_as_in_mitsuba(tmp_path, depth, ok):
+    """Mitsuba 3.9.1 reads a chain of 14 nested includes and refuses the 15th ("Exceeded maximum include recursion
+    depth of 15"); a long chain without a cycle is no cycle."""
+    write(tmp_path / "main.xml", f'{HEAD}{SENSOR}<include filename="i1.xml"/></scene>')
+    for i in range(1, depth):
+        write(tmp_path / f"i{i}.xml", f'{HEAD}\n<include filename="i{i + 1}.xml"/></scene>')
+    write(tmp_path / f"i{depth}.xml", f'{HEAD}<shape type="cube"/></scene>')
+    if ok:
+        assert len(parse_file(tmp_path / "main.xml").children_with_tag("shape")) == 1
+        return
+    with pytest.raises(SceneError) as e:
+        parse_file(tmp_path / "main.xml")
+    at(e.value, 2, file=str(tmp_path / "i14.xml"))
+    assert "maximum include depth, 15" in str(e.value) and "itself" not in str(e.value)
 
 
 def test_error_inside_an_include_names_that_file(tmp_path):

@@ -268,6 +268,15 @@ def test_duplicate_property_of_different_kind():
         "<integer name='radius' value='2'/></mesh></scene>", 2, 1, "given twice")
 
 
+def test_define_that_fills_nothing_is_an_error():
+    """As in Mitsuba 3.9.1 ("Found unused parameters"): a -D naming no $name of the file is a mistake."""
+    text = "<scene><default name='spp' value='4'/><sampler type='independent'><integer name='sampleCount' value='$spp'/></sampler></scene>"
+    assert parse_string(text, "s.xml", defines={"spp": "8"}).children[0].props.get_int("sampleCount") == 8
+    with pytest.raises(SceneError) as e:
+        parse_string(text, "s.xml", defines={"spp": "8", "sp": "9"})
+    assert e.value.location.file == "s.xml" and "-D sp=9" in str(e.value) and "uses $spp" in str(e.value)
+
+
 def test_undefined_define():
     err("<scene>\n<sampler type='independent'>\n  <integer name='sampleCount' value='$spp'/>\n</sampler>\n</scene>",
         3, 38, "'$spp'", "-D spp=value", defines={"other": "1"})

@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import SceneError, SourceLocation
 from .properties import MITSUBA_PROPERTY_TAGS, PropertyList
-from .spec import MITSUBA_OBJECT_TAGS, PluginSpec, describe
+from .spec import MITSUBA_OBJECT_TAGS, PluginSpec, RefSite, describe
 from .transform import Transform
 from . import xmlparser as _x
 
@@ -40,8 +40,9 @@ log = logging.getLogger("clrender")
 OP_TAGS = ("translate", "scale", "rotate", "lookat", "matrix")
 _VERSION = re.compile(r"([0-9]+)\.([0-9]+)(\.([0-9]+))?")
 _ID = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*")
-#: include nesting deeper than this is taken for a cycle
-MAX_INCLUDE_DEPTH = 32
+#: Mitsuba 3.9's limit (ParserConfig::max_include_depth): the main file is depth 0, a file it includes depth 1,
+#: and a file at this depth is refused, so the same chains load in both
+MAX_INCLUDE_DEPTH = 15
 READER = "Mitsuba 3 reader"
 
 
@@ -57,6 +58,7 @@ class _State:
         self.user_defines = {str(k): str(v) for k, v in (defines or {}).items()}
         self.defines = dict(self.user_defines)
         self.file_defaults: dict[str, SourceLocation] = {}
+        self.used_defines: set[str] = set()
         self.ids: dict[str, PluginSpec] = {}
         self.search = [main_dir]
         self.chain: list[str] = []
@@ -84,6 +86,7 @@ class MitsubaBuilder(_x._Builder):
         super().__init__(src, None, state.search[0], "upstream")
         self.state = state
         self.defines = state.defines
+        self.used_defines = state.used_defines
 
     @staticmethod
     def err(message: str, loc) -> SceneError:
@@ -163,7 +166,10 @@ class MitsubaBuilder(_x._Builder):
             elif c.tag in MITSUBA_PROPERTY_TAGS:
                 self.build_property(c, spec.props)
             elif c.tag == "ref":
-                spec.children.append(self.build_ref(c))
+                target = self.build_ref(c)
+                spec.refs[len(spec.children)] = RefSite(c.loc, self.substitute(c, "id"),
+                                                        self.substitute(c, "name") if "name" in c.attrs else None)
+                spec.children.append(target)
             elif c.tag == "include":
                 self.build_include(c, spec)
             elif c.tag == "alias":
@@ -215,9 +221,14 @@ class MitsubaBuilder(_x._Builder):
         a = self.attrs(el, ("filename",))
         self.no_children(el)
         path = self.state.resolve(a["filename"], include=True)
-        if path in self.state.chain or len(self.state.chain) >= MAX_INCLUDE_DEPTH:
+        if path in self.state.chain:
             raise self.err(f"<include> of '{a['filename']}' includes itself (include chain: "
                            f"{' -> '.join(self.state.chain + [path])})", self.attr_loc(el, "filename"))
+        if len(self.state.chain) >= MAX_INCLUDE_DEPTH:
+            raise self.err(f"<include> of '{a['filename']}' reaches the maximum include depth, {MAX_INCLUDE_DEPTH} "
+                           f"(Mitsuba 3's: includes nest at most {MAX_INCLUDE_DEPTH - 1} deep; include chain: "
+                           f"{' -> '.join(self.state.chain[:2] + ['...'] + self.state.chain[-2:] + [path])})",
+                           self.attr_loc(el, "filename"))
         try:
             if not stat.S_ISREG(os.stat(path).st_mode):
                 raise self.err(f"cannot include '{a['filename']}' ({path}): not a regular file",
@@ -383,7 +394,9 @@ def build(src, root, defines, main_dir: str) -> PluginSpec:
     state.chain.append(os.path.normpath(os.path.abspath(src.filename)) if not src.filename.startswith("<")
                        else src.filename)
     try:
-        return MitsubaBuilder(src, state).build_root(root)
+        spec = MitsubaBuilder(src, state).build_root(root)
+        _x.check_defines_used(state.user_defines, state.used_defines, src.filename)
+        return spec
     except SceneError as e:
         raise SceneError(with_reader(e.message), e.location) from None
 
