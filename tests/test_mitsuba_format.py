@@ -151,6 +151,47 @@ def test_nested_includes_resolve_as_mitsuba(tmp_path, monkeypatch):
     assert shape.location.file == str(tmp_path / "sub" / "deeper" / "b.xml")
 
 
+def mesh_files(spec) -> list[str]:
+    return [s.props.get_string("filename") for s in spec.walk() if s.props.has("filename")]
+
+
+def test_path_folders_resolve_as_mitsuba(tmp_path, monkeypatch):
+    """Which file wins, as Mitsuba 3.9.1 loads these very layouts (a triangle of a different size in each folder,
+    its bounding box printed): the last <path> first, then the earlier ones, then the main file's folder; a
+    <path> written after the shape counts too (files are resolved when the plugins are built); a <path> in an
+    included file serves only the includes below it; a nested include is looked for beside the file including it
+    before the main file's folder."""
+    for d in ("A", "B", "C", ".", "sub/D"):
+        write(tmp_path / d / "m.obj", CUBE_OBJ)
+    monkeypatch.chdir(tmp_path / "C")
+    two = write(tmp_path / "two.xml", f'{HEAD}{SENSOR}<path value="A"/><path value="B"/>'
+                                      '<shape type="obj"><string name="filename" value="m.obj"/></shape></scene>')
+    assert mesh_files(parse_file(two)) == [str(tmp_path / "B" / "m.obj")]
+    after = write(tmp_path / "after.xml", f'{HEAD}{SENSOR}<shape type="obj"><string name="filename" value="m.obj"/>'
+                                          '</shape><path value="A"/></scene>')
+    assert mesh_files(parse_file(after)) == [str(tmp_path / "A" / "m.obj")]
+    write(tmp_path / "sub" / "mid.xml", f'{HEAD}<path value="D"/><include filename="leaf.xml"/></scene>')
+    write(tmp_path / "sub" / "D" / "leaf.xml",
+          f'{HEAD}<shape type="obj"><string name="filename" value="m.obj"/></shape></scene>')
+    scoped = write(tmp_path / "scoped.xml", f'{HEAD}{SENSOR}<include filename="sub/mid.xml"/></scene>')
+    assert mesh_files(parse_file(scoped)) == [str(tmp_path / "m.obj")]
+    write(tmp_path / "inc.xml", f'{HEAD}<shape type="obj"><string name="filename" value="A/m.obj"/></shape></scene>')
+    write(tmp_path / "sub" / "inc.xml",
+          f'{HEAD}<shape type="obj"><string name="filename" value="B/m.obj"/></shape></scene>')
+    write(tmp_path / "sub" / "outer.xml", f'{HEAD}<include filename="inc.xml"/></scene>')
+    nearest = write(tmp_path / "nearest.xml", f'{HEAD}{SENSOR}<include filename="sub/outer.xml"/></scene>')
+    assert mesh_files(parse_file(nearest)) == [str(tmp_path / "B" / "m.obj")]
+
+
+def test_path_errors_are_located(tmp_path):
+    write(tmp_path / "s.xml", f'{HEAD}\n  <path value="nowhere"/></scene>')
+    with pytest.raises(SceneError) as e:
+        parse_file(tmp_path / "s.xml")
+    at(e.value, 2, 16, file=str(tmp_path / "s.xml"))
+    assert "folder 'nowhere' not found" in str(e.value)
+    err(f'{HEAD}<shape type="cube">\n<path value="."/></shape></scene>', 2, 1, "only allowed directly inside")
+
+
 def test_mesh_next_to_an_included_file_only_is_missing(tmp_path, monkeypatch):
     from clrender import load_scene
 

@@ -12,10 +12,8 @@ It shares pass one (bytes -> located element tree) and the value parsing of the 
 - ``<ref id="..."/>`` (``<ref name="..." id="..."/>`` for a named parameter) to an object declared earlier with
   that ``id``; ``<alias id as>``;
 - ``<include filename="..."/>``: the included file's root ``<scene>`` children are spliced in where the include
-  is written. Relative paths are resolved as Mitsuba 3.9 resolves them (first existing file wins): an include
-  in the main file's folder, then the folders of the files that include it, then the current directory; any
-  other filename (meshes, textures), even one written in an included file, in the main file's folder, then the
-  current directory;
+  is written; ``<path value="folder"/>`` (a child of a file's root) adds a folder to the resolver. Relative paths
+  are resolved as Mitsuba 3.9 resolves them (:class:`_State`);
 - ``<transform>`` ops ``translate scale rotate lookat matrix``; ``rotate`` axes are used as written (not
   normalised), as Mitsuba does.
 """
@@ -52,7 +50,16 @@ def is_mitsuba_root(el) -> bool:
 
 
 class _State:
-    """What every file of one scene shares: defines, declared ids, the resolver's folders, the include chain."""
+    """What every file of one scene shares: defines, declared ids, the resolver's folders, the include chain.
+
+    ``folders`` is Mitsuba 3.9's FileResolver while a file is read: a relative path is looked for in each folder
+    in turn, then in the current directory, and the first that exists wins. It starts as the main file's folder;
+    ``<path>`` puts its folder first; an ``<include>`` is looked for, and its file read, with the including file's
+    folder put first, and the list as it was comes back after it (so a ``<path>`` in an included file serves the
+    includes below it only). Meshes, images and other files are resolved when the whole scene is read, as Mitsuba
+    builds its plugins then: with the main file's list, a ``<path>`` written after the shape included. All checked
+    against Mitsuba 3.9.1 (tests/test_mitsuba_format.py).
+    """
 
     def __init__(self, defines, main_dir: str):
         self.user_defines = {str(k): str(v) for k, v in (defines or {}).items()}
@@ -60,30 +67,45 @@ class _State:
         self.file_defaults: dict[str, SourceLocation] = {}
         self.used_defines: set[str] = set()
         self.ids: dict[str, PluginSpec] = {}
-        self.search = [main_dir]
+        self.main_dir = main_dir
+        self.folders = [main_dir]
         self.chain: list[str] = []
+        #: the filename properties, resolved once the whole scene is read
+        self.filenames: list[tuple[PropertyList, str]] = []
 
-    def resolve(self, name: str, include: bool = False) -> str:
-        """Mitsuba's FileResolver: an absolute path as is; else the first folder of the list holding it; else
-        the name relative to the main file's folder (which the caller then reports as missing). An <include> is
-        looked for in the main file's folder, the folders of the files including it, then the current one; any
-        other file (a mesh, a texture) only in the main file's folder and the current one, since Mitsuba resolves
-        those when it builds the plugins, after the includes are read (checked against Mitsuba 3.9)."""
+    def looked_in(self) -> list[str]:
+        return list(dict.fromkeys(self.folders + [os.getcwd()]))
+
+    def find(self, name: str) -> str | None:
+        """The first existing ``folder/name`` of the resolver (``name`` itself if absolute), else None."""
         name = os.path.expanduser(name)
         if os.path.isabs(name):
-            return os.path.normpath(name)
-        for d in (self.search if include else self.search[:1]) + [os.getcwd()]:
+            return os.path.normpath(name) if os.path.exists(name) else None
+        for d in self.looked_in():
             p = os.path.join(d, name)
             if os.path.exists(p):
                 return os.path.normpath(p)
-        return os.path.normpath(os.path.join(self.search[0], name))
+        return None
+
+    def resolve(self, name: str) -> str:
+        """``find``, else the name relative to the main file's folder (which the caller reports as missing)."""
+        found = self.find(name)
+        return found if found is not None else os.path.normpath(os.path.join(self.main_dir,
+                                                                             os.path.expanduser(name)))
+
+    def resolve_filenames(self) -> None:
+        for props, name in self.filenames:
+            entry = props._entry(name)
+            entry.value = self.resolve(entry.value)
 
 
 class MitsubaBuilder(_x._Builder):
     """Pass two for one Mitsuba file; includes get a builder of their own sharing ``state``."""
 
-    def __init__(self, src, state: _State):
-        super().__init__(src, None, state.search[0], "upstream")
+    def __init__(self, src, state: _State, folder: str | None = None):
+        super().__init__(src, None, state.main_dir, "upstream")
+        #: the folder of this builder's file (the main file's: the scene's base folder)
+        self.folder = folder or state.main_dir
         self.state = state
         self.defines = state.defines
         self.used_defines = state.used_defines
@@ -181,10 +203,15 @@ class MitsubaBuilder(_x._Builder):
             elif c.tag == "default":
                 if not is_root:
                     raise self.err("<default> is only allowed directly inside the root <scene>", c.loc)
+            elif c.tag == "path":
+                if not is_root:
+                    raise self.err("<path> is only allowed directly inside a file's root <scene> (as in Mitsuba)",
+                                   c.loc)
+                self.add_path(c)
             elif c.tag in OP_TAGS:
                 raise self.err(f"<{c.tag}> is a transform op and is only allowed inside <transform>", c.loc)
             else:
-                extra = ", <default>" if is_root else ""
+                extra = ", <default>, <path>" if is_root else ""
                 hint = ""
                 if c.tag in ("mesh", "camera", "color"):
                     hint = (f"; <{c.tag}> is Nori's: this file is read as a Mitsuba 3 scene because its <scene> has "
@@ -192,6 +219,20 @@ class MitsubaBuilder(_x._Builder):
                 raise self.err(f"unknown tag <{c.tag}> in <{el.tag}>; expected an object "
                                f"({_x._tags(t for t in MITSUBA_OBJECT_TAGS if t != 'scene')}), a property "
                                f"({_x._tags(MITSUBA_PROPERTY_TAGS)}), <ref>, <include>, <alias>{extra}{hint}", c.loc)
+
+    def add_path(self, el) -> None:
+        """``<path value="folder"/>``: the folder goes first in the resolver. A relative one is the folder beside
+        this file, else one the resolver finds (as Mitsuba 3.9.1 reads it)."""
+        value = self.attrs(el, ("value",))["value"]
+        self.no_children(el)
+        folder = os.path.expanduser(value)
+        if not os.path.isabs(folder):
+            beside = os.path.join(self.folder, folder)
+            folder = beside if os.path.exists(beside) else (self.state.find(folder) or beside)
+        if not os.path.exists(folder):
+            raise self.err(f"<path>: folder '{value}' not found (looked beside this file and in "
+                           f"{', '.join(self.state.looked_in())})", self.attr_loc(el, "value"))
+        self.state.folders = [os.path.normpath(folder)] + self.state.folders
 
     def unknown_id(self, el, oid: str) -> SceneError:
         known = ", ".join(sorted(self.state.ids)) or "none"
@@ -220,7 +261,16 @@ class MitsubaBuilder(_x._Builder):
     def build_include(self, el, spec: PluginSpec) -> None:
         a = self.attrs(el, ("filename",))
         self.no_children(el)
-        path = self.state.resolve(a["filename"], include=True)
+        outer = self.state.folders
+        self.state.folders = [self.folder] + outer
+        try:
+            self.read_include(el, a["filename"], spec)
+        finally:
+            self.state.folders = outer
+
+    def read_include(self, el, filename: str, spec: PluginSpec) -> None:
+        a = {"filename": filename}
+        path = self.state.resolve(filename)
         if path in self.state.chain:
             raise self.err(f"<include> of '{a['filename']}' includes itself (include chain: "
                            f"{' -> '.join(self.state.chain + [path])})", self.attr_loc(el, "filename"))
@@ -237,19 +287,17 @@ class MitsubaBuilder(_x._Builder):
                 data = f.read()
         except OSError as e:
             raise self.err(f"cannot include '{a['filename']}': {e.strerror or e} (looked in "
-                           f"{', '.join(self.state.search + [os.getcwd()])})", self.attr_loc(el, "filename")) from None
+                           f"{', '.join(self.state.looked_in())})", self.attr_loc(el, "filename")) from None
         src, root = _x._read_bytes(data, path, None)
-        sub = MitsubaBuilder(src, self.state)
+        sub = MitsubaBuilder(src, self.state, os.path.dirname(path))
         if root.tag != "scene":
             raise sub.err(f"an included file must have a <scene> root, not <{root.tag}>", root.loc)
         sub.check_version(root)
         self.state.chain.append(path)
-        self.state.search.append(os.path.dirname(path))
         try:
             sub.read_defaults(root)
             sub.fill(root, spec, is_root=True)
         finally:
-            self.state.search.pop()
             self.state.chain.pop()
 
     # --- properties -----------------------------------------------------------------------------
@@ -295,10 +343,10 @@ class MitsubaBuilder(_x._Builder):
             value = self.spectrum_rgb(pairs)
         else:
             value = self.value_of(el, el.tag, text)
+        props.add(name, el.tag, value, el.loc, raw=text)
         if el.tag == "string" and name == "filename":
             _x.check_filename(value, self.attr_loc(el, "value"))
-            value = self.state.resolve(value)
-        props.add(name, el.tag, value, el.loc, raw=text)
+            self.state.filenames.append((props, name))
         if el.tag == "spectrum":
             props._entry(name).spectrum = pairs
 
@@ -395,6 +443,7 @@ def build(src, root, defines, main_dir: str) -> PluginSpec:
                        else src.filename)
     try:
         spec = MitsubaBuilder(src, state).build_root(root)
+        state.resolve_filenames()
         _x.check_defines_used(state.user_defines, state.used_defines, src.filename)
         return spec
     except SceneError as e:
