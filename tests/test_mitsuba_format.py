@@ -52,7 +52,7 @@ def test_version_attribute_selects_the_mitsuba_reader():
 
 
 def test_unsupported_version_is_located():
-    err('<scene\n version="0.6.0"></scene>', 2, 2, "'version'", "0.6.0", "Mitsuba 3 reader")
+    err('<scene\n version="4.0.0"></scene>', 2, 2, "'version'", "4.0.0", "Mitsuba 3 reader")
     e = err('<scene version="three"></scene>')
     assert "major.minor" in str(e)
 

@@ -31,6 +31,7 @@ from ..errors import SceneError, SourceLocation
 from .properties import MITSUBA_PROPERTY_TAGS, PropertyList
 from .spec import MITSUBA_OBJECT_TAGS, PluginSpec, RefSite, describe
 from .transform import Transform
+from . import mitsuba_legacy as _legacy
 from . import xmlparser as _x
 
 log = logging.getLogger("clrender")
@@ -106,6 +107,8 @@ class MitsubaBuilder(_x._Builder):
         super().__init__(src, None, state.main_dir, "upstream")
         #: the folder of this builder's file (the main file's: the scene's base folder)
         self.folder = folder or state.main_dir
+        #: a file older than Mitsuba 2.0, upgraded as Mitsuba 3 reads it (mitsuba_legacy.py)
+        self.legacy = False
         self.state = state
         self.defines = state.defines
         self.used_defines = state.used_defines
@@ -130,10 +133,15 @@ class MitsubaBuilder(_x._Builder):
         if not m:
             raise self.err(f'bad scene version="{v}"; expected major.minor[.patch], e.g. "3.0.0"',
                            self.attr_loc(el, "version"))
-        if m.group(1) not in ("2", "3"):
+        if m.group(1) not in ("0", "1", "2", "3"):
             raise self.err(f"unsupported 'version' \"{v}\" of <scene>: clrender reads Nori scenes (whose <scene> "
-                           f"has no attributes) and Mitsuba 2.x and 3.x scenes (snake_case parameter names); "
-                           f"convert older Mitsuba scenes with Mitsuba first", self.attr_loc(el, "version", at_value=False))
+                           f"has no attributes) and Mitsuba 0.x to 3.x scenes", self.attr_loc(el, "version",
+                                                                                            at_value=False))
+        self.legacy = int(m.group(1)) < 2
+
+    def param_name(self, name: str) -> str:
+        """A parameter's name as Mitsuba 3 reads it: an old file's camelCase becomes snake_case."""
+        return _legacy.camel_to_snake(name) if self.legacy else name
 
     def read_defaults(self, el) -> None:
         for c in el.children:
@@ -161,14 +169,20 @@ class MitsubaBuilder(_x._Builder):
             raise self.err(f"<{el.tag}> is missing the required attribute 'type'", el.loc)
         type_name = self.substitute(el, "type")
         oid = self.substitute(el, "id") if "id" in el.attrs else None
-        name = self.substitute(el, "name") if "name" in el.attrs else None
+        name = self.param_name(self.substitute(el, "name")) if "name" in el.attrs else None
         return type_name, oid, name
 
     def build_object(self, el, is_root: bool = False) -> PluginSpec:
         type_name, oid, name = self.object_attrs(el)
         props = PropertyList(describe(el.tag, type_name), el.loc, fmt="mitsuba")
         spec = PluginSpec(el.tag, type_name, name, props, [], el.loc, format="mitsuba")
+        if self.legacy and el.tag == "integrator":
+            from .registry import registered
+
+            _legacy.check_integrator(type_name, self.attr_loc(el, "type"), registered("integrator", "mitsuba"))
         self.fill(el, spec)
+        if self.legacy:
+            _legacy.upgrade(spec, set(spec.refs))
         if oid is not None:
             self.declare(oid, spec, el)
         return spec
@@ -251,7 +265,7 @@ class MitsubaBuilder(_x._Builder):
         target = self.state.ids.get(oid)
         if target is None:
             raise self.unknown_id(el, oid)
-        name = self.substitute(el, "name") if "name" in el.attrs else None
+        name = self.param_name(self.substitute(el, "name")) if "name" in el.attrs else None
         if name is None or name == target.name or target.tag != "texture":
             return target   # one object wherever it is referenced (a bsdf's or emitter's name says nothing)
         # A texture filling another parameter (its name tells the BSDF which): a spec sharing the texture's
@@ -314,7 +328,7 @@ class MitsubaBuilder(_x._Builder):
 
     def build_property(self, el, props: PropertyList) -> None:
         if el.tag == "transform":
-            name = self.attrs(el, ("name",))["name"]
+            name = self.param_name(self.attrs(el, ("name",))["name"])
             props.add(name, "transform", self.build_transform(el), el.loc)
             return
         if el.tag in ("point", "vector"):
@@ -326,7 +340,7 @@ class MitsubaBuilder(_x._Builder):
             if "name" not in el.attrs:
                 raise self.err(f"<{el.tag}> is missing the required attribute 'name'", el.loc)
             self.no_children(el)
-            props.add(self.substitute(el, "name"), el.tag, self.xyz(el, 0.0), el.loc)
+            props.add(self.param_name(self.substitute(el, "name")), el.tag, self.xyz(el, 0.0), el.loc)
             return
         if el.tag == "spectrum" and "filename" in el.attrs:
             self.attrs(el, ("name", "filename"))
@@ -334,7 +348,7 @@ class MitsubaBuilder(_x._Builder):
                            'value="wavelength:value, ..." or as an <rgb>', el.loc)
         a = self.attrs(el, ("name", "value"))
         self.no_children(el)
-        name, text = a["name"], a["value"]
+        name, text = self.param_name(a["name"]), a["value"]
         if el.tag == "rgb":
             value = self.numbers(el, "value", text, (3, 1))
             value = np.repeat(value, 3) if value.size == 1 else value
@@ -390,8 +404,11 @@ class MitsubaBuilder(_x._Builder):
     def build_transform(self, el) -> Transform:
         result = Transform()
         for op in el.children:
+            if op.tag == "lookAt" and self.legacy:   # old files' spelling; Mitsuba 3 knows only <lookat>
+                op = replace(op, tag="lookat")
             if op.tag not in OP_TAGS:
-                raise self.err(f"<{op.tag}> is not allowed in <transform>; expected one of {_x._tags(OP_TAGS)}",
+                hint = " (<lookAt> is how Mitsuba 0.x files spell it)" if op.tag == "lookAt" else ""
+                raise self.err(f"<{op.tag}> is not allowed in <transform>; expected one of {_x._tags(OP_TAGS)}{hint}",
                                op.loc)
             self.no_children(op)
             if op.tag == "translate":

@@ -1,0 +1,113 @@
+"""Reading Mitsuba 0.x / 1.x files (a root ``<scene version="0.5.0">``, say) as Mitsuba 3.9.1 reads them, and a
+little further where an old file's meaning is clear and Mitsuba 3 refuses it.
+
+Mitsuba 3 upgrades every object of a file older than 2.0 while parsing (``upgrade_from_v1`` in its
+``src/core/parser.cpp``): each parameter name (a property's or a nested object's ``name``) goes from camelCase to
+snake_case (:func:`camel_to_snake`, its rule exactly: ``toWorld`` -> ``to_world``, ``intIOR`` -> ``int_ior``);
+then ``diffuse``'s ``diffuse_reflectance`` becomes ``reflectance``; and any object's ``uoffset``/``voffset``/
+``uscale``/``vscale`` become one ``to_uv`` transform, scale(uscale, vscale) * translate(uoffset, voffset).
+:func:`upgrade` does the same to a :class:`PluginSpec` of such a file.
+
+Beyond Mitsuba 3 (each with a log line or a located error):
+
+- parameters of Mitsuba 0.6 that no longer mean anything to a renderer of surfaces in RGB
+  (:data:`DROPPED`, e.g. ``strictNormals``, ``highQualityEdges``) are ignored with a warning, where
+  Mitsuba 3 stops on an unused parameter;
+- ``<lookAt>`` is read as ``<lookat>`` (mitsuba_xml.py);
+- the ``ldrfilm``, the ``sobol``/``halton``/``hammersley`` samplers and meshes' ``maxSmoothAngle`` are plugins'
+  own parameters (films/ldrfilm.py, samplers/independent.py, shapes/trianglemesh.py);
+- an integrator that clrender does not have (:data:`INTEGRATORS`) is a located error that names what it has.
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import replace
+
+from ..errors import SceneError
+from .transform import Transform
+
+log = logging.getLogger("clrender")
+
+#: Mitsuba 0.6 parameters that have no counterpart in Mitsuba 3 or here, by object tag; they are ignored with a
+#: warning (their snake_case names, as the upgrade makes them)
+DROPPED = {
+    "integrator": ("strict_normals",),            # the path tracers' light-leak guard at shading normals
+    "film": ("attach_log", "high_quality_edges"),  # a log in the file, edge pixels filtered from outside the film
+    "sampler": ("dimension", "scramble"),         # the low-discrepancy samplers' pattern settings
+    "texture": ("max_anisotropy", "cache"),       # bitmap's EWA filter width and its MIP-map cache file
+}
+
+#: Mitsuba 0.6 integrators that clrender does not have, with what they do (a path tracer renders the same image
+#: for each of them but the approximate ones, only with other noise)
+INTEGRATORS = {
+    "bdpt": "bidirectional path tracing", "pssmlt": "primary sample space MLT", "mlt": "Metropolis light transport",
+    "erpt": "energy redistribution path tracing", "photonmapper": "photon mapping",
+    "ppm": "progressive photon mapping", "sppm": "stochastic progressive photon mapping",
+    "ptracer": "particle tracing", "vpl": "virtual point lights", "irrcache": "irradiance caching (a wrapper)",
+    "adaptive": "adaptive sampling (a wrapper)", "multichannel": "several integrators into one image",
+    "field": "a field of the first hit", "volpath_simple": "simple volumetric path tracing",
+}
+
+
+def camel_to_snake(name: str) -> str:
+    """Mitsuba 3.9.1's camel_to_underscore_case: before an upper-case letter that follows a lower-case one, an
+    underscore, and that letter and the upper-case ones right after it in lower case (``intIOR`` -> ``int_ior``,
+    ``cropOffsetX`` -> ``crop_offset_x``); everything else as written."""
+    out = []
+    i = 0
+    while i < len(name):
+        c = name[i]
+        if i > 0 and name[i - 1].islower() and c.isupper():
+            out.append("_" + c.lower())
+            while i + 1 < len(name) and name[i + 1].isupper():
+                i += 1
+                out.append(name[i].lower())
+        else:
+            out.append(c)
+        i += 1
+    return "".join(out)
+
+
+def check_integrator(type_name: str, location, known: list[str]) -> None:
+    """A located error for an old integrator that clrender does not have."""
+    what = INTEGRATORS.get(type_name)
+    if what is not None:
+        raise SceneError(f"the Mitsuba 0.x integrator '{type_name}' ({what}) is not available in clrender (nor in "
+                         f"Mitsuba 3); clrender's Mitsuba integrators: {', '.join(known)}; 'path' converges to "
+                         f"the same image as the unbiased ones", location)
+
+
+def upgrade(spec, shared: set[int]) -> None:
+    """Mitsuba's upgrade of one object read from a file older than 2.0, after its names went to snake_case.
+    ``shared``: the indices of children that a ``<ref>`` put there (the referenced object is not changed in place).
+    """
+    props = spec.props
+    if spec.type == "diffuse":
+        if props.has("diffuse_reflectance"):
+            props.rename("diffuse_reflectance", "reflectance")
+        for i, child in enumerate(spec.children):
+            if child.name == "diffuse_reflectance":
+                if i in shared:
+                    spec.children[i] = replace(child, name="reflectance")
+                else:
+                    child.name = "reflectance"
+    uv = [n for n in ("uoffset", "voffset", "uscale", "vscale") if props.has(n)]
+    if uv:
+        where = props.location(uv[0])
+        v = {n: props.get_float(n) for n in uv}
+        for n in uv:
+            props.remove(n)
+        try:
+            to_uv = (Transform.scale([v.get("uscale", 1.0), v.get("vscale", 1.0), 1.0])
+                     @ Transform.translate([v.get("uoffset", 0.0), v.get("voffset", 0.0), 0.0]))
+        except ValueError as e:
+            raise SceneError(f"uscale/vscale: {e}", where) from None
+        if props.has("to_uv"):
+            raise SceneError("to_uv given together with uoffset/voffset/uscale/vscale, which Mitsuba turns into a "
+                             "to_uv; give one of them", where)
+        props.add("to_uv", "transform", to_uv, where)
+    for name in DROPPED.get(spec.tag, ()):
+        if props.has(name):
+            props.mark_used(name)
+            log.warning("%s: '%s' of the Mitsuba 0.x %s has no counterpart in Mitsuba 3 or clrender; ignored",
+                        props.location(name), name, spec.describe())

@@ -1,0 +1,127 @@
+"""Mitsuba 0.x files (clrender/scene/mitsuba_legacy.py): read as Mitsuba 3.9.1 upgrades them (names, diffuse's
+reflectance, the uv offsets and scales), and what we read beyond Mitsuba 3 (lookAt, dropped parameters, old
+integrators named). Scenes of our own, written here in both spellings."""
+import logging
+
+import numpy as np
+import pytest
+
+import clrender
+import clrender.plugins  # noqa: F401
+from clrender.errors import SceneError
+from clrender.scene.mitsuba_legacy import camel_to_snake
+from clrender.scene.registry import create
+from clrender.scene.xmlparser import parse_string
+
+
+# Mitsuba 3.9.1's own renames, read off its "unreferenced properties" error for a 0.6 file with these names
+@pytest.mark.parametrize("old, new", [("toWorld", "to_world"), ("cropOffsetX", "crop_offset_x"), ("intIOR", "int_ior"),
+                                      ("HDRFile", "HDRFile"), ("aBCdE", "a_bcd_e"), ("x2Y", "x2Y"),
+                                      ("already_snake", "already_snake"), ("uvScaleUV", "uv_scale_uv")])
+def test_names_go_to_snake_case_as_in_mitsuba(old, new):
+    assert camel_to_snake(old) == new
+
+
+def scene_xml(version: str, body: str, sensor: str) -> str:
+    return f'<scene version="{version}">{sensor}{body}<emitter type="constant"><rgb name="radiance" value="1"/></emitter></scene>'
+
+
+SENSOR = ('<integrator type="path"><integer name="{max_depth}" value="4"/><integer name="{rr_depth}" value="2"/>'
+          '</integrator><sensor type="perspective"><float name="fov" value="40"/><string name="{fov_axis}" value="y"/>'
+          '<float name="{near_clip}" value="0.5"/><transform name="{to_world}">'
+          '<{lookat} origin="0, 1, 6" target="0, 0, 0" up="0, 1, 0"/></transform>'
+          '<sampler type="independent"><integer name="{sample_count}" value="3"/></sampler>'
+          '<film type="hdrfilm"><integer name="width" value="20"/><integer name="height" value="14"/>'
+          '<integer name="{crop_offset_x}" value="2"/><integer name="{crop_width}" value="16"/><rfilter type="box"/>'
+          '</film></sensor>')
+BODY = """
+  <texture type="checkerboard" id="check">{uv_check}<rgb name="color0" value="0.1, 0.2, 0.6"/></texture>
+  <bsdf type="diffuse" id="plain"><rgb name="{reflectance}" value="0.2, 0.5, 0.3"/></bsdf>
+  <bsdf type="diffuse" id="checked"><ref name="{reflectance}" id="check"/></bsdf>
+  <bsdf type="roughplastic" id="coat"><float name="{int_ior}" value="1.6"/><string name="distribution" value="ggx"/>
+    <float name="alpha" value="0.2"/><rgb name="{diffuse_reflectance}" value="0.6, 0.3, 0.2"/></bsdf>
+  <shape type="sphere"><ref id="plain"/></shape>
+  <shape type="sphere"><point name="center" x="2.2" y="0" z="0"/><ref id="checked"/></shape>
+  <shape type="sphere"><point name="center" x="-2.2" y="0" z="0"/><ref id="coat"/></shape>
+  <shape type="rectangle"><transform name="{to_world}"><scale value="5"/><rotate x="1" angle="-90"/>
+    <translate y="-1"/></transform><bsdf type="diffuse"><texture type="checkerboard" name="{reflectance}">
+    {uv_floor}</texture></bsdf></shape>
+"""
+#: the same scene's names in Mitsuba 0.x's spelling and in Mitsuba 3's (written out here, not derived)
+OLD = dict(max_depth="maxDepth", rr_depth="rrDepth", fov_axis="fovAxis", near_clip="nearClip", to_world="toWorld",
+           lookat="lookAt", sample_count="sampleCount", crop_offset_x="cropOffsetX", crop_width="cropWidth",
+           reflectance="diffuseReflectance", int_ior="intIOR", diffuse_reflectance="diffuseReflectance",
+           uv_check='<float name="uscale" value="4"/><float name="uoffset" value="0.3"/><float name="voffset" '
+                    'value="0.25"/>',
+           uv_floor='<float name="vscale" value="3"/><float name="uoffset" value="0.1"/>')
+NEW = dict(max_depth="max_depth", rr_depth="rr_depth", fov_axis="fov_axis", near_clip="near_clip", to_world="to_world",
+           lookat="lookat", sample_count="sample_count", crop_offset_x="crop_offset_x", crop_width="crop_width",
+           reflectance="reflectance", int_ior="int_ior", diffuse_reflectance="diffuse_reflectance",
+           uv_check='<transform name="to_uv"><translate x="0.3" y="0.25"/><scale x="4" y="1"/></transform>',
+           uv_floor='<transform name="to_uv"><translate x="0.1" y="0"/><scale x="1" y="3"/></transform>')
+
+
+@pytest.mark.parametrize("version", ["0.5.0", "0.6", "1.0.0"])
+def test_old_file_renders_as_its_mitsuba3_spelling(version):
+    """The same scene in Mitsuba 0.x and Mitsuba 3 spelling renders the very same image (same seed: the same
+    samples), pixel for pixel. Mitsuba 3.9.1 itself gave identical images for such a pair (the to_uv spelt out
+    as translate-then-scale, Mitsuba's upgrade), and agreed with ours (mean ratio 0.9999 at 1024 spp)."""
+    old = create(parse_string(scene_xml(version, BODY.format(**OLD), SENSOR.format(**OLD)), "old.xml"))
+    new = create(parse_string(scene_xml("3.0.0", BODY.format(**NEW), SENSOR.format(**NEW)), "new.xml"))
+    assert (old.width, old.height, old.sample_count) == (16, 14, 3)
+    a = clrender.render(old, spp=3, seed=7).image
+    b = clrender.render(new, spp=3, seed=7).image
+    assert a.mean() > 0.05 and np.array_equal(a, b)
+    # and the checkerboards did move: without the upgrade's to_uv the picture differs
+    unmoved = dict(NEW, uv_floor="")
+    plain = create(parse_string(scene_xml("3.0.0", BODY.format(**unmoved), SENSOR.format(**NEW)), "new.xml"))
+    assert not np.array_equal(clrender.render(plain, spp=3, seed=7).image, b)
+
+
+def test_to_uv_is_scale_after_translate():
+    tex = create(parse_string('<scene version="0.5.0"><texture type="checkerboard" id="t"><float name="uoffset" '
+                              'value="0.5"/><float name="uscale" value="2"/><float name="vscale" value="3"/></texture>'
+                              '</scene>', "s.xml").children[0])
+    assert np.allclose(tex.to_uv, [[2, 0, 1], [0, 3, 0]])   # (u, v) -> (2 (u + 0.5), 3 v)
+
+
+def err(xml: str, line: int, *fragments: str) -> SceneError:
+    with pytest.raises(SceneError) as e:
+        create(parse_string(xml, "old.xml"))
+    assert e.value.location is not None and e.value.location.line == line, str(e.value)
+    for f in fragments:
+        assert f in str(e.value), str(e.value)
+    return e.value
+
+
+@pytest.mark.parametrize("kind", ["bdpt", "photonmapper", "ptracer", "mlt", "sppm"])
+def test_old_integrators_we_do_not_have_are_named(kind):
+    e = err(f'<scene version="0.5.0">\n  <integrator type="{kind}"/></scene>', 2, f"'{kind}'", "not available",
+            "path, ")
+    assert e.location.col == 21
+
+
+def test_legacy_errors_are_located():
+    err('<scene version="0.5.0">\n<texture type="checkerboard"><float name="uscale" value="0"/></texture></scene>',
+        2, "uscale")
+    err('<scene version="0.5.0">\n<texture type="checkerboard"><float name="uScale" value="2"/>'
+        '<transform name="toUV"><scale value="2"/></transform></texture></scene>', 2, "to_uv")
+    err('<scene version="0.5.0">\n<bsdf type="plastic"><float name="intIOR" value="1.4"/>\n'
+        '<float name="int_ior" value="1.5"/></bsdf></scene>', 3, "given twice")
+    # lookAt is an old file's spelling only
+    err('<scene version="3.0.0"><shape type="cube"><transform name="to_world">\n<lookAt origin="0,0,1" target="0,0,0"'
+        ' up="0,1,0"/></transform></shape></scene>', 2, "Mitsuba 0.x")
+    err('<scene\n version="4.0.0"></scene>', 2, "unsupported 'version'")
+
+
+def test_dropped_parameters_warn(caplog):
+    xml = ('<scene version="0.6.0"><integrator type="path"><boolean name="strictNormals" value="true"/></integrator>'
+           '<sensor type="perspective"><film type="hdrfilm"><boolean name="highQualityEdges" value="true"/>'
+           '<boolean name="banner" value="false"/></film></sensor><shape type="cube"/></scene>')
+    with caplog.at_level(logging.WARNING, logger="clrender"):
+        create(parse_string(xml, "old.xml"))
+    assert "'strict_normals' of the Mitsuba 0.x <integrator" in caplog.text
+    assert "'high_quality_edges'" in caplog.text and "banner" not in caplog.text   # Mitsuba 3's hdrfilm takes banner
+    # in a Mitsuba 3 file they are unused parameters, as Mitsuba 3 says
+    with pytest.raises(SceneError, match="strict_normals"):
+        create(parse_string(xml.replace("0.6.0", "3.0.0").replace("strictNormals", "strict_normals"), "new.xml"))
