@@ -394,7 +394,7 @@ def test_stratifying_samplers_use_scrambled_sobol(caplog):
     from clrender.pack import pack_scene
     from clrender.renderer import render_defines
 
-    for kind in ("stratified", "multijitter", "orthogonal", "ldsampler"):
+    for kind in ("stratified", "multijitter", "orthogonal", "ldsampler", "sobol", "halton", "hammersley"):
         with caplog.at_level(logging.INFO, logger="clrender"):
             scene = load(f'<sensor type="perspective"><sampler type="{kind}"><integer name="sample_count" '
                          'value="16"/></sampler><film type="hdrfilm"/></sensor><shape type="cube"/>')

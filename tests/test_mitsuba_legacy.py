@@ -114,6 +114,18 @@ def test_legacy_errors_are_located():
     err('<scene\n version="4.0.0"></scene>', 2, "unsupported 'version'")
 
 
+@pytest.mark.parametrize("kind, extra", [("sobol", '<integer name="scramble" value="3"/>'),
+                                         ("halton", '<integer name="scramble" value="-1"/>'), ("hammersley", ""),
+                                         ("ldsampler", '<integer name="dimension" value="4"/>')])
+def test_old_samplers_render_with_our_stratified_sampler(kind, extra):
+    from clrender.pack import pack_scene
+
+    scene = create(parse_string(f'<scene version="0.5.0"><sensor type="perspective"><sampler type="{kind}">'
+                                f'<integer name="sampleCount" value="16"/>{extra}</sampler></sensor>'
+                                '<shape type="cube"/></scene>', "old.xml"))
+    assert scene.sample_count == 16 and pack_scene(scene).sampler == "sobol"
+
+
 def test_dropped_parameters_warn(caplog):
     xml = ('<scene version="0.6.0"><integrator type="path"><boolean name="strictNormals" value="true"/></integrator>'
            '<sensor type="perspective"><film type="hdrfilm"><boolean name="highQualityEdges" value="true"/>'

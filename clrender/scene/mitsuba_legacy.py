@@ -14,7 +14,7 @@ Beyond Mitsuba 3 (each with a log line or a located error):
   (:data:`DROPPED`, e.g. ``strictNormals``, ``highQualityEdges``) are ignored with a warning, where
   Mitsuba 3 stops on an unused parameter;
 - ``<lookAt>`` is read as ``<lookat>`` (mitsuba_xml.py);
-- the ``ldrfilm``, the ``sobol``/``halton``/``hammersley`` samplers and meshes' ``maxSmoothAngle`` are plugins'
+- the ``ldrfilm``, the ``sobol``/``halton``/``hammersley`` samplers (with their ``scramble``) and meshes' ``maxSmoothAngle`` are plugins'
   own parameters (films/ldrfilm.py, samplers/independent.py, shapes/trianglemesh.py);
 - an integrator that clrender does not have (:data:`INTEGRATORS`) is a located error that names what it has.
 """
@@ -33,7 +33,7 @@ log = logging.getLogger("clrender")
 DROPPED = {
     "integrator": ("strict_normals",),            # the path tracers' light-leak guard at shading normals
     "film": ("attach_log", "high_quality_edges"),  # a log in the file, edge pixels filtered from outside the film
-    "sampler": ("dimension", "scramble"),         # the low-discrepancy samplers' pattern settings
+    "sampler": ("dimension",),                    # ldsampler's and stratified's count of dimensions
     "texture": ("max_anisotropy", "cache"),       # bitmap's EWA filter width and its MIP-map cache file
 }
 
