@@ -137,3 +137,55 @@ def test_dropped_parameters_warn(caplog):
     # in a Mitsuba 3 file they are unused parameters, as Mitsuba 3 says
     with pytest.raises(SceneError, match="strict_normals"):
         create(parse_string(xml.replace("0.6.0", "3.0.0").replace("strictNormals", "strict_normals"), "new.xml"))
+
+
+# ------------------------------------------------------------------------------------------------- ldrfilm
+def ldrfilm(params: str):
+    xml = ('<scene version="0.5.0"><sensor type="perspective"><transform name="toWorld"><lookAt origin="0, 0, -3" '
+           'target="0, 0, 0" up="0, 1, 0"/></transform>'
+           f'<film type="ldrfilm"><integer name="width" value="8"/>'
+           f'<integer name="height" value="6"/>{params}<rfilter type="box"/></film></sensor>'
+           '<shape type="sphere"><emitter type="area"><rgb name="radiance" value="0.3, 0.6, 0.9"/></emitter></shape>'
+           '</scene>')
+    return xml, create(parse_string(xml, "old.xml")).camera.film
+
+
+def test_ldrfilm_takes_an_old_files_parameters():
+    _, film = ldrfilm('<string name="fileFormat" value="png"/><string name="pixelFormat" value="rgb"/>'
+                      '<float name="gamma" value="2.2"/><float name="exposure" value="1"/>'
+                      '<boolean name="banner" value="false"/><string name="tonemapMethod" value="gamma"/>')
+    img = np.array([[[0.1, 0.2, 0.8]]], np.float32)
+    assert film.tonemap(img).tolist() == [[[round(255 * 0.2 ** (1 / 2.2)), round(255 * 0.4 ** (1 / 2.2)), 255]]]
+    from clrender.film import to_srgb8
+
+    _, default = ldrfilm("")                       # gamma -1: the sRGB curve, as our usual PNG
+    wide = np.linspace(0, 1.5, 64, dtype=np.float32).reshape(4, 16, 1).repeat(3, axis=-1)
+    assert np.array_equal(default.tonemap(wide), to_srgb8(wide))
+    with pytest.raises(SceneError, match="tonemap_method"):
+        ldrfilm('<string name="tonemapMethod" value="filmic"/>')
+
+
+def test_ldrfilm_reinhard_keeps_colour_and_maps_the_brightest_to_white():
+    _, film = ldrfilm('<string name="tonemapMethod" value="reinhard"/><float name="gamma" value="1"/>')
+    img = np.array([[[0.05, 0.1, 0.2], [2.0, 4.0, 8.0], [0.3, 0.3, 0.3]]], np.float32)
+    out = film.tonemap(img).astype(np.float64)
+    assert out[0, 1].max() == 255                             # burn 0: the largest luminance becomes 1
+    for p in (0, 2):                                          # luminance compressed, chromaticity kept
+        assert np.allclose(out[0, p] / out[0, p].max(), img[0, p] / img[0, p].max(), atol=2 / out[0, p].max())
+    assert out[0, 0].max() < out[0, 2].max() < 255
+
+
+def test_ldrfilm_png_is_its_tone_mapped_image(tmp_path):
+    from PIL import Image
+
+    from clrender.cli import main
+    from clrender.film import read_exr, to_srgb8
+
+    xml, _ = ldrfilm('<float name="gamma" value="1"/><float name="exposure" value="1"/>')
+    (tmp_path / "s.xml").write_text(xml)
+    assert main(["render", str(tmp_path / "s.xml"), "-q", "-o", str(tmp_path / "s.exr"), "--spp", "2"]) == 0
+    linear, _ = read_exr(tmp_path / "s.exr")
+    png = np.asarray(Image.open(tmp_path / "s.png").convert("RGB"))
+    expected = np.clip(2 * linear.astype(np.float64), 0, 1) * 255       # exposure 1, gamma 1
+    assert linear.max() > 0.2 and np.abs(png - expected).max() <= 0.5 + 1e-3   # to the rounding of 8 bits
+    assert not np.array_equal(png, to_srgb8(linear))                    # not the plain sRGB preview
