@@ -189,3 +189,50 @@ def test_ldrfilm_png_is_its_tone_mapped_image(tmp_path):
     expected = np.clip(2 * linear.astype(np.float64), 0, 1) * 255       # exposure 1, gamma 1
     assert linear.max() > 0.2 and np.abs(png - expected).max() <= 0.5 + 1e-3   # to the rounding of 8 bits
     assert not np.array_equal(png, to_srgb8(linear))                    # not the plain sRGB preview
+
+
+# ------------------------------------------------------------------------------------------- maxSmoothAngle
+CUBE = ("v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
+        "vn 0 0 1\n"   # a file normal, which maxSmoothAngle drops
+        "f 1//1 4//1 3//1\nf 1//1 3//1 2//1\nf 5//1 6//1 7//1\nf 5//1 7//1 8//1\nf 1//1 2//1 6//1\nf 1//1 6//1 5//1\n"
+        "f 4//1 8//1 7//1\nf 4//1 7//1 3//1\nf 1//1 5//1 8//1\nf 1//1 8//1 4//1\nf 2//1 3//1 7//1\nf 2//1 7//1 6//1\n")
+# two unit squares meeting at the x = 0 ridge at 20 degrees off flat (their normals 20 degrees apart)
+_S, _C = np.sin(np.radians(10)), np.cos(np.radians(10))
+RIDGE = (f"v -{_C} 0 -{_S}\nv 0 0 0\nv 0 1 0\nv -{_C} 1 -{_S}\nv {_C} 0 -{_S}\nv {_C} 1 -{_S}\n"
+         "f 1 2 3\nf 1 3 4\nf 2 5 6\nf 2 6 3\n")
+
+
+def crease_mesh(tmp_path, obj: str, angle: str, version: str = "0.5.0", extra: str = ""):
+    (tmp_path / "m.obj").write_text(obj)
+    xml = (f'<scene version="{version}"><sensor type="perspective"/><shape type="obj"><string name="filename" '
+           f'value="{tmp_path / "m.obj"}"/><float name="maxSmoothAngle" value="{angle}"/>{extra}</shape></scene>')
+    return create(parse_string(xml, "old.xml")).shapes[0].mesh
+
+
+def face_normals(mesh) -> np.ndarray:
+    p = mesh.positions.astype(np.float64)[mesh.faces]
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    return n / np.linalg.norm(n, axis=1, keepdims=True)
+
+
+def test_max_smooth_angle_keeps_creases_sharper_than_it(tmp_path):
+    flat = crease_mesh(tmp_path, CUBE, "30")                  # the cube's 90 degree edges are creases
+    assert flat.positions.shape == (24, 3)                    # each corner: one vertex per face meeting there
+    for corner in range(3):                                   # each vertex normal is its face's normal
+        assert np.allclose(flat.normals[flat.faces[:, corner]], face_normals(flat), atol=1e-6)
+    round_ = crease_mesh(tmp_path, CUBE, "100")               # no crease: one vertex per corner
+    assert round_.positions.shape == (8, 3)
+    assert np.allclose(round_.normals, round_.positions / np.sqrt(3), atol=1e-6)   # (+-1, +-1, +-1) / sqrt 3
+    smooth = crease_mesh(tmp_path, RIDGE, "25")               # 20 degrees: smooth across the ridge
+    ridge = np.nonzero(np.abs(smooth.positions[:, 0]) < 1e-6)[0]
+    assert ridge.size == 2 and np.allclose(smooth.normals[ridge], [0, 0, 1], atol=1e-6)
+    sharp = crease_mesh(tmp_path, RIDGE, "15")
+    assert np.sum(np.abs(sharp.positions[:, 0]) < 1e-6) == 4   # the ridge's two vertices split
+    for corner in range(3):
+        assert np.allclose(sharp.normals[sharp.faces[:, corner]], face_normals(sharp), atol=1e-6)
+
+
+def test_max_smooth_angle_with_face_normals_and_errors(tmp_path):
+    assert crease_mesh(tmp_path, CUBE, "30", extra='<boolean name="faceNormals" value="true"/>').normals is None
+    with pytest.raises(SceneError, match="max_smooth_angle must be between"):
+        crease_mesh(tmp_path, CUBE, "200")
