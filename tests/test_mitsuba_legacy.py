@@ -236,3 +236,20 @@ def test_max_smooth_angle_with_face_normals_and_errors(tmp_path):
     assert crease_mesh(tmp_path, CUBE, "30", extra='<boolean name="faceNormals" value="true"/>').normals is None
     with pytest.raises(SceneError, match="max_smooth_angle must be between"):
         crease_mesh(tmp_path, CUBE, "200")
+
+
+def test_srgb_of_old_files_is_the_rgb_of_its_linear_values():
+    def albedo(version, colour):
+        xml = (f'<scene version="{version}"><sensor type="perspective"/><shape type="cube"><bsdf type="diffuse">'
+               f'{colour}</bsdf></shape></scene>')
+        return create(parse_string(xml, "s.xml")).shapes[0].bsdf.albedo
+
+    # the sRGB curve's values: 128/255 -> 0.2158605, 0.5 -> 0.2140411, 0.02 -> 0.02 / 12.92
+    assert np.allclose(albedo("0.5.0", '<srgb name="diffuseReflectance" value="#80ff00"/>'), [0.2158605, 1, 0])
+    assert np.allclose(albedo("0.6.0", '<srgb name="reflectance" value="0.5, 0.02, 1"/>'),
+                       [0.2140411, 0.02 / 12.92, 1])
+    assert np.allclose(albedo("0.6.0", '<srgb name="reflectance" value="0.5"/>'), [0.2140411] * 3)
+    err('<scene version="0.5.0"><shape type="cube"><bsdf type="diffuse">\n<srgb name="reflectance" value="#80zz00"/>'
+        '</bsdf></shape></scene>', 2, "bad number")
+    err('<scene version="3.0.0"><shape type="cube"><bsdf type="diffuse">\n<srgb name="reflectance" value="#808080"/>'
+        '</bsdf></shape></scene>', 2, "unknown tag <srgb>", "Mitsuba 0.x")

@@ -13,7 +13,7 @@ Beyond Mitsuba 3 (each with a log line or a located error):
 - parameters of Mitsuba 0.6 that no longer mean anything to a renderer of surfaces in RGB
   (:data:`DROPPED`, e.g. ``strictNormals``, ``highQualityEdges``) are ignored with a warning, where
   Mitsuba 3 stops on an unused parameter;
-- ``<lookAt>`` is read as ``<lookat>`` (mitsuba_xml.py);
+- ``<lookAt>`` is read as ``<lookat>``, and ``<srgb>`` as the ``<rgb>`` of its linear values (mitsuba_xml.py);
 - the ``ldrfilm``, the ``sobol``/``halton``/``hammersley`` samplers (with their ``scramble``) and meshes' ``maxSmoothAngle`` are plugins'
   own parameters (films/ldrfilm.py, samplers/independent.py, shapes/trianglemesh.py);
 - an integrator that clrender does not have (:data:`INTEGRATORS`) is a located error that names what it has.
@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import logging
 from dataclasses import replace
+
+import numpy as np
 
 from ..errors import SceneError
 from .transform import Transform
@@ -66,6 +68,19 @@ def camel_to_snake(name: str) -> str:
             out.append(c)
         i += 1
     return "".join(out)
+
+
+def srgb_to_linear(value) -> np.ndarray:
+    """Mitsuba 0.x's ``<srgb>``: an sRGB-encoded colour, ``#rrggbb`` or 1 or 3 numbers in [0, 1], as linear RGB.
+    A string that is not ``#rrggbb`` raises ValueError (the caller then reads it as numbers)."""
+    if isinstance(value, str):
+        text = value.strip()
+        if not (text.startswith("#") and len(text) == 7):
+            raise ValueError(text)
+        x = np.array([int(text[i:i + 2], 16) for i in (1, 3, 5)]) / 255.0
+    else:
+        x = np.repeat(value, 3) if np.size(value) == 1 else np.asarray(value, np.float64)
+    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
 
 
 def check_integrator(type_name: str, location, known: list[str]) -> None:

@@ -199,7 +199,7 @@ class MitsubaBuilder(_x._Builder):
                 self.build_property(c, spec.props)
             elif c.tag in MITSUBA_OBJECT_TAGS and c.tag != "scene":
                 spec.children.append(self.build_object(c))
-            elif c.tag in MITSUBA_PROPERTY_TAGS:
+            elif c.tag in MITSUBA_PROPERTY_TAGS or (c.tag == "srgb" and self.legacy):
                 self.build_property(c, spec.props)
             elif c.tag == "ref":
                 target = self.build_ref(c)
@@ -227,6 +227,9 @@ class MitsubaBuilder(_x._Builder):
             else:
                 extra = ", <default>, <path>" if is_root else ""
                 hint = ""
+                if c.tag == "srgb":
+                    hint = ("; <srgb> (an sRGB-encoded colour) is Mitsuba 0.x's: write it as an <rgb> of linear "
+                            "values, or give the file the version it was written for")
                 if c.tag in ("mesh", "camera", "color"):
                     hint = (f"; <{c.tag}> is Nori's: this file is read as a Mitsuba 3 scene because its <scene> has "
                             f"a version attribute (Nori's <scene> has none)")
@@ -349,7 +352,14 @@ class MitsubaBuilder(_x._Builder):
         a = self.attrs(el, ("name", "value"))
         self.no_children(el)
         name, text = self.param_name(a["name"]), a["value"]
-        if el.tag == "rgb":
+        tag = el.tag
+        if el.tag == "srgb":   # Mitsuba 0.x: "#rrggbb" or numbers, sRGB-encoded; an <rgb> of their linear values
+            tag = "rgb"
+            try:
+                value = _legacy.srgb_to_linear(text)
+            except ValueError:
+                value = _legacy.srgb_to_linear(self.numbers(el, "value", text, (3, 1)))
+        elif el.tag == "rgb":
             value = self.numbers(el, "value", text, (3, 1))
             value = np.repeat(value, 3) if value.size == 1 else value
         elif el.tag == "spectrum":
@@ -357,7 +367,7 @@ class MitsubaBuilder(_x._Builder):
             value = self.spectrum_rgb(pairs)
         else:
             value = self.value_of(el, el.tag, text)
-        props.add(name, el.tag, value, el.loc, raw=text)
+        props.add(name, tag, value, el.loc, raw=text)
         if el.tag == "string" and name == "filename":
             _x.check_filename(value, self.attr_loc(el, "value"))
             self.state.filenames.append((props, name))
