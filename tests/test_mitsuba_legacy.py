@@ -253,3 +253,26 @@ def test_srgb_of_old_files_is_the_rgb_of_its_linear_values():
         '</bsdf></shape></scene>', 2, "bad number")
     err('<scene version="3.0.0"><shape type="cube"><bsdf type="diffuse">\n<srgb name="reflectance" value="#808080"/>'
         '</bsdf></shape></scene>', 2, "unknown tag <srgb>", "Mitsuba 0.x")
+
+
+def test_old_bitmap_settings_carry_over(tmp_path, caplog):
+    from PIL import Image
+
+    Image.fromarray(np.full((2, 2, 3), 128, np.uint8)).save(tmp_path / "t.png")
+
+    def bitmap(params):
+        xml = (f'<scene version="0.5.0"><texture type="bitmap" id="t"><string name="filename" value="t.png"/>'
+               f'\n{params}</texture></scene>')
+        return create(parse_string(xml, str(tmp_path / "s.xml")).children[0])
+
+    with caplog.at_level(logging.WARNING, logger="clrender"):
+        t = bitmap('<string name="filterType" value="ewa"/><string name="wrapModeU" value="mirror"/>'
+                   '<string name="wrapModeV" value="mirror"/><float name="gamma" value="1"/><float name="uscale" value="2"/>')
+    assert (t.filter, t.wrap, t.raw) == (0, 1, True) and "MIP-mapped" in caplog.text
+    assert np.allclose(t.image, 128 / 255) and np.allclose(t.to_uv, [[2, 0, 0], [0, 1, 0]])
+    assert not bitmap('<float name="gamma" value="-1"/>').raw and np.allclose(bitmap("").image, 0.2158605)
+    for bad, what in [('<string name="wrapModeU" value="clamp"/><string name="wrapModeV" value="repeat"/>', "differ"),
+                      ('<float name="gamma" value="2.2"/>', "gamma 2.2")]:
+        with pytest.raises(SceneError, match=what) as e:
+            bitmap(bad)
+        assert e.value.location.line == 2

@@ -16,6 +16,7 @@ Beyond Mitsuba 3 (each with a log line or a located error):
 - ``<lookAt>`` is read as ``<lookat>``, and ``<srgb>`` as the ``<rgb>`` of its linear values (mitsuba_xml.py);
 - the ``ldrfilm``, the ``sobol``/``halton``/``hammersley`` samplers (with their ``scramble``) and meshes' ``maxSmoothAngle`` are plugins'
   own parameters (films/ldrfilm.py, samplers/independent.py, shapes/trianglemesh.py);
+- an old bitmap's MIP-mapped filterType, per-axis wrap modes and gamma, where they mean something we have;
 - an integrator that clrender does not have (:data:`INTEGRATORS`) is a located error that names what it has.
 """
 from __future__ import annotations
@@ -70,6 +71,42 @@ def camel_to_snake(name: str) -> str:
     return "".join(out)
 
 
+def _set(props, name: str, tag: str, value) -> None:
+    where = props.location(name)
+    props.remove(name)
+    props.add(name, tag, value, where)
+
+
+def _upgrade_bitmap(props) -> None:
+    """An old bitmap's settings whose meaning carries over: MIP-mapped filters (Mitsuba 3, and we, filter
+    bilinearly: the same at magnification, sharper where a texel is smaller than a pixel), one wrap mode per axis
+    (the same for both, as Mitsuba 3 and we have one), and ``gamma`` 1 (raw data) or -1 (sRGB) as ``raw``."""
+    if props.has("filter_type") and props.tag("filter_type") == "string":
+        value = props.get_string("filter_type")
+        if value in ("trilinear", "ewa"):
+            log.warning("%s: filterType '%s' (MIP-mapped) of a Mitsuba 0.x bitmap: clrender filters bilinearly, as "
+                        "Mitsuba 3 does", props.location("filter_type"), value)
+            _set(props, "filter_type", "string", "bilinear")
+    axes = [n for n in ("wrap_mode_u", "wrap_mode_v") if props.has(n)]
+    if axes:
+        modes = {props.get_string(n) for n in axes}
+        if len(modes) > 1 or props.has("wrap_mode"):
+            raise SceneError("wrap_mode_u and wrap_mode_v differ (or wrap_mode is given too); clrender, as Mitsuba 3, "
+                             "takes one wrap_mode for both axes", props.location(axes[0]))
+        where = props.location(axes[0])
+        for n in axes:
+            props.remove(n)
+        props.add("wrap_mode", "string", modes.pop(), where)
+    if props.has("gamma") and not props.has("raw"):
+        gamma = props.get_float("gamma")
+        if gamma not in (1.0, -1.0):
+            raise SceneError(f"a bitmap's gamma {gamma:g}: clrender reads images as sRGB (gamma -1) or as raw data "
+                             f"(gamma 1), as Mitsuba 3's 'raw' parameter does", props.location("gamma"))
+        where = props.location("gamma")
+        props.remove("gamma")
+        props.add("raw", "boolean", gamma == 1.0, where)
+
+
 def srgb_to_linear(value) -> np.ndarray:
     """Mitsuba 0.x's ``<srgb>``: an sRGB-encoded colour, ``#rrggbb`` or 1 or 3 numbers in [0, 1], as linear RGB.
     A string that is not ``#rrggbb`` raises ValueError (the caller then reads it as numbers)."""
@@ -121,6 +158,8 @@ def upgrade(spec, shared: set[int]) -> None:
             raise SceneError("to_uv given together with uoffset/voffset/uscale/vscale, which Mitsuba turns into a "
                              "to_uv; give one of them", where)
         props.add("to_uv", "transform", to_uv, where)
+    if spec.tag == "texture" and spec.type == "bitmap":
+        _upgrade_bitmap(props)
     for name in DROPPED.get(spec.tag, ()):
         if props.has(name):
             props.mark_used(name)
