@@ -276,3 +276,25 @@ def test_old_bitmap_settings_carry_over(tmp_path, caplog):
         with pytest.raises(SceneError, match=what) as e:
             bitmap(bad)
         assert e.value.location.line == 2
+
+
+def test_each_file_is_upgraded_by_its_own_version(tmp_path):
+    """Mitsuba upgrades each object by the version of the file it is written in: an old file included by a new one
+    and a new one included by an old one both read."""
+    from clrender.scene.xmlparser import parse_file
+
+    (tmp_path / "old.xml").write_text('<scene version="0.5.0"><bsdf type="diffuse" id="a">'
+                                      '<rgb name="diffuseReflectance" value="0.25"/></bsdf></scene>')
+    (tmp_path / "new.xml").write_text('<scene version="3.0.0"><bsdf type="plastic" id="b">'
+                                      '<float name="int_ior" value="1.7"/></bsdf></scene>')
+    (tmp_path / "main.xml").write_text('<scene version="0.6.0"><include filename="new.xml"/>'
+                                       '<include filename="old.xml"/><sensor type="perspective"/>'
+                                       '<shape type="cube"><ref id="a"/></shape><shape type="sphere"><ref id="b"/>'
+                                       '<float name="radius" value="0.5"/></shape></scene>')
+    scene = create(parse_file(tmp_path / "main.xml"))
+    assert scene.shapes[0].bsdf.albedo.tolist() == [0.25] * 3 and scene.shapes[1].bsdf.int_ior == 1.7
+    (tmp_path / "new.xml").write_text('<scene version="3.0.0"><bsdf type="plastic" id="b">'
+                                      '\n<float name="intIOR" value="1.7"/></bsdf></scene>')   # camelCase in a v3 file
+    with pytest.raises(SceneError, match="'intIOR' is not used") as e:
+        create(parse_file(tmp_path / "main.xml"))
+    assert e.value.location.file == str(tmp_path / "new.xml") and e.value.location.line == 2
