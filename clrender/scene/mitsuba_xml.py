@@ -1,5 +1,6 @@
 """Reader for Mitsuba 3's XML scene format (a root ``<scene version="2.x|3.x">``), producing PluginSpecs of format
-"mitsuba".
+"mitsuba". Older files (``version="0.x|1.x"``) are upgraded object by object as Mitsuba 3 upgrades them
+(:mod:`clrender.scene.mitsuba_legacy`).
 
 It shares pass one (bytes -> located element tree) and the value parsing of the Nori reader
 (:mod:`clrender.scene.xmlparser`) and differs in the structure it accepts:
