@@ -284,6 +284,21 @@ def test_transform_op_errors_are_located():
         2, 1, "<shear> is not allowed")
 
 
+# Mitsuba 3.9.1's sensor to_world for a <lookat> without up (it picks coordinate_system(direction)'s first vector),
+# printed from sensors()[0].world_transform()
+@pytest.mark.parametrize("origin, target, matrix", [
+    ("1, 2, 3", "0, 0.5, -1", [[-0.040761, 0.972826, -0.227921, 1], [0.938859, -0.040761, -0.341882, 2],
+                               [-0.341882, -0.227921, -0.911685, 3]]),
+    ("0, 0, 0", "0, 0, -1", [[0, 1, 0, 0], [1, 0, 0, 0], [0, 0, -1, 0]]),
+    ("0, 1, 0", "0, -2, 0", [[0, 1, 0, 0], [0, 0, -1, 1], [-1, 0, 0, 0]]),
+])
+def test_lookat_without_up_as_mitsuba(origin, target, matrix):
+    for up in ("", ' up="0, 0, 0"'):
+        scene = load(f'<sensor type="perspective"><transform name="to_world"><lookat origin="{origin}" '
+                     f'target="{target}"{up}/></transform></sensor><shape type="cube"/>')
+        assert np.allclose(scene.camera.to_world.matrix[:3], matrix, atol=1e-6)
+
+
 # ---------------------------------------------------------------------------------------------- properties
 SPECTRUM = "400:0.1, 500:0.8, 600:0.3, 700:0.2"
 

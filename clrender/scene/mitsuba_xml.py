@@ -445,11 +445,15 @@ class MitsubaBuilder(_x._Builder):
                 step = self.checked(op, Transform.rotate, axis, angle, False)
             else:
                 self.op_attrs(op, ("origin", "target", "up"))
-                for k in ("origin", "target", "up"):
+                for k in ("origin", "target"):
                     if k not in op.attrs:
-                        raise self.err(f"<lookat> is missing the attribute '{k}' (clrender needs it written)",
-                                       op.loc)
-                vs = [self.numbers(op, k, self.substitute(op, k), (3,)) for k in ("origin", "target", "up")]
+                        raise self.err(f"<lookat> is missing the required attribute '{k}'", op.loc)
+                vs = [self.numbers(op, k, self.substitute(op, k), (3,)) for k in ("origin", "target")]
+                up = self.numbers(op, "up", self.substitute(op, "up"), (3,)) if "up" in op.attrs else np.zeros(3)
+                if not up.any():   # none given (or zero): Mitsuba's choice, a vector perpendicular to the view
+                    d = vs[1] - vs[0]
+                    up = _frame_vector(d / np.linalg.norm(d)) if d.any() else up
+                vs.append(up)
                 warnings: list[str] = []
                 step = self.checked(op, Transform.lookat, *vs, warnings)
                 for w in warnings:
@@ -462,6 +466,14 @@ class MitsubaBuilder(_x._Builder):
             if n not in allowed:
                 raise self.err(f"unexpected attribute '{n}' in <{op.tag}>; it takes {_x._quoted(allowed)}",
                                self.attr_loc(op, n, at_value=False))
+
+
+def _frame_vector(n: np.ndarray) -> np.ndarray:
+    """The first vector of Mitsuba's coordinate_system(n) (Duff et al. 2017): the up <lookat> takes when none is
+    written."""
+    sign = 1.0 if n[2] >= 0 else -1.0
+    a = -1.0 / (sign + n[2])
+    return np.array([1.0 + sign * n[0] * n[0] * a, sign * n[0] * n[1] * a, -sign * n[0]])
 
 
 def build(src, root, defines, main_dir: str) -> PluginSpec:
