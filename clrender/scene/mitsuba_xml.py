@@ -287,24 +287,23 @@ class MitsubaBuilder(_x._Builder):
             self.state.folders = outer
 
     def read_include(self, el, filename: str, spec: PluginSpec) -> None:
-        a = {"filename": filename}
         path = self.state.resolve(filename)
         if path in self.state.chain:
-            raise self.err(f"<include> of '{a['filename']}' includes itself (include chain: "
+            raise self.err(f"<include> of '{filename}' includes itself (include chain: "
                            f"{' -> '.join(self.state.chain + [path])})", self.attr_loc(el, "filename"))
         if len(self.state.chain) >= MAX_INCLUDE_DEPTH:
-            raise self.err(f"<include> of '{a['filename']}' reaches the maximum include depth, {MAX_INCLUDE_DEPTH} "
+            raise self.err(f"<include> of '{filename}' reaches the maximum include depth, {MAX_INCLUDE_DEPTH} "
                            f"(Mitsuba 3's: includes nest at most {MAX_INCLUDE_DEPTH - 1} deep; include chain: "
                            f"{' -> '.join(self.state.chain[:2] + ['...'] + self.state.chain[-2:] + [path])})",
                            self.attr_loc(el, "filename"))
         try:
             if not stat.S_ISREG(os.stat(path).st_mode):
-                raise self.err(f"cannot include '{a['filename']}' ({path}): not a regular file",
+                raise self.err(f"cannot include '{filename}' ({path}): not a regular file",
                                self.attr_loc(el, "filename"))
             with open(path, "rb") as f:
                 data = f.read()
         except OSError as e:
-            raise self.err(f"cannot include '{a['filename']}': {e.strerror or e} (looked in "
+            raise self.err(f"cannot include '{filename}': {e.strerror or e} (looked in "
                            f"{', '.join(self.state.looked_in())})", self.attr_loc(el, "filename")) from None
         src, root = _x._read_bytes(data, path, None)
         sub = MitsubaBuilder(src, self.state, os.path.dirname(path))
