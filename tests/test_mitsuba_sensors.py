@@ -128,6 +128,19 @@ def test_focus_distance_is_accepted_where_mitsuba_reads_it(ctx, queue, lens_prog
         sensor('<string name="focus_distance" value="far"/>', kind=kind)
 
 
+@pytest.mark.parametrize("kind", ["perspective", "thinlens", "orthographic"])
+def test_shutter_interval_is_accepted_as_in_mitsuba(kind):
+    """Every Mitsuba 3.9.1 sensor takes shutter_open/shutter_close (close not before open); nothing moves here."""
+    from clrender.errors import SceneError
+
+    lens = '<float name="aperture_radius" value="0.1"/>' if kind == "thinlens" else ""
+    cam = sensor(lens + '<float name="shutter_open" value="0.5"/><float name="shutter_close" value="1.5"/>', kind=kind)
+    assert cam.fov == sensor(lens, kind=kind).fov
+    with pytest.raises(SceneError, match="shutter_close") as e:
+        sensor(lens + '<float name="shutter_open" value="1"/>', kind=kind)
+    assert e.value.location.line == 1
+
+
 def test_orthographic_rays_are_parallel_from_the_scaled_film_plane(ctx, queue, lens_program):
     """Mitsuba's orthographic sensor: image position (x, y) of the full film starts at camera-space
     (1 - 2x, (1 - 2y) h/w, near_clip) (the to_world's scale sets the area) and runs along +z for far - near."""
