@@ -233,7 +233,8 @@ def test_max_smooth_angle_keeps_creases_sharper_than_it(tmp_path):
 
 
 def test_max_smooth_angle_with_face_normals_and_errors(tmp_path):
-    assert crease_mesh(tmp_path, CUBE, "30", extra='<boolean name="faceNormals" value="true"/>').normals is None
+    assert crease_mesh(tmp_path, CUBE, "30", extra='<boolean name="faceNormals" value="true"/>'
+                                                   '<boolean name="collapse" value="true"/>').normals is None
     with pytest.raises(SceneError, match="max_smooth_angle must be between"):
         crease_mesh(tmp_path, CUBE, "200")
 

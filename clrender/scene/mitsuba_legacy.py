@@ -38,6 +38,7 @@ DROPPED = {
     "film": ("attach_log", "high_quality_edges"),  # a log in the file, edge pixels filtered from outside the film
     "sampler": ("dimension",),                    # ldsampler's and stratified's count of dimensions
     "texture": ("max_anisotropy", "cache"),       # bitmap's EWA filter width and its MIP-map cache file
+    "shape": ("collapse",),                       # obj's merging of its groups into one mesh: the same surface
 }
 
 #: Mitsuba 0.6 integrators that clrender does not have, with what they do (a path tracer renders the same image
