@@ -223,7 +223,7 @@ def test_unexpected_attribute():
     # the location is the offending attribute's name
     err("<scene>\n  <bsdf type='diffuse'>\n    <float name='a' vaule='1'/>\n  </bsdf>\n</scene>", 3, 21,
         "unexpected attribute 'vaule' in <float>", "'value'")
-    err("<scene version='0.5'/>", 1, 8, "'version'")
+    err("<scene version='4.0'/>", 1, 8, "'version'")   # 0.x to 3.x are Mitsuba's (test_mitsuba_legacy.py)
     err("<scene><bsdf type='diffuse' name='x'/></scene>", None, None,  # only <texture> has a name
         "unexpected attribute 'name'")
     err("<scene><camera type='p'><transform name='t' value='1'/></camera></scene>", None, None,
