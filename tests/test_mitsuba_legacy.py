@@ -299,3 +299,17 @@ def test_each_file_is_upgraded_by_its_own_version(tmp_path):
     with pytest.raises(SceneError, match="'intIOR' is not used") as e:
         create(parse_file(tmp_path / "main.xml"))
     assert e.value.location.file == str(tmp_path / "new.xml") and e.value.location.line == 2
+
+
+@pytest.mark.parametrize("wrapper", ["adaptive", "irrcache"])
+def test_wrapping_integrators_render_as_the_one_they_wrap(wrapper, caplog):
+    inner = '<integrator type="path"><integer name="maxDepth" value="3"/></integrator>'
+    xml = (f'<scene version="0.5.0"><integrator type="{wrapper}"><float name="maxError" value="0.05"/>{inner}'
+           '</integrator><sensor type="perspective"/><shape type="cube"/></scene>')
+    with caplog.at_level(logging.WARNING, logger="clrender"):
+        wrapped = create(parse_string(xml, "old.xml")).integrator
+    plain = create(parse_string(f'<scene version="0.5.0">{inner}<sensor type="perspective"/><shape type="cube"/>'
+                                '</scene>', "old.xml")).integrator
+    assert type(wrapped) is type(plain) and vars(wrapped).keys() == vars(plain).keys()
+    assert wrapped.max_depth == plain.max_depth == 3 and "max_error" in caplog.text
+    err(f'<scene version="0.5.0">\n<integrator type="{wrapper}"/></scene>', 2, "must hold one nested <integrator>")

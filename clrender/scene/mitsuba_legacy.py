@@ -17,6 +17,7 @@ Beyond Mitsuba 3 (each with a log line or a located error):
 - the ``ldrfilm``, the ``sobol``/``halton``/``hammersley`` samplers (with their ``scramble``) and meshes' ``maxSmoothAngle`` are plugins'
   own parameters (films/ldrfilm.py, samplers/independent.py, shapes/trianglemesh.py);
 - an old bitmap's MIP-mapped filterType, per-axis wrap modes and gamma, where they mean something we have;
+- the wrappers ``adaptive`` and ``irrcache`` render as the integrator they hold (:data:`WRAPPERS`);
 - an integrator that clrender does not have (:data:`INTEGRATORS`) is a located error that names what it has.
 """
 from __future__ import annotations
@@ -47,10 +48,26 @@ INTEGRATORS = {
     "bdpt": "bidirectional path tracing", "pssmlt": "primary sample space MLT", "mlt": "Metropolis light transport",
     "erpt": "energy redistribution path tracing", "photonmapper": "photon mapping",
     "ppm": "progressive photon mapping", "sppm": "stochastic progressive photon mapping",
-    "ptracer": "particle tracing", "vpl": "virtual point lights", "irrcache": "irradiance caching (a wrapper)",
-    "adaptive": "adaptive sampling (a wrapper)", "multichannel": "several integrators into one image",
+    "ptracer": "particle tracing", "vpl": "virtual point lights", "multichannel": "several integrators into one image",
     "field": "a field of the first hit", "volpath_simple": "simple volumetric path tracing",
 }
+
+
+#: Mitsuba 0.6 integrators that wrap another and change only how it is sampled (adaptive: samples per pixel until
+#: an error bound; irrcache: caches the nested one's indirect light, an approximation): rendered as the nested one
+WRAPPERS = {"adaptive": "adaptive sampling", "irrcache": "irradiance caching"}
+
+
+def unwrap(spec, location):
+    """The integrator nested in a wrapper (a located error without exactly one), its own parameters ignored."""
+    inner = [c for c in spec.children if c.tag == "integrator"]
+    if len(inner) != 1 or len(spec.children) != 1:
+        raise SceneError(f"<integrator type=\"{spec.type}\"> ({WRAPPERS[spec.type]}) must hold one nested "
+                         f"<integrator>, which clrender renders with", location)
+    log.warning("%s: <integrator type=\"%s\"> (%s, Mitsuba 0.x) is rendered as the integrator it wraps, <integrator "
+                "type=\"%s\">; its own parameters (%s) are ignored", location, spec.type, WRAPPERS[spec.type],
+                inner[0].type, ", ".join(spec.props.names()) or "none")
+    return inner[0]
 
 
 def camel_to_snake(name: str) -> str:

@@ -177,12 +177,15 @@ class MitsubaBuilder(_x._Builder):
         type_name, oid, name = self.object_attrs(el)
         props = PropertyList(describe(el.tag, type_name), el.loc, fmt="mitsuba")
         spec = PluginSpec(el.tag, type_name, name, props, [], el.loc, format="mitsuba")
-        if self.legacy and el.tag == "integrator":
+        wrapper = self.legacy and el.tag == "integrator" and type_name in _legacy.WRAPPERS
+        if self.legacy and el.tag == "integrator" and not wrapper:
             from .registry import registered
 
             _legacy.check_integrator(type_name, self.attr_loc(el, "type"), registered("integrator", "mitsuba"))
         self.fill(el, spec)
-        if self.legacy:
+        if wrapper:
+            spec = _legacy.unwrap(spec, self.attr_loc(el, "type"))
+        elif self.legacy:
             _legacy.upgrade(spec, set(spec.refs))
         if oid is not None:
             self.declare(oid, spec, el)
