@@ -80,9 +80,11 @@ class Film:
         return _atomic_write(Path(path), lambda tmp: OpenEXR.File(header, {"RGB": img}).write(str(tmp)))
 
     def write_png(self, path) -> Path:
+        """The sRGB 8-bit image, or the scene's own tone map where its film has one (``tonemap``, set by the
+        renderer from e.g. an ``ldrfilm``)."""
         from .png import encode_png
 
-        data = encode_png(to_srgb8(self.image))
+        data = encode_png((getattr(self, "tonemap", None) or to_srgb8)(self.image))
         return _atomic_write(Path(path), lambda tmp: tmp.write_bytes(data))
 
 

@@ -4,7 +4,7 @@ from .scene import scene  # noqa: F401
 from .shapes import cube, cylinder, disk, instance, obj, ply, rectangle, serialized, sphere  # noqa: F401
 from .cameras import perspective  # noqa: F401
 from .filters import box, gaussian, lanczos, mitchell, tent  # noqa: F401
-from .films import hdrfilm  # noqa: F401
+from .films import hdrfilm, ldrfilm  # noqa: F401
 from .samplers import independent  # noqa: F401
 from .textures import bitmap, checkerboard, checkerboard_color, uvtexture  # noqa: F401
 from .bsdfs import blendbsdf, bumpmap, conductor, dielectric, diffuse, mask, microfacet, mirror, normalmap  # noqa: F401

@@ -275,6 +275,7 @@ class Renderer:
         film = Film.from_accumulators(self.width, self.height, acc0, acc1, bad, meta)
         stats.dropped = int(film.dropped.sum())  # with the samples of pixels whose sums overflowed
         film.stats = stats
+        film.tonemap = getattr(getattr(self.scene.camera, "film", None), "tonemap", None)  # an ldrfilm's 8-bit image
         return film
 
 

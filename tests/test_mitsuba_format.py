@@ -52,7 +52,7 @@ def test_version_attribute_selects_the_mitsuba_reader():
 
 
 def test_unsupported_version_is_located():
-    err('<scene\n version="0.6.0"></scene>', 2, 2, "'version'", "0.6.0", "Mitsuba 3 reader")
+    err('<scene\n version="4.0.0"></scene>', 2, 2, "'version'", "4.0.0", "Mitsuba 3 reader")
     e = err('<scene version="three"></scene>')
     assert "major.minor" in str(e)
 
@@ -70,6 +70,19 @@ def test_load_scene_detects_the_format(tmp_path):
 def test_defaults_and_defines():
     body = '<default name="w" value="0.25"/><shape type="cube"><bsdf type="diffuse"><float name="reflectance" value="$w"/></bsdf></shape>'
     assert load(body).shapes[0].bsdf.albedo.tolist() == [0.25] * 3
+    assert load(body, defines={"w": "0.5"}).shapes[0].bsdf.albedo.tolist() == [0.5] * 3
+
+
+@pytest.mark.parametrize("defines", [{"nope": "1"}, {"w": "0.5", "nope": "1"}, {"unused_default": "2"}])
+def test_a_define_that_fills_nothing_is_an_error(defines):
+    """Mitsuba 3.9.1 stops with "Found unused parameters" for a -D naming no $name the file uses, even one a
+    <default> declares."""
+    body = ('<default name="w" value="0.25"/><default name="unused_default" value="1"/>'
+            '<shape type="cube"><bsdf type="diffuse"><float name="reflectance" value="$w"/></bsdf></shape>')
+    unused = [k for k in defines if k != "w"]
+    with pytest.raises(SceneError) as e:
+        load(body, defines=defines)
+    assert e.value.location.file == "m.xml" and "-D " + unused[0] + "=" in str(e.value) and "uses $w" in str(e.value)
     assert load(body, defines={"w": "0.5"}).shapes[0].bsdf.albedo.tolist() == [0.5] * 3
 
 
@@ -98,6 +111,13 @@ def test_alias_names_the_same_object():
 def test_reference_to_unknown_id_is_located():
     err(f'{HEAD}<bsdf type="diffuse" id="w"/>\n<shape type="cube">  <ref id="white"/></shape></scene>',
         2, 31, "unknown id 'white'", "declared so far: w")
+
+
+def test_reference_to_a_bsdf_where_a_texture_belongs_is_located_at_the_ref():
+    e = err(f'{HEAD}{SENSOR}<bsdf type="diffuse" id="b"/>\n<shape type="cube"><bsdf type="diffuse">\n'
+            f'   <ref name="reflectance" id="b"/></bsdf></shape></scene>', 3, 4,
+            "parameter 'reflectance'", "gets 'b', a <bsdf type=\"diffuse\">", "accepts <texture> only")
+    assert "declared at m.xml:1:" in str(e)
 
 
 def test_id_declared_twice_is_located():
@@ -131,6 +151,47 @@ def test_nested_includes_resolve_as_mitsuba(tmp_path, monkeypatch):
     assert shape.location.file == str(tmp_path / "sub" / "deeper" / "b.xml")
 
 
+def mesh_files(spec) -> list[str]:
+    return [s.props.get_string("filename") for s in spec.walk() if s.props.has("filename")]
+
+
+def test_path_folders_resolve_as_mitsuba(tmp_path, monkeypatch):
+    """Which file wins, as Mitsuba 3.9.1 loads these very layouts (a triangle of a different size in each folder,
+    its bounding box printed): the last <path> first, then the earlier ones, then the main file's folder; a
+    <path> written after the shape counts too (files are resolved when the plugins are built); a <path> in an
+    included file serves only the includes below it; a nested include is looked for beside the file including it
+    before the main file's folder."""
+    for d in ("A", "B", "C", ".", "sub/D"):
+        write(tmp_path / d / "m.obj", CUBE_OBJ)
+    monkeypatch.chdir(tmp_path / "C")
+    two = write(tmp_path / "two.xml", f'{HEAD}{SENSOR}<path value="A"/><path value="B"/>'
+                                      '<shape type="obj"><string name="filename" value="m.obj"/></shape></scene>')
+    assert mesh_files(parse_file(two)) == [str(tmp_path / "B" / "m.obj")]
+    after = write(tmp_path / "after.xml", f'{HEAD}{SENSOR}<shape type="obj"><string name="filename" value="m.obj"/>'
+                                          '</shape><path value="A"/></scene>')
+    assert mesh_files(parse_file(after)) == [str(tmp_path / "A" / "m.obj")]
+    write(tmp_path / "sub" / "mid.xml", f'{HEAD}<path value="D"/><include filename="leaf.xml"/></scene>')
+    write(tmp_path / "sub" / "D" / "leaf.xml",
+          f'{HEAD}<shape type="obj"><string name="filename" value="m.obj"/></shape></scene>')
+    scoped = write(tmp_path / "scoped.xml", f'{HEAD}{SENSOR}<include filename="sub/mid.xml"/></scene>')
+    assert mesh_files(parse_file(scoped)) == [str(tmp_path / "m.obj")]
+    write(tmp_path / "inc.xml", f'{HEAD}<shape type="obj"><string name="filename" value="A/m.obj"/></shape></scene>')
+    write(tmp_path / "sub" / "inc.xml",
+          f'{HEAD}<shape type="obj"><string name="filename" value="B/m.obj"/></shape></scene>')
+    write(tmp_path / "sub" / "outer.xml", f'{HEAD}<include filename="inc.xml"/></scene>')
+    nearest = write(tmp_path / "nearest.xml", f'{HEAD}{SENSOR}<include filename="sub/outer.xml"/></scene>')
+    assert mesh_files(parse_file(nearest)) == [str(tmp_path / "B" / "m.obj")]
+
+
+def test_path_errors_are_located(tmp_path):
+    write(tmp_path / "s.xml", f'{HEAD}\n  <path value="nowhere"/></scene>')
+    with pytest.raises(SceneError) as e:
+        parse_file(tmp_path / "s.xml")
+    at(e.value, 2, 16, file=str(tmp_path / "s.xml"))
+    assert "folder 'nowhere' not found" in str(e.value)
+    err(f'{HEAD}<shape type="cube">\n<path value="."/></shape></scene>', 2, 1, "only allowed directly inside")
+
+
 def test_mesh_next_to_an_included_file_only_is_missing(tmp_path, monkeypatch):
     from clrender import load_scene
 
@@ -159,6 +220,23 @@ def test_include_cycle_is_an_error(tmp_path):
         parse_file(tmp_path / "main.xml")
     at(e.value, 2, file=str(tmp_path / "a.xml"))
     assert "includes itself" in str(e.value)
+
+
+@pytest.mark.parametrize("depth, ok", [(14, True), (15, False), (200, False)])
+def test_include_depth_is_limited_as_in_mitsuba(tmp_path, depth, ok):
+    """Mitsuba 3.9.1 reads a chain of 14 nested includes and refuses the 15th ("Exceeded maximum include recursion
+    depth of 15"); a long chain without a cycle is no cycle."""
+    write(tmp_path / "main.xml", f'{HEAD}{SENSOR}<include filename="i1.xml"/></scene>')
+    for i in range(1, depth):
+        write(tmp_path / f"i{i}.xml", f'{HEAD}\n<include filename="i{i + 1}.xml"/></scene>')
+    write(tmp_path / f"i{depth}.xml", f'{HEAD}<shape type="cube"/></scene>')
+    if ok:
+        assert len(parse_file(tmp_path / "main.xml").children_with_tag("shape")) == 1
+        return
+    with pytest.raises(SceneError) as e:
+        parse_file(tmp_path / "main.xml")
+    at(e.value, 2, file=str(tmp_path / "i14.xml"))
+    assert "maximum include depth, 15" in str(e.value) and "itself" not in str(e.value)
 
 
 def test_error_inside_an_include_names_that_file(tmp_path):
@@ -204,6 +282,21 @@ def test_transform_op_errors_are_located():
         2, None, "either 'value' or 'x', 'y', 'z'")
     err(f'{HEAD}<shape type="cube"><transform name="to_world">\n<shear value="1"/></transform></shape></scene>',
         2, 1, "<shear> is not allowed")
+
+
+# Mitsuba 3.9.1's sensor to_world for a <lookat> without up (it picks coordinate_system(direction)'s first vector),
+# printed from sensors()[0].world_transform()
+@pytest.mark.parametrize("origin, target, matrix", [
+    ("1, 2, 3", "0, 0.5, -1", [[-0.040761, 0.972826, -0.227921, 1], [0.938859, -0.040761, -0.341882, 2],
+                               [-0.341882, -0.227921, -0.911685, 3]]),
+    ("0, 0, 0", "0, 0, -1", [[0, 1, 0, 0], [1, 0, 0, 0], [0, 0, -1, 0]]),
+    ("0, 1, 0", "0, -2, 0", [[0, 1, 0, 0], [0, 0, -1, 1], [-1, 0, 0, 0]]),
+])
+def test_lookat_without_up_as_mitsuba(origin, target, matrix):
+    for up in ("", ' up="0, 0, 0"'):
+        scene = load(f'<sensor type="perspective"><transform name="to_world"><lookat origin="{origin}" '
+                     f'target="{target}"{up}/></transform></sensor><shape type="cube"/>')
+        assert np.allclose(scene.camera.to_world.matrix[:3], matrix, atol=1e-6)
 
 
 # ---------------------------------------------------------------------------------------------- properties
@@ -316,7 +409,7 @@ def test_stratifying_samplers_use_scrambled_sobol(caplog):
     from clrender.pack import pack_scene
     from clrender.renderer import render_defines
 
-    for kind in ("stratified", "multijitter", "orthogonal", "ldsampler"):
+    for kind in ("stratified", "multijitter", "orthogonal", "ldsampler", "sobol", "halton", "hammersley"):
         with caplog.at_level(logging.INFO, logger="clrender"):
             scene = load(f'<sensor type="perspective"><sampler type="{kind}"><integer name="sample_count" '
                          'value="16"/></sampler><film type="hdrfilm"/></sensor><shape type="cube"/>')

@@ -112,6 +112,35 @@ def test_thin_lens_rays_meet_in_the_focus_plane(ctx, queue, lens_program):
     assert np.linalg.norm(lens_offsets, axis=1).max() > 0.24             # and not all at the centre
 
 
+@pytest.mark.parametrize("kind", ["perspective", "orthographic"])
+def test_focus_distance_is_accepted_where_mitsuba_reads_it(ctx, queue, lens_program, kind):
+    """Mitsuba 3.9.1 reads focus_distance in every projective sensor's base class (exporters write it on
+    perspective sensors); on a pinhole or orthographic sensor it changes no ray."""
+    cam = sensor('<float name="focus_distance" value="3"/>' + LOOK, kind=kind)
+    plain = sensor(LOOK, kind=kind)
+    rng = np.random.default_rng(5)
+    pos = np.column_stack([rng.uniform(0, 64, 256), rng.uniform(0, 48, 256), rng.random(256), rng.random(256)])
+    for a, b in zip(lens_rays(ctx, queue, lens_program, cam, pos), lens_rays(ctx, queue, lens_program, plain, pos)):
+        assert np.array_equal(a, b)
+    from clrender.errors import SceneError
+
+    with pytest.raises(SceneError, match="expects a <float>"):
+        sensor('<string name="focus_distance" value="far"/>', kind=kind)
+
+
+@pytest.mark.parametrize("kind", ["perspective", "thinlens", "orthographic"])
+def test_shutter_interval_is_accepted_as_in_mitsuba(kind):
+    """Every Mitsuba 3.9.1 sensor takes shutter_open/shutter_close (close not before open); nothing moves here."""
+    from clrender.errors import SceneError
+
+    lens = '<float name="aperture_radius" value="0.1"/>' if kind == "thinlens" else ""
+    cam = sensor(lens + '<float name="shutter_open" value="0.5"/><float name="shutter_close" value="1.5"/>', kind=kind)
+    assert cam.fov == sensor(lens, kind=kind).fov
+    with pytest.raises(SceneError, match="shutter_close") as e:
+        sensor(lens + '<float name="shutter_open" value="1"/>', kind=kind)
+    assert e.value.location.line == 1
+
+
 def test_orthographic_rays_are_parallel_from_the_scaled_film_plane(ctx, queue, lens_program):
     """Mitsuba's orthographic sensor: image position (x, y) of the full film starts at camera-space
     (1 - 2x, (1 - 2y) h/w, near_clip) (the to_world's scale sets the area) and runs along +z for far - near."""

@@ -223,7 +223,7 @@ def test_unexpected_attribute():
     # the location is the offending attribute's name
     err("<scene>\n  <bsdf type='diffuse'>\n    <float name='a' vaule='1'/>\n  </bsdf>\n</scene>", 3, 21,
         "unexpected attribute 'vaule' in <float>", "'value'")
-    err("<scene version='0.5'/>", 1, 8, "'version'")
+    err("<scene version='4.0'/>", 1, 8, "'version'")   # 0.x to 3.x are Mitsuba's (test_mitsuba_legacy.py)
     err("<scene><bsdf type='diffuse' name='x'/></scene>", None, None,  # only <texture> has a name
         "unexpected attribute 'name'")
     err("<scene><camera type='p'><transform name='t' value='1'/></camera></scene>", None, None,
@@ -266,6 +266,15 @@ def test_duplicate_property():
 def test_duplicate_property_of_different_kind():
     err("<scene><mesh type='sphere'><float name='radius' value='1'/>\n"
         "<integer name='radius' value='2'/></mesh></scene>", 2, 1, "given twice")
+
+
+def test_define_that_fills_nothing_is_an_error():
+    """As in Mitsuba 3.9.1 ("Found unused parameters"): a -D naming no $name of the file is a mistake."""
+    text = "<scene><default name='spp' value='4'/><sampler type='independent'><integer name='sampleCount' value='$spp'/></sampler></scene>"
+    assert parse_string(text, "s.xml", defines={"spp": "8"}).children[0].props.get_int("sampleCount") == 8
+    with pytest.raises(SceneError) as e:
+        parse_string(text, "s.xml", defines={"spp": "8", "sp": "9"})
+    assert e.value.location.file == "s.xml" and "-D sp=9" in str(e.value) and "uses $spp" in str(e.value)
 
 
 def test_undefined_define():

@@ -137,6 +137,8 @@ class MitsubaPerspectiveCamera(PerspectiveCamera):
         <string name="fov_axis" value="x"/>       <!-- x (default), y, diagonal, smaller, larger -->
         <float name="near_clip" value="0.01"/>    <!-- default 0.01 -->
         <float name="far_clip" value="10000"/>    <!-- default 10000 -->
+        <float name="focus_distance" value="5"/>  <!-- accepted, no effect (a pinhole), as in Mitsuba -->
+        <float name="shutter_open" value="0"/>    <!-- and shutter_close: accepted, no effect (nothing moves) -->
         <float name="principal_point_offset_x" value="0"/>   <!-- default 0; and _y: perspective only -->
         <transform name="to_world"> ... </transform>
         <film type="hdrfilm"> ... </film>         <!-- default hdrfilm: 768 x 576, gaussian filter -->
@@ -184,6 +186,14 @@ class MitsubaPerspectiveCamera(PerspectiveCamera):
         self.lens_radius, self.focus_distance = 0.0, 1.0
         self.principal_point = (0.0, 0.0)
         self.ortho = False
+        # Mitsuba reads focus_distance for every projective sensor (its base class), so exporters write it on
+        # perspective and orthographic sensors too, where it changes nothing; thinlens reads it again below.
+        props.get_float("focus_distance", self.far_clip)
+        # Every Mitsuba sensor takes a shutter interval, which moves nothing in a scene without motion (ours)
+        shutter = props.get_float("shutter_open", 0.0), props.get_float("shutter_close", 0.0)
+        if shutter[1] < shutter[0]:
+            raise SceneError(f"shutter_close ({shutter[1]:g}) is before shutter_open ({shutter[0]:g})",
+                             props.location("shutter_close" if props.has("shutter_close") else "shutter_open"))
         self.read_projection(props, m)
         self.read_lens(props)
 
@@ -255,6 +265,7 @@ class MitsubaOrthographicCamera(MitsubaPerspectiveCamera):
         </transform>
         <float name="near_clip" value="0.01"/>    <!-- default 0.01: rays start on the plane z = near_clip -->
         <float name="far_clip" value="10000"/>    <!-- default 10000: and run for far_clip - near_clip -->
+        <float name="focus_distance" value="5"/>  <!-- accepted, no effect, as in Mitsuba -->
         <film type="hdrfilm"> ... </film>
         <sampler type="independent"> ... </sampler>
     </sensor>

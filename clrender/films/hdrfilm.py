@@ -31,6 +31,8 @@ _FORMATS = {"file_format": ("openexr", "exr", "rgbe", "hdr", "pfm"),
 @register("film", "hdrfilm", fmt="mitsuba")
 class HdrFilm:
     children = ("rfilter",)
+    #: the output options and their allowed values (the first is the default); they change no pixel here
+    FORMATS = _FORMATS
 
     def __init__(self, props, children, spec):
         def size(name, default, low):
@@ -51,7 +53,7 @@ class HdrFilm:
             raise SceneError(f"the crop window ({self.crop_x}, {self.crop_y}) + {self.crop_width} x "
                              f"{self.crop_height} does not fit the {self.full_width} x {self.full_height} film", where)
         self.sample_border = props.get_bool("sample_border", False)
-        for name, allowed in _FORMATS.items():   # how Mitsuba writes its file: no effect on the image
+        for name, allowed in self.FORMATS.items():   # how Mitsuba writes its file: no effect on the image
             v = props.get_string(name, allowed[0]).lower()
             if v not in allowed:
                 raise SceneError(f"{name} '{v}' is not supported; clrender takes {', '.join(allowed)}",

@@ -93,3 +93,22 @@ class MitsubaOrthogonalSampler(_Substitute):
 @register("sampler", "ldsampler", fmt="mitsuba")
 class MitsubaLdSampler(_Substitute):
     """``<sampler type="ldsampler">`` (sample_count, seed): scrambled Sobol samples instead."""
+
+
+@register("sampler", "sobol", fmt="mitsuba")
+class MitsubaSobolSampler(_Substitute):
+    """Mitsuba 0.6's ``<sampler type="sobol">`` (sample_count, scramble), found in old files (Mitsuba 3 has none):
+    clrender's scrambled Sobol samples, keyed by the render's seed rather than ``scramble``."""
+    EXTRA = ("scramble",)
+
+
+@register("sampler", "halton", fmt="mitsuba")
+class MitsubaHaltonSampler(_Substitute):
+    """Mitsuba 0.6's ``<sampler type="halton">`` (sample_count, scramble): scrambled Sobol samples instead."""
+    EXTRA = ("scramble",)
+
+
+@register("sampler", "hammersley", fmt="mitsuba")
+class MitsubaHammersleySampler(_Substitute):
+    """Mitsuba 0.6's ``<sampler type="hammersley">`` (sample_count, scramble): scrambled Sobol samples instead."""
+    EXTRA = ("scramble",)

@@ -1,5 +1,6 @@
 """Reader for Mitsuba 3's XML scene format (a root ``<scene version="2.x|3.x">``), producing PluginSpecs of format
-"mitsuba".
+"mitsuba". Older files (``version="0.x|1.x"``) are upgraded object by object as Mitsuba 3 upgrades them
+(:mod:`clrender.scene.mitsuba_legacy`).
 
 It shares pass one (bytes -> located element tree) and the value parsing of the Nori reader
 (:mod:`clrender.scene.xmlparser`) and differs in the structure it accepts:
@@ -12,10 +13,8 @@ It shares pass one (bytes -> located element tree) and the value parsing of the 
 - ``<ref id="..."/>`` (``<ref name="..." id="..."/>`` for a named parameter) to an object declared earlier with
   that ``id``; ``<alias id as>``;
 - ``<include filename="..."/>``: the included file's root ``<scene>`` children are spliced in where the include
-  is written. Relative paths are resolved as Mitsuba 3.9 resolves them (first existing file wins): an include
-  in the main file's folder, then the folders of the files that include it, then the current directory; any
-  other filename (meshes, textures), even one written in an included file, in the main file's folder, then the
-  current directory;
+  is written; ``<path value="folder"/>`` (a child of a file's root) adds a folder to the resolver. Relative paths
+  are resolved as Mitsuba 3.9 resolves them (:class:`_State`);
 - ``<transform>`` ops ``translate scale rotate lookat matrix``; ``rotate`` axes are used as written (not
   normalised), as Mitsuba does.
 """
@@ -31,8 +30,9 @@ import numpy as np
 
 from ..errors import SceneError, SourceLocation
 from .properties import MITSUBA_PROPERTY_TAGS, PropertyList
-from .spec import MITSUBA_OBJECT_TAGS, PluginSpec, describe
+from .spec import MITSUBA_OBJECT_TAGS, PluginSpec, RefSite, describe
 from .transform import Transform
+from . import mitsuba_legacy as _legacy
 from . import xmlparser as _x
 
 log = logging.getLogger("clrender")
@@ -40,8 +40,9 @@ log = logging.getLogger("clrender")
 OP_TAGS = ("translate", "scale", "rotate", "lookat", "matrix")
 _VERSION = re.compile(r"([0-9]+)\.([0-9]+)(\.([0-9]+))?")
 _ID = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*")
-#: include nesting deeper than this is taken for a cycle
-MAX_INCLUDE_DEPTH = 32
+#: Mitsuba 3.9's limit (ParserConfig::max_include_depth): the main file is depth 0, a file it includes depth 1,
+#: and a file at this depth is refused, so the same chains load in both
+MAX_INCLUDE_DEPTH = 15
 READER = "Mitsuba 3 reader"
 
 
@@ -51,39 +52,67 @@ def is_mitsuba_root(el) -> bool:
 
 
 class _State:
-    """What every file of one scene shares: defines, declared ids, the resolver's folders, the include chain."""
+    """What every file of one scene shares: defines, declared ids, the resolver's folders, the include chain.
+
+    ``folders`` is Mitsuba 3.9's FileResolver while a file is read: a relative path is looked for in each folder
+    in turn, then in the current directory, and the first that exists wins. It starts as the main file's folder;
+    ``<path>`` puts its folder first; an ``<include>`` is looked for, and its file read, with the including file's
+    folder put first, and the list as it was comes back after it (so a ``<path>`` in an included file serves the
+    includes below it only). Meshes, images and other files are resolved when the whole scene is read, as Mitsuba
+    builds its plugins then: with the main file's list, a ``<path>`` written after the shape included. All checked
+    against Mitsuba 3.9.1 (tests/test_mitsuba_format.py).
+    """
 
     def __init__(self, defines, main_dir: str):
         self.user_defines = {str(k): str(v) for k, v in (defines or {}).items()}
         self.defines = dict(self.user_defines)
         self.file_defaults: dict[str, SourceLocation] = {}
+        self.used_defines: set[str] = set()
         self.ids: dict[str, PluginSpec] = {}
-        self.search = [main_dir]
+        self.main_dir = main_dir
+        self.folders = [main_dir]
         self.chain: list[str] = []
+        #: the filename properties, resolved once the whole scene is read
+        self.filenames: list[tuple[PropertyList, str]] = []
 
-    def resolve(self, name: str, include: bool = False) -> str:
-        """Mitsuba's FileResolver: an absolute path as is; else the first folder of the list holding it; else
-        the name relative to the main file's folder (which the caller then reports as missing). An <include> is
-        looked for in the main file's folder, the folders of the files including it, then the current one; any
-        other file (a mesh, a texture) only in the main file's folder and the current one, since Mitsuba resolves
-        those when it builds the plugins, after the includes are read (checked against Mitsuba 3.9)."""
+    def looked_in(self) -> list[str]:
+        return list(dict.fromkeys(self.folders + [os.getcwd()]))
+
+    def find(self, name: str) -> str | None:
+        """The first existing ``folder/name`` of the resolver (``name`` itself if absolute), else None."""
         name = os.path.expanduser(name)
         if os.path.isabs(name):
-            return os.path.normpath(name)
-        for d in (self.search if include else self.search[:1]) + [os.getcwd()]:
+            return os.path.normpath(name) if os.path.exists(name) else None
+        for d in self.looked_in():
             p = os.path.join(d, name)
             if os.path.exists(p):
                 return os.path.normpath(p)
-        return os.path.normpath(os.path.join(self.search[0], name))
+        return None
+
+    def resolve(self, name: str) -> str:
+        """``find``, else the name relative to the main file's folder (which the caller reports as missing)."""
+        found = self.find(name)
+        return found if found is not None else os.path.normpath(os.path.join(self.main_dir,
+                                                                             os.path.expanduser(name)))
+
+    def resolve_filenames(self) -> None:
+        for props, name in self.filenames:
+            entry = props._entry(name)
+            entry.value = self.resolve(entry.value)
 
 
 class MitsubaBuilder(_x._Builder):
     """Pass two for one Mitsuba file; includes get a builder of their own sharing ``state``."""
 
-    def __init__(self, src, state: _State):
-        super().__init__(src, None, state.search[0], "upstream")
+    def __init__(self, src, state: _State, folder: str | None = None):
+        super().__init__(src, None, state.main_dir, "upstream")
+        #: the folder of this builder's file (the main file's: the scene's base folder)
+        self.folder = folder or state.main_dir
+        #: a file older than Mitsuba 2.0, upgraded as Mitsuba 3 reads it (mitsuba_legacy.py)
+        self.legacy = False
         self.state = state
         self.defines = state.defines
+        self.used_defines = state.used_defines
 
     @staticmethod
     def err(message: str, loc) -> SceneError:
@@ -105,10 +134,15 @@ class MitsubaBuilder(_x._Builder):
         if not m:
             raise self.err(f'bad scene version="{v}"; expected major.minor[.patch], e.g. "3.0.0"',
                            self.attr_loc(el, "version"))
-        if m.group(1) not in ("2", "3"):
+        if m.group(1) not in ("0", "1", "2", "3"):
             raise self.err(f"unsupported 'version' \"{v}\" of <scene>: clrender reads Nori scenes (whose <scene> "
-                           f"has no attributes) and Mitsuba 2.x and 3.x scenes (snake_case parameter names); "
-                           f"convert older Mitsuba scenes with Mitsuba first", self.attr_loc(el, "version", at_value=False))
+                           f"has no attributes) and Mitsuba 0.x to 3.x scenes", self.attr_loc(el, "version",
+                                                                                            at_value=False))
+        self.legacy = int(m.group(1)) < 2
+
+    def param_name(self, name: str) -> str:
+        """A parameter's name as Mitsuba 3 reads it: an old file's camelCase becomes snake_case."""
+        return _legacy.camel_to_snake(name) if self.legacy else name
 
     def read_defaults(self, el) -> None:
         for c in el.children:
@@ -136,14 +170,23 @@ class MitsubaBuilder(_x._Builder):
             raise self.err(f"<{el.tag}> is missing the required attribute 'type'", el.loc)
         type_name = self.substitute(el, "type")
         oid = self.substitute(el, "id") if "id" in el.attrs else None
-        name = self.substitute(el, "name") if "name" in el.attrs else None
+        name = self.param_name(self.substitute(el, "name")) if "name" in el.attrs else None
         return type_name, oid, name
 
     def build_object(self, el, is_root: bool = False) -> PluginSpec:
         type_name, oid, name = self.object_attrs(el)
         props = PropertyList(describe(el.tag, type_name), el.loc, fmt="mitsuba")
         spec = PluginSpec(el.tag, type_name, name, props, [], el.loc, format="mitsuba")
+        wrapper = self.legacy and el.tag == "integrator" and type_name in _legacy.WRAPPERS
+        if self.legacy and el.tag == "integrator" and not wrapper:
+            from .registry import registered
+
+            _legacy.check_integrator(type_name, self.attr_loc(el, "type"), registered("integrator", "mitsuba"))
         self.fill(el, spec)
+        if wrapper:
+            spec = _legacy.unwrap(spec, self.attr_loc(el, "type"))
+        elif self.legacy:
+            _legacy.upgrade(spec, set(spec.refs))
         if oid is not None:
             self.declare(oid, spec, el)
         return spec
@@ -160,10 +203,13 @@ class MitsubaBuilder(_x._Builder):
                 self.build_property(c, spec.props)
             elif c.tag in MITSUBA_OBJECT_TAGS and c.tag != "scene":
                 spec.children.append(self.build_object(c))
-            elif c.tag in MITSUBA_PROPERTY_TAGS:
+            elif c.tag in MITSUBA_PROPERTY_TAGS or (c.tag == "srgb" and self.legacy):
                 self.build_property(c, spec.props)
             elif c.tag == "ref":
-                spec.children.append(self.build_ref(c))
+                target = self.build_ref(c)
+                spec.refs[len(spec.children)] = RefSite(c.loc, self.substitute(c, "id"),
+                                                        self.substitute(c, "name") if "name" in c.attrs else None)
+                spec.children.append(target)
             elif c.tag == "include":
                 self.build_include(c, spec)
             elif c.tag == "alias":
@@ -175,17 +221,39 @@ class MitsubaBuilder(_x._Builder):
             elif c.tag == "default":
                 if not is_root:
                     raise self.err("<default> is only allowed directly inside the root <scene>", c.loc)
+            elif c.tag == "path":
+                if not is_root:
+                    raise self.err("<path> is only allowed directly inside a file's root <scene> (as in Mitsuba)",
+                                   c.loc)
+                self.add_path(c)
             elif c.tag in OP_TAGS:
                 raise self.err(f"<{c.tag}> is a transform op and is only allowed inside <transform>", c.loc)
             else:
-                extra = ", <default>" if is_root else ""
+                extra = ", <default>, <path>" if is_root else ""
                 hint = ""
+                if c.tag == "srgb":
+                    hint = ("; <srgb> (an sRGB-encoded colour) is Mitsuba 0.x's: write it as an <rgb> of linear "
+                            "values, or give the file the version it was written for")
                 if c.tag in ("mesh", "camera", "color"):
                     hint = (f"; <{c.tag}> is Nori's: this file is read as a Mitsuba 3 scene because its <scene> has "
                             f"a version attribute (Nori's <scene> has none)")
                 raise self.err(f"unknown tag <{c.tag}> in <{el.tag}>; expected an object "
                                f"({_x._tags(t for t in MITSUBA_OBJECT_TAGS if t != 'scene')}), a property "
                                f"({_x._tags(MITSUBA_PROPERTY_TAGS)}), <ref>, <include>, <alias>{extra}{hint}", c.loc)
+
+    def add_path(self, el) -> None:
+        """``<path value="folder"/>``: the folder goes first in the resolver. A relative one is the folder beside
+        this file, else one the resolver finds (as Mitsuba 3.9.1 reads it)."""
+        value = self.attrs(el, ("value",))["value"]
+        self.no_children(el)
+        folder = os.path.expanduser(value)
+        if not os.path.isabs(folder):
+            beside = os.path.join(self.folder, folder)
+            folder = beside if os.path.exists(beside) else (self.state.find(folder) or beside)
+        if not os.path.exists(folder):
+            raise self.err(f"<path>: folder '{value}' not found (looked beside this file and in "
+                           f"{', '.join(self.state.looked_in())})", self.attr_loc(el, "value"))
+        self.state.folders = [os.path.normpath(folder)] + self.state.folders
 
     def unknown_id(self, el, oid: str) -> SceneError:
         known = ", ".join(sorted(self.state.ids)) or "none"
@@ -204,7 +272,7 @@ class MitsubaBuilder(_x._Builder):
         target = self.state.ids.get(oid)
         if target is None:
             raise self.unknown_id(el, oid)
-        name = self.substitute(el, "name") if "name" in el.attrs else None
+        name = self.param_name(self.substitute(el, "name")) if "name" in el.attrs else None
         if name is None or name == target.name or target.tag != "texture":
             return target   # one object wherever it is referenced (a bsdf's or emitter's name says nothing)
         # A texture filling another parameter (its name tells the BSDF which): a spec sharing the texture's
@@ -214,31 +282,42 @@ class MitsubaBuilder(_x._Builder):
     def build_include(self, el, spec: PluginSpec) -> None:
         a = self.attrs(el, ("filename",))
         self.no_children(el)
-        path = self.state.resolve(a["filename"], include=True)
-        if path in self.state.chain or len(self.state.chain) >= MAX_INCLUDE_DEPTH:
-            raise self.err(f"<include> of '{a['filename']}' includes itself (include chain: "
+        outer = self.state.folders
+        self.state.folders = [self.folder] + outer
+        try:
+            self.read_include(el, a["filename"], spec)
+        finally:
+            self.state.folders = outer
+
+    def read_include(self, el, filename: str, spec: PluginSpec) -> None:
+        path = self.state.resolve(filename)
+        if path in self.state.chain:
+            raise self.err(f"<include> of '{filename}' includes itself (include chain: "
                            f"{' -> '.join(self.state.chain + [path])})", self.attr_loc(el, "filename"))
+        if len(self.state.chain) >= MAX_INCLUDE_DEPTH:
+            raise self.err(f"<include> of '{filename}' reaches the maximum include depth, {MAX_INCLUDE_DEPTH} "
+                           f"(Mitsuba 3's: includes nest at most {MAX_INCLUDE_DEPTH - 1} deep; include chain: "
+                           f"{' -> '.join(self.state.chain[:2] + ['...'] + self.state.chain[-2:] + [path])})",
+                           self.attr_loc(el, "filename"))
         try:
             if not stat.S_ISREG(os.stat(path).st_mode):
-                raise self.err(f"cannot include '{a['filename']}' ({path}): not a regular file",
+                raise self.err(f"cannot include '{filename}' ({path}): not a regular file",
                                self.attr_loc(el, "filename"))
             with open(path, "rb") as f:
                 data = f.read()
         except OSError as e:
-            raise self.err(f"cannot include '{a['filename']}': {e.strerror or e} (looked in "
-                           f"{', '.join(self.state.search + [os.getcwd()])})", self.attr_loc(el, "filename")) from None
+            raise self.err(f"cannot include '{filename}': {e.strerror or e} (looked in "
+                           f"{', '.join(self.state.looked_in())})", self.attr_loc(el, "filename")) from None
         src, root = _x._read_bytes(data, path, None)
-        sub = MitsubaBuilder(src, self.state)
+        sub = MitsubaBuilder(src, self.state, os.path.dirname(path))
         if root.tag != "scene":
             raise sub.err(f"an included file must have a <scene> root, not <{root.tag}>", root.loc)
         sub.check_version(root)
         self.state.chain.append(path)
-        self.state.search.append(os.path.dirname(path))
         try:
             sub.read_defaults(root)
             sub.fill(root, spec, is_root=True)
         finally:
-            self.state.search.pop()
             self.state.chain.pop()
 
     # --- properties -----------------------------------------------------------------------------
@@ -255,7 +334,7 @@ class MitsubaBuilder(_x._Builder):
 
     def build_property(self, el, props: PropertyList) -> None:
         if el.tag == "transform":
-            name = self.attrs(el, ("name",))["name"]
+            name = self.param_name(self.attrs(el, ("name",))["name"])
             props.add(name, "transform", self.build_transform(el), el.loc)
             return
         if el.tag in ("point", "vector"):
@@ -267,7 +346,7 @@ class MitsubaBuilder(_x._Builder):
             if "name" not in el.attrs:
                 raise self.err(f"<{el.tag}> is missing the required attribute 'name'", el.loc)
             self.no_children(el)
-            props.add(self.substitute(el, "name"), el.tag, self.xyz(el, 0.0), el.loc)
+            props.add(self.param_name(self.substitute(el, "name")), el.tag, self.xyz(el, 0.0), el.loc)
             return
         if el.tag == "spectrum" and "filename" in el.attrs:
             self.attrs(el, ("name", "filename"))
@@ -275,8 +354,15 @@ class MitsubaBuilder(_x._Builder):
                            'value="wavelength:value, ..." or as an <rgb>', el.loc)
         a = self.attrs(el, ("name", "value"))
         self.no_children(el)
-        name, text = a["name"], a["value"]
-        if el.tag == "rgb":
+        name, text = self.param_name(a["name"]), a["value"]
+        tag = el.tag
+        if el.tag == "srgb":   # Mitsuba 0.x: "#rrggbb" or numbers, sRGB-encoded; an <rgb> of their linear values
+            tag = "rgb"
+            try:
+                value = _legacy.srgb_to_linear(text)
+            except ValueError:
+                value = _legacy.srgb_to_linear(self.numbers(el, "value", text, (3, 1)))
+        elif el.tag == "rgb":
             value = self.numbers(el, "value", text, (3, 1))
             value = np.repeat(value, 3) if value.size == 1 else value
         elif el.tag == "spectrum":
@@ -284,10 +370,10 @@ class MitsubaBuilder(_x._Builder):
             value = self.spectrum_rgb(pairs)
         else:
             value = self.value_of(el, el.tag, text)
+        props.add(name, tag, value, el.loc, raw=text)
         if el.tag == "string" and name == "filename":
             _x.check_filename(value, self.attr_loc(el, "value"))
-            value = self.state.resolve(value)
-        props.add(name, el.tag, value, el.loc, raw=text)
+            self.state.filenames.append((props, name))
         if el.tag == "spectrum":
             props._entry(name).spectrum = pairs
 
@@ -331,8 +417,11 @@ class MitsubaBuilder(_x._Builder):
     def build_transform(self, el) -> Transform:
         result = Transform()
         for op in el.children:
+            if op.tag == "lookAt" and self.legacy:   # old files' spelling; Mitsuba 3 knows only <lookat>
+                op = replace(op, tag="lookat")
             if op.tag not in OP_TAGS:
-                raise self.err(f"<{op.tag}> is not allowed in <transform>; expected one of {_x._tags(OP_TAGS)}",
+                hint = " (<lookAt> is how Mitsuba 0.x files spell it)" if op.tag == "lookAt" else ""
+                raise self.err(f"<{op.tag}> is not allowed in <transform>; expected one of {_x._tags(OP_TAGS)}{hint}",
                                op.loc)
             self.no_children(op)
             if op.tag == "translate":
@@ -358,11 +447,15 @@ class MitsubaBuilder(_x._Builder):
                 step = self.checked(op, Transform.rotate, axis, angle, False)
             else:
                 self.op_attrs(op, ("origin", "target", "up"))
-                for k in ("origin", "target", "up"):
+                for k in ("origin", "target"):
                     if k not in op.attrs:
-                        raise self.err(f"<lookat> is missing the attribute '{k}' (clrender needs it written)",
-                                       op.loc)
-                vs = [self.numbers(op, k, self.substitute(op, k), (3,)) for k in ("origin", "target", "up")]
+                        raise self.err(f"<lookat> is missing the required attribute '{k}'", op.loc)
+                vs = [self.numbers(op, k, self.substitute(op, k), (3,)) for k in ("origin", "target")]
+                up = self.numbers(op, "up", self.substitute(op, "up"), (3,)) if "up" in op.attrs else np.zeros(3)
+                if not up.any():   # none given (or zero): Mitsuba's choice, a vector perpendicular to the view
+                    d = vs[1] - vs[0]
+                    up = _frame_vector(d / np.linalg.norm(d)) if d.any() else up
+                vs.append(up)
                 warnings: list[str] = []
                 step = self.checked(op, Transform.lookat, *vs, warnings)
                 for w in warnings:
@@ -377,13 +470,24 @@ class MitsubaBuilder(_x._Builder):
                                self.attr_loc(op, n, at_value=False))
 
 
+def _frame_vector(n: np.ndarray) -> np.ndarray:
+    """The first vector of Mitsuba's coordinate_system(n) (Duff et al. 2017): the up <lookat> takes when none is
+    written."""
+    sign = 1.0 if n[2] >= 0 else -1.0
+    a = -1.0 / (sign + n[2])
+    return np.array([1.0 + sign * n[0] * n[0] * a, sign * n[0] * n[1] * a, -sign * n[0]])
+
+
 def build(src, root, defines, main_dir: str) -> PluginSpec:
     """Pass two for a Mitsuba scene whose pass-one tree is ``root``."""
     state = _State(defines, main_dir)
     state.chain.append(os.path.normpath(os.path.abspath(src.filename)) if not src.filename.startswith("<")
                        else src.filename)
     try:
-        return MitsubaBuilder(src, state).build_root(root)
+        spec = MitsubaBuilder(src, state).build_root(root)
+        state.resolve_filenames()
+        _x.check_defines_used(state.user_defines, state.used_defines, src.filename)
+        return spec
     except SceneError as e:
         raise SceneError(with_reader(e.message), e.location) from None
 

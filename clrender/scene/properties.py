@@ -91,6 +91,18 @@ class PropertyList:
             raise SceneError(f"property '{name}' given twice{where}", location)
         self._props[name] = Property(name, tag, _normalise(tag, value), location, raw)
 
+    def rename(self, old: str, new: str) -> None:
+        """Give property ``old`` the name ``new``, keeping its place (an old file's upgrade renames parameters)."""
+        if new in self._props:
+            first = self._props[new]
+            raise SceneError(f"property '{old}' becomes '{new}', which is given too (at line "
+                             f"{first.location.line if first.location else '?'})", self._props[old].location)
+        self._props = {(new if k == old else k): v for k, v in self._props.items()}
+        self._props[new].name = new
+
+    def remove(self, name: str) -> None:
+        del self._props[name]
+
     # --- introspection (none of these mark a property used) ---------------------------------------
     def has(self, name: str) -> bool:
         return name in self._props

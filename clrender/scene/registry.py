@@ -104,13 +104,19 @@ def create(spec: PluginSpec, _made: dict | None = None):
     accepted = tuple(getattr(cls, "children", ()))
     # Check every nesting before building anything, so the reported error is the structural one
     # rather than some failure deep inside an earlier child.
-    for child in spec.children:
+    for i, child in enumerate(spec.children):
         if child.tag in MEDIA_TAGS:
             raise SceneError(f"<{child.tag}{_typed(child)}>: participating media are not supported (clrender renders "
                              "surfaces in a vacuum); remove the medium, or render the scene with Mitsuba",
                              child.location)
         if child.tag not in accepted:
             takes = (", ".join(f"<{t}>" for t in accepted) if accepted else "no nested objects")
+            ref = spec.refs.get(i)
+            if ref is not None:   # the ref is the mistake, not the object it names
+                what = f"parameter '{ref.name}' of {spec.describe()}" if ref.name else spec.describe()
+                rule = f"accepts {takes} only" if accepted else "takes no nested objects"
+                raise SceneError(f"{ref.describe()}: {what} gets '{ref.id}', a {child.describe()} (declared at "
+                                 f"{child.location}), but {spec.describe()} {rule}", ref.location)
             raise SceneError(f"<{child.tag}> cannot be nested in {spec.describe()} (it accepts {takes})",
                              child.location)
     children = [create(child, _made) for child in spec.children]

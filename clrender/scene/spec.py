@@ -18,6 +18,19 @@ FORMAT_TAGS = {"nori": OBJECT_TAGS, "mitsuba": MITSUBA_OBJECT_TAGS}
 FORMAT_NAMES = {"nori": "Nori", "mitsuba": "Mitsuba 3"}
 
 
+@dataclass(frozen=True)
+class RefSite:
+    """A ``<ref id="..." name="...">`` element: where it is written and what it says."""
+
+    location: SourceLocation | None
+    id: str
+    name: str | None
+
+    def describe(self) -> str:
+        name = f' name="{self.name}"' if self.name is not None else ""
+        return f'<ref id="{self.id}"{name}>'
+
+
 @dataclass(eq=False)
 class PluginSpec:
     """One object element: its tag, ``type`` (``"scene"`` for ``<scene>``), optional ``name``,
@@ -33,6 +46,9 @@ class PluginSpec:
     dialect: str = "upstream"
     #: the scene format the file was read as ("nori" or "mitsuba"); picks the registry's namespace
     format: str = "nori"
+    #: children that a Mitsuba ``<ref>`` put here, by index into ``children``: the ref's own element (its
+    #: location, id and name), so that an error about such a child can point at the ref, not at the declaration
+    refs: dict[int, "RefSite"] = field(default_factory=dict)
 
     def describe(self) -> str:
         """How errors refer to this object, e.g. ``<bsdf type="diffuse">``."""

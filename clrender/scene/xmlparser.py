@@ -205,6 +205,8 @@ class _Builder:
         self.dialect = dialect
         self.user_defines = {str(k): str(v) for k, v in (defines or {}).items()}
         self.defines: dict[str, str] = dict(self.user_defines)
+        #: every $name an attribute of the file asked for (whether -D or a <default> filled it)
+        self.used_defines: set[str] = set()
         self.base_dir = base_dir
 
     # --- locations ------------------------------------------------------------------------------
@@ -250,6 +252,7 @@ class _Builder:
 
         def replace(m: re.Match) -> str:
             var = m.group(1)
+            self.used_defines.add(var)
             if var not in self.defines:
                 raise SceneError(
                     f"undefined variable '${var}' in attribute {name}=\"{value}\" of <{el.tag}>; "
@@ -436,6 +439,16 @@ class _Builder:
 # --------------------------------------------------------------------------------------------------
 # Public entry points
 # --------------------------------------------------------------------------------------------------
+def check_defines_used(defines: Mapping[str, str], used: set[str], filename: str) -> None:
+    """A -D value that fills no ``$name`` is a mistake (a typo, the wrong scene): an error, as Mitsuba 3.9 stops
+    with "Found unused parameters", whether or not a <default> declares the name."""
+    unused = [f"{k}={v}" for k, v in defines.items() if k not in used]
+    if unused:
+        asks = ", ".join(f"${n}" for n in sorted(used)) or "no $name at all"
+        raise SceneError(f"-D {', -D '.join(unused)}: the scene has no such $name to fill (it uses {asks})",
+                         SourceLocation(filename))
+
+
 def check_filename(value: str, location: SourceLocation) -> None:
     """An empty filename would resolve to the scene's own folder and be reported as "a folder, not a file"."""
     if not value.strip():
@@ -464,7 +477,10 @@ def _parse_bytes(data: bytes, filename: str, defines, base_dir: str, force_encod
     if mitsuba_xml.is_mitsuba_root(root):  # <scene version="..."> is Mitsuba's; Nori's <scene> has no attributes
         return mitsuba_xml.build(src, root, defines, base_dir)
     dialect = _dialect.resolve(nori_dialect)
-    return _Builder(src, defines, base_dir, dialect).build_root(root)
+    builder = _Builder(src, defines, base_dir, dialect)
+    spec = builder.build_root(root)
+    check_defines_used(builder.user_defines, builder.used_defines, filename)
+    return spec
 
 
 def parse_file(path, defines: Mapping[str, str] | None = None, nori_dialect: str | None = None) -> PluginSpec:

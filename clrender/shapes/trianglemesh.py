@@ -17,6 +17,7 @@ from ..device import dispatch
 from ..device.layout import NONE
 from ..errors import SceneError
 from ..scene.transform import Transform
+from .meshdata import _normalize_rows
 from .shape import TRIANGLE_COORD_MAX, Shape
 
 log = logging.getLogger("clrender")
@@ -107,26 +108,73 @@ def half_normals(normals) -> np.ndarray:
     return n.astype(np.float16).view(np.uint16)
 
 
-def angle_weighted_normals(mesh) -> np.ndarray:
-    """Smooth vertex normals as Mitsuba computes them for a mesh file without normals: each face's unit normal,
-    weighted by the face's angle at the vertex, summed and normalised."""
-    p = mesh.positions.astype(np.float64)
-    f = mesh.faces
-    n = np.cross(p[f[:, 1]] - p[f[:, 0]], p[f[:, 2]] - p[f[:, 0]])
-    length = np.linalg.norm(n, axis=1)
-    ok = length > 0
-    n = n[ok] / length[ok, None]
-    f = f[ok]
-    out = np.zeros_like(p)
+def _corner_terms(p: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each face's unit normal (0 for a degenerate face) and (T, 3) its angle at each of its corners."""
+    n = _normalize_rows(np.cross(p[f[:, 1]] - p[f[:, 0]], p[f[:, 2]] - p[f[:, 0]]))
+    angles = np.empty(f.shape)
     for j in range(3):
         a = p[f[:, (j + 1) % 3]] - p[f[:, j]]
         b = p[f[:, (j + 2) % 3]] - p[f[:, j]]
         a /= np.maximum(np.linalg.norm(a, axis=1, keepdims=True), 1e-300)
         b /= np.maximum(np.linalg.norm(b, axis=1, keepdims=True), 1e-300)
-        angle = np.arccos(np.clip((a * b).sum(axis=1), -1.0, 1.0))
-        np.add.at(out, f[:, j], n * angle[:, None])
-    length = np.linalg.norm(out, axis=1, keepdims=True)
-    return np.where(length > 0, out / np.where(length > 0, length, 1.0), 0.0)
+        angles[:, j] = np.arccos(np.clip((a * b).sum(axis=1), -1.0, 1.0))
+    return n, angles
+
+
+def angle_weighted_normals(mesh) -> np.ndarray:
+    """Smooth vertex normals as Mitsuba computes them for a mesh file without normals: each face's unit normal,
+    weighted by the face's angle at the vertex, summed and normalised."""
+    p = mesh.positions.astype(np.float64)
+    n, angles = _corner_terms(p, mesh.faces)
+    out = np.zeros_like(p)
+    for j in range(3):
+        np.add.at(out, mesh.faces[:, j], n * angles[:, j, None])
+    return _normalize_rows(out)
+
+
+def crease_normals(mesh, max_angle: float):
+    """Mitsuba 0.x's ``maxSmoothAngle`` (degrees): the mesh's own normals dropped, vertices at the same position
+    (and uv) welded, and at each vertex the faces whose normals lie within ``max_angle`` of each other
+    (transitively) share one new vertex, whose normal is theirs, angle-weighted as above. So a crease sharper
+    than the angle stays sharp and smoother parts are smooth, whatever the file's vertex sharing was."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from .meshdata import MeshData
+
+    p = mesh.positions.astype(np.float64)
+    f = mesh.faces
+    key = p if mesh.uvs is None else np.hstack([p, mesh.uvs.astype(np.float64)])
+    weld = np.unique(key, axis=0, return_inverse=True)[1].reshape(-1)
+    n, angles = _corner_terms(p, f)
+    corner_vertex = weld[f].reshape(-1)                       # corner c = 3 * face + j
+    order = np.argsort(corner_vertex, kind="stable")
+    ordered = corner_vertex[order]
+    cos_max = np.cos(np.radians(max_angle))
+    rows, cols = [], []
+    k = 1
+    while k < ordered.size:   # every pair of corners at one vertex: the i-th and the (i+k)-th of its run
+        same = np.nonzero(ordered[k:] == ordered[:-k])[0]
+        if same.size == 0:
+            break
+        a, b = order[same], order[same + k]
+        close = (n[a // 3] * n[b // 3]).sum(axis=1) >= cos_max
+        rows.append(a[close])
+        cols.append(b[close])
+        k += 1
+    count = f.size
+    rows = np.concatenate(rows) if rows else np.zeros(0, np.int64)
+    cols = np.concatenate(cols) if cols else np.zeros(0, np.int64)
+    graph = coo_matrix((np.ones(rows.size), (rows, cols)), shape=(count, count))
+    labels = connected_components(graph, directed=False)[1]
+    new_index = np.unique(labels, return_inverse=True)[1].reshape(-1)
+    first = np.zeros(new_index.max() + 1, np.int64)
+    first[new_index[::-1]] = np.arange(count)[::-1]          # a corner of each new vertex
+    normals = np.zeros((first.size, 3))
+    np.add.at(normals, new_index, np.repeat(n, 3, axis=0) * angles.reshape(-1, 1))
+    old = f.reshape(-1)[first]
+    return MeshData(positions=mesh.positions[old], normals=_normalize_rows(normals),
+                    uvs=None if mesh.uvs is None else mesh.uvs[old], faces=new_index.reshape(-1, 3))
 
 
 class MitsubaMeshOptions:
@@ -138,10 +186,17 @@ class MitsubaMeshOptions:
     def _load_mitsuba(self, props, children, spec, loader, generate=None, name=None):
         face_normals = props.get_bool("face_normals", False) if loader is not None else False
         flip = props.get_bool("flip_normals", False)
+        # Mitsuba 0.x's maxSmoothAngle (old files; Mitsuba 3 has none): normals rebuilt with that crease angle
+        crease = props.get_float("max_smooth_angle", None) if loader is not None else None
+        if crease is not None and not 0 <= crease <= 180:
+            raise SceneError(f"max_smooth_angle must be between 0 and 180 degrees, got {crease}",
+                             props.location("max_smooth_angle"))
 
         def prepare(mesh):
             from .meshdata import MeshData
 
+            if crease is not None and not face_normals:
+                mesh = crease_normals(mesh, crease)
             normals = None if face_normals else (
                 mesh.normals if mesh.normals is not None else angle_weighted_normals(mesh))
             faces = mesh.faces
