@@ -40,9 +40,8 @@ __kernel void record_pass(SCENE_ARGS, __global const Camera* cam, __global const
     Sampler smp;
     sampler_init(&smp, seed, pix, sample);
     float w;
-    float2 off = filter_sample_guided(cam, filter_cdf, next2d(&smp), &w);
-    Ray ray = camera_ray(cam, (float)px + 0.5f + off.x, (float)py + 0.5f + off.y);
-    Li(&rs.sd, ray, &smp);
+    Ray ray;
+    if (camera_sample(cam, filter_cdf, px, py, &smp, &w, &ray)) Li(&rs.sd, ray, &smp);   /* render.cl's step */
     count[pix] = (uint2)(rs.n, rs.dropped);
 }
 
@@ -278,8 +277,8 @@ __kernel void setup_pass(__global const Camera* cam, __global const float* filte
     Sampler smp;
     sampler_init(&smp, seed, pix, sample);
     float w;
-    float2 off = filter_sample_guided(cam, filter_cdf, next2d(&smp), &w);
-    Ray ray = camera_ray(cam, (float)px + 0.5f + off.x, (float)py + 0.5f + off.y);
+    Ray ray;
+    if (!camera_sample(cam, filter_cdf, px, py, &smp, &w, &ray)) return;   /* render.cl's step */
     float3 wl = (ray.d + ray.o * next1d(&smp)) * w;   /* keeps the sampling alive without tracing */
     float4 a0 = acc0[pix], a1 = acc1[pix];
     acc0[pix] = (float4)(a0.xyz + wl, a0.w + w);
