@@ -366,6 +366,12 @@ case("image-exr-corrupt", {"s.xml": bitmap("t.exr"), "t.exr": b"v/1\x01" + bytes
 case("image-hdr-lying-resolution", {"s.xml": bitmap("t.hdr"), "t.hdr": b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n"
                                                                       b"-Y 1000000 +X 1000000\n" + bytes(8)},
      ("s.xml:4:", "t.hdr", "1000000 x 1000000"))
+case("image-pfm-lying-resolution", {"s.xml": bitmap("t.pfm"), "t.pfm": b"PF\n1000000 1000000\n-1\n" + bytes(12)},
+     ("s.xml:4:", "t.pfm", "ends before its 1000000 x 1000000 pixels"))
+case("image-ppm16-truncated", {"s.xml": bitmap("t.ppm"), "t.ppm": b"P6\n300 200\n65535\n" + bytes(12)},
+     ("s.xml:4:", "t.ppm", "ends before its 180000 samples"))
+case("image-gif", {"s.xml": bitmap("t.gif"), "t.gif": b"GIF89a\x01\x00\x01\x00\x00\x00\x00;"},
+     ("s.xml:4:", "t.gif", "unsupported image format", "PFM, PNG, JPEG, BMP, TGA"))
 case("image-is-a-folder", {"s.xml": bitmap("sub"), "sub/x": ""}, ("s.xml:4:", "not a regular file"))
 case("image-missing", bitmap("nowhere.png"), ("s.xml:4:", "nowhere.png", "not found"))
 

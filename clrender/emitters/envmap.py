@@ -52,7 +52,7 @@ class EnvMap(Emitter):
 
     def __init__(self, props, children, spec):
         path = Path(props.get_string("filename"))   # the reader resolved it against the scene's folder
-        self.image = pad_to(read_image(path, location=props.location("filename")), 2, 3)
+        self.image = pad_to(read_image(path, location=props.location("filename"), half=False), 2, 3)
         if np.any(self.image < 0):
             raise SceneError(f"'{path.name}': an environment map cannot hold negative radiance",
                              props.location("filename"))
