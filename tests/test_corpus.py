@@ -401,8 +401,8 @@ case("option-scene-is-folder", {"s.xml/x": ""}, "s.xml")
 case("option-scene-is-fifo", {"s.xml": FIFO}, ("s.xml", "regular file"))
 
 # ---- output --------------------------------------------------------------------------------------------------------
-case("output-jpg", scene(), ("-o ", "img.jpg", ".exr"), output="img.jpg")
-case("output-png", scene(), ("-o ", "img.png", ".exr"), output="img.png")
+case("output-bmp", scene(), ("-o ", "img.bmp", ".exr, .png, .jpg, .jpeg, .hdr, .pfm"), output="img.bmp")
+case("output-txt", scene(), ("-o ", "img.txt", "'.txt'"), output="img.txt")
 case("output-proc", scene(), "/proc/clrender-x.exr", output="/proc/clrender-x.exr")
 case("output-sys", scene(), "/sys/clrender-x.exr", output="/sys/clrender-x.exr")
 case("output-under-a-file", {"s.xml": scene(), "f.txt": "x"}, ("f.txt", "not a folder"), output="f.txt/o.exr")

@@ -229,8 +229,9 @@ def _read_rgbe(path: Path) -> np.ndarray:
 
 
 def write_rgbe(path, img: np.ndarray) -> None:
-    """Write linear RGB (H x W x 3) as a flat (not run-length encoded) Radiance file (test assets)."""
-    img = np.asarray(img, np.float64)
+    """Write linear RGB (H x W x 3) as a flat (not run-length encoded) Radiance file (`-o NAME.hdr`, test assets).
+    Negative values become 0, values beyond RGBE's largest (2^127 · 255/256) that largest."""
+    img = np.clip(np.asarray(img, np.float64), 0.0, 2.0 ** 127 * 255 / 256)
     h, w, _ = img.shape
     m = img.max(axis=-1)
     mant, e = np.frexp(m)
@@ -241,3 +242,10 @@ def write_rgbe(path, img: np.ndarray) -> None:
     rgbe[..., 3] = np.where(ok, e + 128, 0).astype(np.uint8)
     head = f"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y {h} +X {w}\n".encode()
     Path(path).write_bytes(head + rgbe.tobytes())
+
+
+def write_pfm(path, img: np.ndarray) -> None:
+    """Write linear RGB (H x W x 3) as a little-endian colour PFM (scale -1, bottom row first)."""
+    img = np.asarray(img, np.float32)
+    h, w, _ = img.shape
+    Path(path).write_bytes(f"PF\n{w} {h}\n-1\n".encode() + np.ascontiguousarray(img[::-1], "<f4").tobytes())
