@@ -26,7 +26,7 @@ from contextlib import contextmanager
 
 POLL_SECONDS = 0.002
 
-#: A test hook: the name of an extension module in whose initialisation a SIGINT is sent (tests/test_interrupt.py).
+#: A test hook, MODULE[@FILE]: a SIGINT is sent inside the initialisation of that extension module (`_test_hook`).
 TEST_SIGINT_ENV = "CLRENDER_TEST_SIGINT_IN_INIT"
 
 _deferring = 0          # depth of the sections in which CtrlC only records a SIGINT

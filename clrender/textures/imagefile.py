@@ -159,6 +159,8 @@ def _read_pfm(path: Path) -> np.ndarray:
             raise ValueError("not a PFM header (PF, width, height, scale)")
         fields.append(data[start:pos])
     pos += 1
+    if fields[0] != b"PF":
+        raise ValueError("not a PFM header (PF, width, height, scale)")
     try:
         w, h, scale = int(fields[1]), int(fields[2]), float(fields[3])
     except ValueError:
