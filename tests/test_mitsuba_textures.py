@@ -470,6 +470,13 @@ def test_image_formats_match_mitsuba(image_files):
                                        atol=1e-7, err_msg=f"{path.name} raw={raw}")
             checked += 1
     assert checked == 2 * 13
+    from clrender.textures.imagefile import read_image
+
+    f32 = (np.random.default_rng(22).random((5, 20, 3)) * 40).astype(np.float32)   # >= 8 wide: RLE rows
+    for name in ("mi.hdr", "mi.pfm"):   # as Mitsuba writes them (its RGBE is run-length encoded)
+        path = image_files[0][0].parent / name
+        mi.Bitmap(f32).write(str(path))
+        np.testing.assert_array_equal(read_image(path), np.array(mi.Bitmap(str(path))), err_msg=name)
 
 
 def test_unsupported_images(tmp_path):
