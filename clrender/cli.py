@@ -71,9 +71,10 @@ def cmd_render(args) -> int:
           f"device {renderer.device_name}", file=sys.stderr)
     progress = not args.quiet and (args.progress or sys.stderr.isatty())
 
-    def write_partial(film):
-        film.write_exr(out)
-        film.write_png(png)
+    def write_partial(film):   # and the final image
+        film.write(out)
+        if png is not None:
+            film.write_png(png)
 
     partial = None if args.partial_every is None else (args.partial_every, write_partial)
     try:
@@ -83,11 +84,10 @@ def cmd_render(args) -> int:
         print("clrender: aborted (second Ctrl-C); nothing written", file=sys.stderr)
         _exit_now(args, 130)
         return 130
-    film.write_exr(out)
-    film.write_png(png)
+    write_partial(film)
     s = film.stats
     rate = s.samples / s.seconds / 1e6 if s.seconds > 0 else 0.0
-    msg = (f"clrender: wrote {out} and {png}: {film.spp} spp in {s.seconds:.2f} s "
+    msg = (f"clrender: wrote {out}{f' and {png}' if png is not None else ''}: {film.spp} spp in {s.seconds:.2f} s "
            f"({rate:.2f} M samples/s)")
     if s.interrupted:
         msg += " [interrupted: partial image]"
@@ -197,8 +197,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = ap.add_subparsers(dest="command", required=True)
     r = sub.add_parser("render", help="render a scene to EXR (+ PNG)")
     r.add_argument("scene", help="scene file: Nori XML, or Mitsuba 3 XML (root <scene version=...>)")
-    r.add_argument("-o", "--output", help="output .exr file, or a folder (default: beside the scene); a PNG "
-                                          "preview is written beside it")
+    r.add_argument("-o", "--output", help="output .exr file (a PNG preview is written beside it), or a folder "
+                                          "(default: beside the scene); or a .png, .jpg, .hdr or .pfm file: that "
+                                          "format alone")
     r.add_argument("--spp", type=int, help="samples per pixel (default: the scene's sampler)")
     r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     r.add_argument("--device", help="OpenCL device: index, cpu, gpu or name substring (default: PoCL CPU)")

@@ -58,12 +58,11 @@ def cmd_render_distributed(args, defines: dict) -> int:
         raise ClrenderError("--tasks and --scene-files apply to --cluster renders only")
     from .output import output_paths
 
-    try:
-        out, _ = output_paths(args.output, args.scene)  # the same -o rules as a plain render, checked before work
-    except ClrenderError as exc:
-        if args.sample_range:
-            raise ClrenderError(f"{exc} (a --sample-range part is an accumulator EXR)") from None
-        raise
+    # the same -o rules as a plain render, checked before work; but a part, or what an interrupted cluster render
+    # keeps, is an accumulator EXR
+    out, _ = output_paths(args.output, args.scene,
+                          exr_only="a --sample-range part is an accumulator EXR" if args.sample_range else
+                          "--cluster writes an EXR (an accumulator EXR when interrupted)")
     say = lambda msg: print(f"clrender: {msg}", file=sys.stderr, flush=True)  # noqa: E731
     source = SceneSource(str(Path(args.scene).resolve()), defines, dialect)
 

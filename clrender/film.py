@@ -69,6 +69,25 @@ class Film:
         return int(self.metadata.get("spp", int(self.count.max()) if self.count.size else 0))
 
     # -- output -------------------------------------------------------------------------------------------
+    def write(self, path) -> Path:
+        """Write the image in the format its extension names: .png, .jpg/.jpeg (8-bit sRGB), .hdr (Radiance RGBE),
+        .pfm (float), anything else OpenEXR with the metadata."""
+        suffix = Path(path).suffix.lower()
+        if suffix == ".png":
+            return self.write_png(path)
+        if suffix in (".jpg", ".jpeg"):
+            from PIL import Image
+
+            srgb = Image.fromarray(to_srgb8(self.image))
+            # full-resolution chroma (4:4:4): a render's coloured edges and noise survive
+            return _atomic_write(Path(path), lambda tmp: srgb.save(tmp, format="JPEG", quality=95, subsampling=0))
+        if suffix in (".hdr", ".pfm"):
+            from .textures.imagefile import write_pfm, write_rgbe
+
+            img = self.image
+            return _atomic_write(Path(path), lambda tmp: (write_rgbe if suffix == ".hdr" else write_pfm)(tmp, img))
+        return self.write_exr(path)
+
     def write_exr(self, path) -> Path:
         import OpenEXR
 

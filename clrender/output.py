@@ -2,7 +2,8 @@
 
 Rules (README, "Command line"): no `-o`: SCENE.exr beside the scene. `-o NAME.exr`: that file. `-o NAME`
 without an extension: NAME.exr. `-o FOLDER` (an existing folder, or a name ending in '/'): FOLDER/SCENE.exr.
-Any other extension is an error: clrender writes OpenEXR, plus a PNG preview beside it.
+An EXR gets a PNG preview beside it. `-o NAME.png|.jpg|.jpeg|.hdr|.pfm`: that file in that format, alone (the
+user named the file they want). Any other extension is an error.
 """
 from __future__ import annotations
 
@@ -13,10 +14,13 @@ from pathlib import Path
 from .errors import ClrenderError
 
 EXTENSION = ".exr"
+#: the formats `-o NAME.ext` writes besides OpenEXR (Film.write)
+IMAGE_FORMATS = {".png": "PNG", ".jpg": "JPEG", ".jpeg": "JPEG", ".hdr": "Radiance HDR", ".pfm": "PFM"}
 
 
-def output_paths(option: str | None, scene: str) -> tuple[Path, Path]:
-    """(EXR path, PNG path) for `-o option` and the scene file, or a ClrenderError naming the option."""
+def output_paths(option: str | None, scene: str, exr_only: str | None = None) -> tuple[Path, Path | None]:
+    """(image path, path of its PNG preview or None) for `-o option` and the scene file, or a ClrenderError naming
+    the option. `exr_only`: why only OpenEXR will do (said in the error), for writers of EXR alone."""
     scene_path = Path(scene)
     if option is None:
         exr = scene_path.with_suffix(EXTENSION)
@@ -24,15 +28,23 @@ def output_paths(option: str | None, scene: str) -> tuple[Path, Path]:
         raise ClrenderError("-o: the output name is empty")
     else:
         p = Path(option)
+        suffix = p.suffix.lower()
         if option.endswith(("/", os.sep)) or p.is_dir():
             exr = p / (scene_path.stem + EXTENSION)
-        elif p.suffix == "":
+        elif suffix == "":
             exr = p.with_name(p.name + EXTENSION)
-        elif p.suffix.lower() == EXTENSION:
+        elif suffix == EXTENSION:
             exr = p
+        elif suffix in IMAGE_FORMATS and not exr_only:
+            check_writable(p, option)
+            return p, None
+        elif exr_only:
+            raise ClrenderError(f"-o {option}: {exr_only}: the output must end in {EXTENSION}, have no extension, "
+                                f"or name a folder (got '{p.suffix}')")
         else:
-            raise ClrenderError(f"-o {option}: clrender writes an OpenEXR image (and a PNG preview beside it); "
-                                f"the output must end in {EXTENSION}, have no extension, or name a folder "
+            raise ClrenderError(f"-o {option}: clrender writes OpenEXR (with a PNG preview beside it), "
+                                f"{', '.join(dict.fromkeys(IMAGE_FORMATS.values()))}; the output must end in "
+                                f"{', '.join((EXTENSION, *IMAGE_FORMATS))}, have no extension, or name a folder "
                                 f"(got '{p.suffix}')")
     png = exr.with_suffix(".png")
     for path in (exr, png):

@@ -873,9 +873,13 @@ def ensure_large_meshes(out=HERE, force=False):
 def build_large(out, meshes=True):
     d = out / "largemesh"
     lift = dict(BLOB_LIFT)
-    if meshes:
-        for tag, n in BLOBS:
+    for tag, n in BLOBS:
+        if meshes:
             write_blob(d / "meshes" / ("blob_%s.ply" % tag), n)
+        # quoted by clrender's error when the PLY is missing (clrender/shapes/meshfile.py)
+        write_text(d / "meshes" / ("blob_%s.ply.missing" % tag),
+                   "generated, not kept in git: make it with 'python scenes/build.py --large-meshes' in the clrender "
+                   "checkout (or 'python scenes/build.py', which writes every scene)\n")
     write_obj(d / "meshes" / "ground.obj", *rect_xz(-10, 10, -10, 10, 0.0, up=True))
     g = LARGE_LIGHT
     (cx, cy, cz), h = g["center"], g["half"]

@@ -1,6 +1,8 @@
 """Camera rays from the kernel against an independent numpy model of Nori's perspective camera
 (sample -> camera space through the inverse of Nori's projection matrices, as NORI_FORMAT.md writes them for
 each dialect), incl. the mirror convention of each dialect and a degenerate lookat."""
+import re
+
 import numpy as np
 import pyopencl as cl
 import pytest
@@ -124,3 +126,58 @@ def test_unknown_dialect_is_an_error():
 
     with pytest.raises(ClrenderError, match="unknown Nori dialect"):
         camera_from_xml("", dialect="mitsuba")
+
+
+FAR = """<scene><integrator type="normals"/><camera type="perspective">
+    <integer name="width" value="6"/><integer name="height" value="4"/><float name="fov" value="2"/>{clip}
+    <rfilter type="box"/>
+    <transform name="toWorld"><lookat origin="0,0,0" target="0,0,-1" up="0,1,0"/></transform></camera>
+  <mesh type="sphere"><point name="center" value="0,0,-3e4"/><float name="radius" value="1e4"/></mesh></scene>"""
+MITSUBA_FAR = """<scene version="3.0.0"><integrator type="depth"/><sensor type="{kind}">{clip}
+    <transform name="to_world"><lookat origin="0,0,0" target="0,0,-1" up="0,1,0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="6"/><integer name="height" value="4"/><rfilter type="box"/>
+    </film></sensor>
+  <shape type="sphere"><point name="center" value="0,0,-3e4"/><float name="radius" value="1e4"/></shape></scene>"""
+
+
+@pytest.mark.parametrize("value", ["inf", "+inf", "Infinity"])
+def test_far_clip_inf_means_no_far_clipping(tmp_path, value):
+    """A sphere 2e4 away, beyond the default far clip of 1e4: unseen by default, seen everywhere with farClip (Nori)
+    or far_clip (Mitsuba: perspective and orthographic) = inf, at its true depth."""
+    import clrender
+
+    for text, clip, check in (
+            (FAR.replace("{clip}", "{c}"), '<float name="farClip" value="{v}"/>',
+             lambda img: np.abs(img).sum(axis=-1) > 0.5),                  # a normal where the sphere is seen
+            (MITSUBA_FAR.replace("{kind}", "perspective").replace("{clip}", "{c}"),
+             '<float name="far_clip" value="{v}"/><float name="fov" value="2"/>',
+             lambda img: np.abs(img[..., 0] - 2e4) < 2e4 * 1e-3),           # depth: the distance along the ray
+            (MITSUBA_FAR.replace("{kind}", "orthographic").replace("{clip}", "{c}"),
+             '<float name="far_clip" value="{v}"/>', lambda img: np.abs(img[..., 0] - 2e4) < 2e4 * 1e-3)):
+        for given, seen in (("", False), (clip.format(v=value), True)):
+            (tmp_path / "far.xml").write_text(text.format(c=given))
+            img = clrender.render(clrender.load_scene(tmp_path / "far.xml"), spp=1).image
+            assert check(img).all() if seen else not check(img).any(), (given, img[..., 0])
+
+
+@pytest.mark.parametrize("xml, what", [
+    (FAR.format(clip='<float name="farClip" value="-inf"/>'), "number '-inf' in attribute value"),
+    (FAR.format(clip='<float name="farClip" value="1e999"/>'), "infinite (or too large"),
+    (FAR.format(clip='<float name="fov" value="inf"/>').replace('<float name="fov" value="2"/>', ""),
+     "number 'inf' of 'fov' is infinite"),
+    (FAR.format(clip="").replace('name="radius" value="1e4"', 'name="radius" value="inf"'),
+     "number 'inf' of 'radius' is infinite"),
+    (MITSUBA_FAR.format(kind="thinlens", clip='<float name="far_clip" value="inf"/>'
+                                              '<float name="aperture_radius" value="0.1"/>'), "needs a focus_distance"),
+    (MITSUBA_FAR.format(kind="perspective", clip='<float name="far_clip" value="inf"/>').replace(
+        '<integrator type="depth"/>', '<emitter type="constant"><rgb name="radiance" value="inf"/></emitter>'),
+     "number 'inf' in attribute value"),
+])
+def test_inf_elsewhere_is_an_error(tmp_path, xml, what):
+    import clrender
+    from clrender.errors import SceneError
+
+    (tmp_path / "s.xml").write_text(xml)
+    with pytest.raises(SceneError, match=re.escape(what)) as e:
+        clrender.load_scene(tmp_path / "s.xml")
+    assert str(e.value).startswith(f"{tmp_path / 's.xml'}:"), str(e.value)

@@ -181,3 +181,92 @@ def test_sample_range_beyond_32_bits_is_an_option_error(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "--sample-range" in err and "2^32" in err, err
     assert not list(tmp_path.glob("*.exr"))
+
+
+def _quad_scene(tmp_path, w=8, h=8):
+    (tmp_path / "quad.obj").write_text(QUAD)
+    return write(tmp_path, GOOD.format(w=w, h=h, mesh="quad.obj"))
+
+
+def _film(h=5, w=7, seed=3):
+    from clrender.film import Film
+
+    rng = np.random.default_rng(seed)
+    img = rng.random((h, w, 3)) * np.array([1.0, 8.0, 60.0])     # beyond 1: the float formats keep it
+    img[0, 0] = [-0.25, 0.0, 1e-3]                                # a Mitchell filter's negative lobe
+    ones = np.ones((h, w))
+    return Film(w, h, img, ones, img * img, ones, np.zeros((h, w), np.int64), {"spp": 1})
+
+
+def test_film_writes_the_format_its_extension_names(tmp_path):
+    """PFM keeps the float32 image exactly; Radiance HDR to its 8-bit shared-exponent precision (negative values
+    become 0); PNG and JPEG are 8-bit sRGB (JPEG within its loss). Read back by Pillow, our readers and, for HDR
+    and PFM, Mitsuba 3.9.1 when installed."""
+    from PIL import Image
+
+    from clrender.film import to_srgb8
+    from clrender.textures.imagefile import read_image
+
+    film = _film()
+    img = film.image
+    written = {ext: film.write(tmp_path / f"o{ext}") for ext in (".pfm", ".hdr", ".png", ".jpg", ".JPEG", ".exr")}
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(p.name for p in written.values())
+    np.testing.assert_array_equal(read_image(written[".pfm"]), img)
+    pos = np.maximum(img, 0)
+    hdr = read_image(written[".hdr"])
+    assert np.all(np.abs(hdr - pos) <= pos.max(axis=-1, keepdims=True) / 128 + 1e-7)
+    assert hdr[0, 0, 0] == 0
+    with Image.open(written[".png"]) as im:
+        assert im.format == "PNG"
+        np.testing.assert_array_equal(np.asarray(im), to_srgb8(img))
+    for ext in (".jpg", ".JPEG"):
+        with Image.open(written[ext]) as im:
+            assert im.format == "JPEG"
+            assert np.abs(np.asarray(im, np.float64) - to_srgb8(img)).mean() < 8
+    np.testing.assert_array_equal(read_exr(written[".exr"])[0], img)
+    try:
+        import mitsuba as mi
+
+        mi.set_variant("scalar_rgb")
+    except (ImportError, AttributeError):
+        return    # tests/mitsuba/ is found as a namespace package without Mitsuba
+    np.testing.assert_array_equal(np.array(mi.Bitmap(str(written[".pfm"]))), img)
+    np.testing.assert_array_equal(np.array(mi.Bitmap(str(written[".hdr"]))), hdr)
+
+
+@pytest.mark.parametrize("name", ["o.png", "o.jpg", "o.hdr", "o.pfm", "o.PNG"])
+def test_output_names_its_format(tmp_path, capsys, name):
+    """-o NAME.png/.jpg/.hdr/.pfm writes that file alone (no EXR, no preview), the same image as the EXR."""
+    from clrender.textures.imagefile import read_image
+
+    p = _quad_scene(tmp_path, w=12)
+    (tmp_path / "out").mkdir()
+    assert main(["render", str(p), "-q", "--spp", "2", "-o", str(tmp_path / "out" / name)]) == 0
+    assert [f.name for f in (tmp_path / "out").iterdir()] == [name]
+    magic = {"png": b"\x89PNG", "jpg": b"\xff\xd8", "hdr": b"#?RA", "pfm": b"PF\n"}[name.lower()[2:]]
+    assert (tmp_path / "out" / name).read_bytes().startswith(magic)
+    assert f"wrote {tmp_path / 'out' / name}:" in capsys.readouterr().err
+    assert main(["render", str(p), "-q", "--spp", "2", "-o", str(tmp_path / "ref.exr")]) == 0
+    ref = read_exr(tmp_path / "ref.exr")[0]
+    back = read_image(tmp_path / "out" / name)
+    if name.endswith(".pfm"):
+        np.testing.assert_array_equal(back, ref)
+    elif name.endswith(".hdr"):
+        assert np.all(np.abs(back - ref) <= ref.max(axis=-1, keepdims=True) / 128 + 1e-7)
+    elif name.lower().endswith(".png"):
+        from clrender.film import to_srgb8
+        from clrender.textures.imagefile import srgb_to_linear
+
+        np.testing.assert_allclose(back, srgb_to_linear(to_srgb8(ref) / 255.0), atol=1e-6)
+    else:
+        assert np.abs(back - ref).mean() < 0.03
+
+
+def test_output_extension_errors(tmp_path, capsys):
+    p = _quad_scene(tmp_path)
+    assert main(["render", str(p), "-q", "--spp", "1", "-o", str(tmp_path / "o.bmp")]) == 2
+    err = capsys.readouterr().err
+    assert "must end in .exr, .png, .jpg, .jpeg, .hdr, .pfm" in err and "'.bmp'" in err, err
+    assert main(["render", str(p), "-q", "--sample-range", "0:1", "-o", str(tmp_path / "o.png")]) == 2
+    assert "accumulator EXR" in capsys.readouterr().err
+    assert list(tmp_path.glob("o.*")) == []

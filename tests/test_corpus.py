@@ -366,6 +366,12 @@ case("image-exr-corrupt", {"s.xml": bitmap("t.exr"), "t.exr": b"v/1\x01" + bytes
 case("image-hdr-lying-resolution", {"s.xml": bitmap("t.hdr"), "t.hdr": b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n"
                                                                       b"-Y 1000000 +X 1000000\n" + bytes(8)},
      ("s.xml:4:", "t.hdr", "1000000 x 1000000"))
+case("image-pfm-lying-resolution", {"s.xml": bitmap("t.pfm"), "t.pfm": b"PF\n1000000 1000000\n-1\n" + bytes(12)},
+     ("s.xml:4:", "t.pfm", "ends before its 1000000 x 1000000 pixels"))
+case("image-ppm16-truncated", {"s.xml": bitmap("t.ppm"), "t.ppm": b"P6\n300 200\n65535\n" + bytes(12)},
+     ("s.xml:4:", "t.ppm", "ends before its 180000 samples"))
+case("image-gif", {"s.xml": bitmap("t.gif"), "t.gif": b"GIF89a\x01\x00\x01\x00\x00\x00\x00;"},
+     ("s.xml:4:", "t.gif", "unsupported image format", "PFM, PNG, JPEG, BMP, TGA"))
 case("image-is-a-folder", {"s.xml": bitmap("sub"), "sub/x": ""}, ("s.xml:4:", "not a regular file"))
 case("image-missing", bitmap("nowhere.png"), ("s.xml:4:", "nowhere.png", "not found"))
 
@@ -395,8 +401,8 @@ case("option-scene-is-folder", {"s.xml/x": ""}, "s.xml")
 case("option-scene-is-fifo", {"s.xml": FIFO}, ("s.xml", "regular file"))
 
 # ---- output --------------------------------------------------------------------------------------------------------
-case("output-jpg", scene(), ("-o ", "img.jpg", ".exr"), output="img.jpg")
-case("output-png", scene(), ("-o ", "img.png", ".exr"), output="img.png")
+case("output-bmp", scene(), ("-o ", "img.bmp", ".exr, .png, .jpg, .jpeg, .hdr, .pfm"), output="img.bmp")
+case("output-txt", scene(), ("-o ", "img.txt", "'.txt'"), output="img.txt")
 case("output-proc", scene(), "/proc/clrender-x.exr", output="/proc/clrender-x.exr")
 case("output-sys", scene(), "/sys/clrender-x.exr", output="/sys/clrender-x.exr")
 case("output-under-a-file", {"s.xml": scene(), "f.txt": "x"}, ("f.txt", "not a folder"), output="f.txt/o.exr")

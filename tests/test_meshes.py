@@ -372,3 +372,20 @@ def test_binary_ply_does_not_import_trimesh(tmp_path):
             "assert m.faces.shape == (2, 3); print('trimesh' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_a_missing_mesh_quotes_its_note(tmp_path):
+    """NAME.missing beside a missing mesh NAME (how to get it) is quoted in the error; without one, or for a mesh that
+    exists but cannot be read, nothing is added."""
+    from clrender.errors import SceneError
+    from clrender.shapes.meshfile import read_mesh_bytes
+
+    (tmp_path / "m.ply.missing").write_text("made by\n   ./make-meshes.sh\n")
+    with pytest.raises(SceneError, match=r"No such file or directory \(m.ply.missing: made by ./make-meshes.sh\)"):
+        read_mesh_bytes(tmp_path / "m.ply", "PLY", None)
+    with pytest.raises(SceneError, match=r"No such file or directory$"):
+        read_mesh_bytes(tmp_path / "n.ply", "PLY", None)
+    (tmp_path / "d.ply").mkdir()
+    (tmp_path / "d.ply.missing").write_text("not quoted")
+    with pytest.raises(SceneError, match=r"it is a folder, not a file$"):
+        read_mesh_bytes(tmp_path / "d.ply", "PLY", None)

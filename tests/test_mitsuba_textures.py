@@ -359,3 +359,133 @@ def test_16_bit_grey_png_is_read(tmp_path):
     assert raw.shape == (3, 4, 3)
     np.testing.assert_allclose(raw[..., 1], values / 65535.0, rtol=1e-3)
     np.testing.assert_allclose(read_image(tmp_path / "g.png")[..., 0], srgb_to_linear(values / 65535.0), rtol=1e-3)
+
+
+# ---------------------------------------------------------------------------------------------------- image formats
+def write_tiff16(path, img, order="<"):
+    """An uncompressed 16-bit RGB TIFF with the baseline tags only, byte order '<' (II) or '>' (MM)."""
+    import struct
+
+    h, w, _ = img.shape
+    data = img.astype(order + "u2").tobytes()
+    tags = [(256, 3, w), (257, 3, h), (258, 3, None), (259, 3, 1), (262, 3, 2), (273, 4, None), (277, 3, 3),
+            (278, 3, h), (279, 4, len(data)), (284, 3, 1)]
+    extra_at = 8 + 2 + 12 * len(tags) + 4       # BitsPerSample's three values follow the directory
+    data_at = extra_at + 6
+    out = (b"II*\0" if order == "<" else b"MM\0*") + struct.pack(order + "IH", 8, len(tags))
+    for tag, kind, value in tags:
+        n = 3 if tag == 258 else 1
+        value = extra_at if tag == 258 else data_at if tag == 273 else value
+        out += struct.pack(order + "HHI", tag, kind, n)
+        out += struct.pack(order + ("HH" if kind == 3 and n == 1 else "I"), *((value, 0) if kind == 3 and n == 1
+                                                                               else (value,)))
+    path.write_bytes(out + struct.pack(order + "I", 0) + struct.pack(order + "HHH", 16, 16, 16) + data)
+
+
+def write_pfm(path, img, scale=1.0, little=True):
+    """A PFM (colour 'PF' or grey 'Pf'): rows bottom-up, the scale's sign giving the byte order."""
+    h, w = img.shape[:2]
+    magic = b"PF" if img.ndim == 3 else b"Pf"
+    head = magic + f"\n{w} {h}\n{-scale if little else scale}\n".encode()
+    path.write_bytes(head + np.ascontiguousarray(img[::-1], "<f4" if little else ">f4").tobytes())
+
+
+@pytest.fixture(scope="module")
+def image_files(tmp_path_factory):
+    """The same pixels in every format we read (written by Pillow or by hand after the formats' specifications), with
+    the linear values each must give: (file, expected with raw=False, expected with raw=True)."""
+    from clrender.textures.imagefile import srgb_to_linear
+
+    d = tmp_path_factory.mktemp("formats")
+    rng = np.random.default_rng(21)
+    c8 = rng.integers(0, 256, (5, 7, 4)).astype(np.uint8)
+    c16 = rng.integers(0, 65536, (5, 7, 3)).astype(np.uint16)
+    f32 = (rng.random((5, 7, 3)) * 4).astype(np.float32)
+    rgb, grey = c8[..., :3] / 255.0, np.repeat(c8[..., :1] / 255.0, 3, -1)
+    eight = lambda v: (srgb_to_linear(v).astype(np.float32), v.astype(np.float32))   # noqa: E731
+    half = lambda v: (srgb_to_linear(v).astype(np.float16).astype(np.float32),       # noqa: E731
+                      v.astype(np.float16).astype(np.float32))
+    linear = lambda v: (v.astype(np.float32), v.astype(np.float32))                 # noqa: E731
+    cases = {}
+    for name, arr, mode, kw in (("rgb.bmp", c8[..., :3], None, {}), ("rgba.bmp", c8, None, {}),
+                                ("grey.bmp", c8[..., 0], None, {}), ("rgb.tga", c8[..., :3], None, {}),
+                                ("rgba.tga", c8, None, {}), ("grey.tga", c8[..., 0], None, {}),
+                                ("rle.tga", c8[..., :3], None, {"compression": "tga_rle"}),
+                                ("rgb.ppm", c8[..., :3], None, {}), ("grey.pgm", c8[..., 0], None, {}),
+                                ("lzw.tif", c8[..., :3], None, {"compression": "tiff_lzw"}),
+                                ("rgba.tif", c8, None, {}), ("greya.png", c8[..., :2], "LA", {})):
+        Image.fromarray(arr, mode).save(d / name, **kw)
+        cases[name] = eight(grey if arr.ndim == 2 or mode == "LA" else rgb)
+    Image.fromarray(c16[..., 0]).save(d / "grey16.tif")      # Pillow writes mode I;16 as 16-bit grey
+    cases["grey16.tif"] = half(np.repeat(c16[..., :1] / 65535.0, 3, -1))
+    (d / "grey16.pgm").write_bytes(b"P5\n7 5\n65535\n" + c16[..., 0].astype(">u2").tobytes())
+    cases["grey16.pgm"] = cases["grey16.tif"]
+    (d / "rgb16.ppm").write_bytes(b"P6\n# a comment\n7 5\n65535\n" + c16.astype(">u2").tobytes())   # big-endian
+    for order in "<>":
+        write_tiff16(d / f"rgb16{order == '<' and 'le' or 'be'}.tif", c16, order)
+    for name in ("rgb16.ppm", "rgb16le.tif", "rgb16be.tif"):
+        cases[name] = half(c16 / 65535.0)
+    write_pfm(d / "le.pfm", f32, scale=1.0)
+    write_pfm(d / "be2.pfm", f32 / 2, scale=2.0, little=False)       # Mitsuba multiplies by the scale
+    write_pfm(d / "grey.pfm", f32[..., 0] / 4, scale=4.0)
+    cases["le.pfm"] = cases["be2.pfm"] = linear(f32)
+    cases["grey.pfm"] = linear(np.repeat(f32[..., :1], 3, -1))
+    Image.fromarray(c8[..., :3]).save(d / "really-a-png.jpg", format="PNG")   # read by content, as Mitsuba does
+    cases["really-a-png.jpg"] = cases["rgb.bmp"]
+    return [(d / name, *values) for name, values in cases.items()]
+
+
+def test_image_formats(image_files):
+    """BMP, TGA (plain and run-length), PPM/PGM (8 and 16 bits), TIFF (8 bits, LZW; 16-bit grey and colour in
+    both byte orders), PFM (colour and grey, both byte orders, with a scale), alpha dropped: every pixel, sRGB-decoded
+    unless raw; 16-bit values at half precision as Mitsuba keeps them; first row at t = 0."""
+    from clrender.textures.imagefile import read_image
+
+    for path, want, want_raw in image_files:
+        np.testing.assert_allclose(read_image(path), want, rtol=1e-6, atol=1e-7, err_msg=path.name)
+        np.testing.assert_allclose(read_image(path, raw=True), want_raw, rtol=1e-6, atol=1e-7, err_msg=path.name)
+        t = bitmap(path, filter_type="nearest")
+        np.testing.assert_allclose(t.eval([[0.5 / 7, 0.5 / 5], [6.5 / 7, 4.5 / 5]]), want[[0, 4], [0, 6]],
+                                   rtol=1e-6, atol=1e-7, err_msg=path.name)
+
+
+def test_image_formats_match_mitsuba(image_files):
+    """Mitsuba 3.9.1's own bitmap texture reads the same values from the formats it reads (it reads no TIFF, no
+    greyscale PPM; its 16-bit PPM is little-endian, against the Netpbm specification that we and Pillow follow)."""
+    mi = real_mitsuba("Mitsuba 3 is not installed (pip install mitsuba==3.9.1): it checks the image formats")
+    mi.set_variant("scalar_rgb")
+    si = mi.SurfaceInteraction3f()
+    uv = np.stack(np.meshgrid((np.arange(7) + 0.5) / 7, (np.arange(5) + 0.5) / 5), -1).reshape(-1, 2)
+    checked = 0
+    for path, _, _ in image_files:
+        if path.suffix in (".tif", ".pgm") or path.name == "rgb16.ppm":
+            continue
+        for raw in (False, True):
+            theirs = mi.load_dict({"type": "bitmap", "filename": str(path), "raw": raw, "filter_type": "nearest"})
+            want = []
+            for u in uv:
+                si.uv = mi.Point2f(*u)
+                want.append(np.array(theirs.eval(si)))
+            np.testing.assert_allclose(bitmap(path, raw=raw, filter_type="nearest").eval(uv), want, rtol=1e-6,
+                                       atol=1e-7, err_msg=f"{path.name} raw={raw}")
+            checked += 1
+    assert checked == 2 * 13
+    from clrender.textures.imagefile import read_image
+
+    f32 = (np.random.default_rng(22).random((5, 20, 3)) * 40).astype(np.float32)   # >= 8 wide: RLE rows
+    for name in ("mi.hdr", "mi.pfm"):   # as Mitsuba writes them (its RGBE is run-length encoded)
+        path = image_files[0][0].parent / name
+        mi.Bitmap(f32).write(str(path))
+        np.testing.assert_array_equal(read_image(path), np.array(mi.Bitmap(str(path))), err_msg=name)
+
+
+def test_unsupported_images(tmp_path):
+    Image.fromarray(np.zeros((2, 2), np.uint8)).save(tmp_path / "a.gif")
+    with pytest.raises(SceneError, match=r"unsupported image format \(its content is none of OpenEXR"):
+        bitmap(tmp_path / "a.gif")
+    (tmp_path / "short.pfm").write_bytes(b"PF\n4 4\n-1\n" + bytes(20))
+    with pytest.raises(SceneError, match="ends before its 4 x 4 pixels"):
+        bitmap(tmp_path / "short.pfm")
+    (tmp_path / "short.ppm").write_bytes(b"P6\n4 4\n65535\n" + bytes(20))
+    with pytest.raises(SceneError, match="ends before its 48 samples"):
+        bitmap(tmp_path / "short.ppm")

@@ -6,7 +6,7 @@
     <integer name="height" value="720"/>      <!-- default 720 -->
     <float name="fov" value="30"/>            <!-- horizontal field of view in degrees, default 30 -->
     <float name="nearClip" value="1e-4"/>     <!-- default 1e-4 -->
-    <float name="farClip" value="1e4"/>       <!-- default 1e4 -->
+    <float name="farClip" value="1e4"/>       <!-- default 1e4; inf: no far clipping -->
     <transform name="toWorld">                <!-- default identity: at the origin looking down +z -->
         <lookat origin="0,0,-5" target="0,0,0" up="0,1,0"/>
     </transform>
@@ -24,6 +24,8 @@ upstream and the kernel (kernels/camera.h) computes the eth form. A `lookat` who
 the viewing direction leaves toWorld with zero x and y columns; as in Nori, every ray then leaves along
 the viewing direction.
 """
+import math
+
 import numpy as np
 
 from ..device import layout
@@ -31,6 +33,9 @@ from ..errors import SceneError
 from ..filters.gaussian import GaussianFilter
 from ..scene.dialect import mirrors_camera_x
 from ..scene.registry import register
+
+#: the device's far clip for inf (no far clipping)
+NO_FAR_CLIP = 1e25
 
 
 @register("camera", "perspective")
@@ -42,7 +47,7 @@ class PerspectiveCamera:
         self.height = props.get_int("height", 720)
         self.fov = props.get_float("fov", 30.0)
         self.near_clip = props.get_float("nearClip", 1e-4)
-        self.far_clip = props.get_float("farClip", 1e4)
+        self.far_clip = props.get_float("farClip", 1e4, no_limit=True)
         self.to_world = props.get_transform("toWorld")
         for name, v in (("width", self.width), ("height", self.height)):
             if not 0 < v <= 65536:
@@ -76,7 +81,9 @@ class PerspectiveCamera:
             row["to_world"][0, :3] *= -1.0
         row["tan_half_fov"] = np.tan(np.radians(self.fov) / 2)
         row["inv_aspect"] = self.height / self.width
-        row["near_clip"], row["far_clip"] = self.near_clip, self.far_clip
+        # "no limit" on the device: beyond every distance a scene can hold (shapes stop at 1e18), and far from
+        # float's overflow in tmax = far_clip / cos(angle) * scale
+        row["near_clip"], row["far_clip"] = self.near_clip, min(self.far_clip, NO_FAR_CLIP)
         row["width"], row["height"] = self.width, self.height
         row["film_width"], row["film_height"] = self.width, self.height
         self.pack_film(row)
@@ -136,7 +143,7 @@ class MitsubaPerspectiveCamera(PerspectiveCamera):
         <float name="fov" value="45"/>            <!-- degrees; or focal_length (default "50mm") -->
         <string name="fov_axis" value="x"/>       <!-- x (default), y, diagonal, smaller, larger -->
         <float name="near_clip" value="0.01"/>    <!-- default 0.01 -->
-        <float name="far_clip" value="10000"/>    <!-- default 10000 -->
+        <float name="far_clip" value="10000"/>    <!-- default 10000; inf: no far clipping -->
         <float name="focus_distance" value="5"/>  <!-- accepted, no effect (a pinhole), as in Mitsuba -->
         <float name="shutter_open" value="0"/>    <!-- and shutter_close: accepted, no effect (nothing moves) -->
         <float name="principal_point_offset_x" value="0"/>   <!-- default 0; and _y: perspective only -->
@@ -168,7 +175,9 @@ class MitsubaPerspectiveCamera(PerspectiveCamera):
             self.sampler = MitsubaIndependentSampler.default()
         film = self.film
         self.near_clip = props.get_float("near_clip", 0.01)
-        self.far_clip = props.get_float("far_clip", 1e4)
+        # inf means no far clipping here (Mitsuba 3.9.1 takes it too, but its rays then meet nothing: their maxt
+        # becomes NaN)
+        self.far_clip = props.get_float("far_clip", 1e4, no_limit=True)
         if not 0 < self.near_clip < self.far_clip:
             raise SceneError(f"need 0 < near_clip < far_clip, got {self.near_clip}, {self.far_clip}",
                              props.location("near_clip") if props.has("near_clip") else spec.location)
@@ -244,6 +253,9 @@ class MitsubaThinLensCamera(MitsubaPerspectiveCamera):
 
     def read_lens(self, props) -> None:
         self.lens_radius = props.get_float("aperture_radius")
+        if not props.has("focus_distance") and math.isinf(self.far_clip):
+            raise SceneError("a thinlens sensor whose far_clip is inf needs a focus_distance (its default is far_clip)",
+                             props.location("far_clip"))
         self.focus_distance = props.get_float("focus_distance", self.far_clip)
         if not 0 <= self.lens_radius < 1e30:
             raise SceneError(f"aperture_radius must be 0 or more, got {self.lens_radius}",

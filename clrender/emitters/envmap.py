@@ -3,14 +3,16 @@ importance sampled by a 2-D piecewise-constant distribution over the image.
 
 ```xml
 <emitter type="envmap">
-    <string name="filename" value="sky.exr"/>   <!-- required: .exr or .hdr, at least 2 x 3 pixels -->
+    <string name="filename" value="sky.exr"/>   <!-- required: an image file that `bitmap` reads -->
     <float name="scale" value="1"/>             <!-- multiplies the radiance, default 1 -->
     <transform name="to_world">                 <!-- a rotation, default identity -->
         <rotate y="1" angle="90"/>
     </transform>
 </emitter>
 ```
-Conventions (Mitsuba's, from its plugin sources): a world direction d maps to local v = to_world⁻¹ d, and to
+Conventions (Mitsuba's, from its plugin sources): a map narrower than 2 or lower than 3 pixels is first padded to
+that size by repeating its last column and its last row (Mitsuba 3.9.1's `Bitmap::pad_to`), so a 1 x 1 map is a
+constant sky. A world direction d maps to local v = to_world⁻¹ d, and to
 uv = (atan2(v.x, -v.z) / 2π, acos(v.y) / π): +y is up, row 0 of the image is the zenith, the last row the nadir.
 The image gets an extra column (a copy of the first) so that it is periodic in u, and the radiance is the bilinear
 interpolation of those W+1 by H pixel values at x = W (u − ½/W mod 1), y = (H − 1) v, times `scale`: pixel
@@ -35,6 +37,13 @@ from ..textures.imagefile import read_image
 from .emitter import LUMINANCE, Emitter
 
 
+def pad_to(img: np.ndarray, width: int, height: int) -> np.ndarray:
+    """img grown to at least width x height by repeating its last column, then its last row (as Mitsuba's
+    `Bitmap::pad_to`): the lookup below needs two columns and two cells of latitude."""
+    h, w = img.shape[:2]
+    return np.pad(img, ((0, max(height - h, 0)), (0, max(width - w, 0)), (0, 0)), mode="edge")
+
+
 @register("emitter", "envmap", fmt="mitsuba")
 class EnvMap(Emitter):
     kernel = "emitters/envmap.h"
@@ -43,11 +52,7 @@ class EnvMap(Emitter):
 
     def __init__(self, props, children, spec):
         path = Path(props.get_string("filename"))   # the reader resolved it against the scene's folder
-        self.image = read_image(path, location=props.location("filename"))
-        h, w = self.image.shape[:2]
-        if w < 2 or h < 3:
-            raise SceneError(f"'{path.name}': an environment map needs at least 2 x 3 pixels, got {w} x {h}",
-                             props.location("filename"))
+        self.image = pad_to(read_image(path, location=props.location("filename"), half=False), 2, 3)
         if np.any(self.image < 0):
             raise SceneError(f"'{path.name}': an environment map cannot hold negative radiance",
                              props.location("filename"))

@@ -6,6 +6,8 @@ that :meth:`PropertyList.check_unused` can flag typos like ``<float name="radus"
 """
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass
 from typing import Any, Iterator
 
@@ -169,10 +171,22 @@ class PropertyList:
         p.used = True
         return p
 
-    def get_float(self, name: str, default: Any = REQUIRED) -> float:
+    def get_float(self, name: str, default: Any = REQUIRED, no_limit: bool = False) -> float:
+        """`no_limit`: a <float> written as inf (or infinity) is taken, meaning no limit (a far clip); everywhere
+        else it is an error, as any other non-finite number is where the file is read."""
         # Nori-style scenes often write integral values as <integer>; accepting them is harmless.
         p = self._fetch(name, ("float", "integer"), default)
-        return default if p is None else float(p.value)
+        if p is None:
+            return default
+        if not no_limit:
+            self._finite(p)
+        return float(p.value)
+
+    @staticmethod
+    def _finite(p: Property) -> None:
+        if p.tag == "float" and math.isinf(p.value):
+            raise SceneError(f"number '{p.raw or p.value}' of '{p.name}' is infinite; every number in a scene must "
+                             f"be finite (only a far clip takes inf, for no limit)", p.location)
 
     def get_int(self, name: str, default: Any = REQUIRED) -> int:
         p = self._fetch(name, ("integer",), default)
@@ -198,6 +212,7 @@ class PropertyList:
             if d.size != n:
                 raise ValueError(f"default of {tag} '{name}' must have {n} numbers, got {d.size}")
             return d
+        self._finite(p)
         v = p.value
         if p.tag in ("float", "integer"):   # a Mitsuba colour written as a number: grey
             return np.full(n, float(v))

@@ -268,7 +268,10 @@ class _Builder:
         return f'<{el.tag} name="{name}">' if name else f"<{el.tag}>"
 
     # --- values ---------------------------------------------------------------------------------
-    def numbers(self, el: _Elem, attr: str, text: str, counts: tuple[int, ...] | None = None) -> np.ndarray:
+    def numbers(self, el: _Elem, attr: str, text: str, counts: tuple[int, ...] | None = None,
+                spelled_inf: bool = False) -> np.ndarray:
+        """The numbers of an attribute, each finite and within float32's range. `spelled_inf`: also +inf written as
+        such (inf, infinity), which the property's getter refuses unless it means "no limit" there."""
         tag = self._describe(el)
         tokens = [t for t in _NUM_SPLIT.split(text.strip()) if t]
         if not tokens:
@@ -282,6 +285,8 @@ class _Builder:
                 raise SceneError(f"bad number '{t}' in attribute {attr}=\"{text}\" of {tag}; "
                                  f"expected numbers separated by commas and/or spaces",
                                  self.attr_loc(el, attr)) from None
+            if spelled_inf and values[-1] == math.inf and t.lower().lstrip("+") in ("inf", "infinity"):
+                continue
             if not math.isfinite(values[-1]):
                 what = "not a number" if math.isnan(values[-1]) else "infinite (or too large for a float)"
                 raise SceneError(f"number '{t}' in attribute {attr}=\"{text}\" of {tag} is {what}; "
@@ -297,8 +302,8 @@ class _Builder:
                              self.attr_loc(el, attr))
         return np.array(values, dtype=np.float64)
 
-    def one_float(self, el: _Elem, attr: str, text: str) -> float:
-        return float(self.numbers(el, attr, text, (1,))[0])
+    def one_float(self, el: _Elem, attr: str, text: str, spelled_inf: bool = False) -> float:
+        return float(self.numbers(el, attr, text, (1,), spelled_inf)[0])
 
     def value_of(self, el: _Elem, tag: str, text: str):
         if tag == "boolean":
@@ -313,7 +318,7 @@ class _Builder:
                                  self.attr_loc(el, "value"))
             return int(text.strip())
         if tag == "float":
-            return self.one_float(el, "value", text)
+            return self.one_float(el, "value", text, spelled_inf=True)
         if tag == "string":
             return text
         # point / vector / color: the getter checks the count, since it depends on the use (3 or 2).

@@ -2,10 +2,14 @@
 
 A device file (/dev/zero, /dev/urandom) or a FIFO named as a mesh would be read until memory runs out, or
 block forever; a folder gives an obscure error. Only regular files are meshes.
+
+A missing mesh file NAME may have a note beside it, NAME.missing (a short text file), which the error quotes:
+scenes/build.py leaves one where a generated mesh that is not kept in git belongs, saying which command makes it.
 """
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import stat
 import warnings
@@ -18,7 +22,8 @@ def mesh_file_problem(path: str) -> str | None:
     try:
         st = os.stat(path)
     except OSError as e:
-        return e.strerror or str(e)
+        note = missing_note(path) if e.errno == errno.ENOENT else None
+        return (e.strerror or str(e)) + (f" ({os.path.basename(path)}.missing: {note})" if note else "")
     if stat.S_ISDIR(st.st_mode):
         return "it is a folder, not a file"
     if not stat.S_ISREG(st.st_mode):
@@ -28,6 +33,18 @@ def mesh_file_problem(path: str) -> str | None:
     if not os.access(path, os.R_OK):
         return "permission denied"
     return None
+
+
+def missing_note(path: str) -> str | None:
+    """The text of PATH.missing (whitespace folded to single spaces), if it is a small regular file."""
+    try:
+        with open(path + ".missing", "rb") as f:
+            if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):
+                return None
+            text = f.read(2001).decode("utf-8", errors="replace")
+    except OSError:
+        return None
+    return " ".join(text.split())[:2000] or None
 
 
 def read_mesh_bytes(path, kind: str, location: SourceLocation | None) -> bytes:

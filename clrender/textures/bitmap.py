@@ -1,4 +1,5 @@
-"""Mitsuba 3's bitmap texture: an image (PNG, JPEG, EXR or HDR) looked up at the surface's uv.
+"""Mitsuba 3's bitmap texture: an image (any format textures/imagefile.py reads: EXR, HDR, PFM, PNG, JPEG, BMP, TGA,
+PPM, TIFF) looked up at the surface's uv.
 
 ```xml
 <bsdf type="diffuse">
@@ -6,7 +7,7 @@
         <string name="filename" value="wood.png"/>       <!-- required -->
         <string name="filter_type" value="bilinear"/>    <!-- bilinear (default) | nearest -->
         <string name="wrap_mode" value="repeat"/>        <!-- repeat (default) | mirror | clamp -->
-        <boolean name="raw" value="false"/>              <!-- true: no sRGB decoding of 8-bit images -->
+        <boolean name="raw" value="false"/>              <!-- true: no sRGB decoding of 8/16-bit images -->
         <transform name="to_uv"><scale x="2" y="2"/></transform>   <!-- default identity -->
     </texture>
 </bsdf>
@@ -16,8 +17,8 @@ wrap mode, with and without `raw` and `to_uv`): st = to_uv(uv), where a 4x4 `to_
 keeps x and y; the image's first row is at t = 0 (no flip), pixel (i, j) covers s in [i/W, (i+1)/W). `nearest`
 takes pixel floor(s W), floor(t H); `bilinear` interpolates the four pixels around (s W − ½, t H − ½). Pixel
 indices outside the image wrap: `repeat` modulo the size, `mirror` reflected at the edges (…, 1, 0, 0, 1, …,
-W−1, W−1, W−2, …), `clamp` to the edge. 8-bit images are sRGB-encoded and decoded to linear unless `raw`;
-EXR and HDR are linear. Grey images give three equal channels; alpha is ignored. Where a float parameter takes
+W−1, W−1, W−2, …), `clamp` to the edge. 8- and 16-bit images are sRGB-encoded and decoded to linear unless
+`raw`; EXR, HDR and PFM are linear. Grey images give three equal channels; alpha is ignored. Where a float parameter takes
 the texture (a roughness, a blend weight, an opacity), Mitsuba reads the luminance of the (decoded) colour.
 
 Texture row (kernels/textures/bitmap.h): p.bitmap.dims = (W, H, filter: 0 bilinear / 1 nearest, wrap: 0 repeat /
@@ -74,9 +75,6 @@ class Bitmap(Texture):
         path = Path(props.get_string("filename"))   # the reader resolved it against the scene's folder
         self.raw = props.get_bool("raw", False)
         self.image = read_image(path, raw=self.raw, location=props.location("filename"))
-        h, w = self.image.shape[:2]
-        if w < 1 or h < 1:
-            raise SceneError(f"'{path.name}' holds no pixels", props.location("filename"))
         self.filter = choice(props, "filter_type", FILTERS, "bilinear")
         self.wrap = choice(props, "wrap_mode", WRAPS, "repeat")
         self.to_uv = uv_transform(props)

@@ -1,10 +1,19 @@
-"""Reading the images that bitmap textures and environment maps name: OpenEXR (through the OpenEXR library),
-Radiance RGBE `.hdr` (read here: flat or new-style run-length scanlines) and 8- or 16-bit PNG, 8-bit JPEG (through
-Pillow).
+"""Reading the images that bitmap textures and environment maps name, by their content (as Mitsuba's `Bitmap`
+detects them), not their extension:
 
-`read_image(path)` returns (pixels as float32 H x W x 3, linear): EXR and HDR hold linear values already; 8-bit
-and 16-bit images hold sRGB-encoded values, which are decoded unless `raw` (Mitsuba's convention for `bitmap`: 8-bit images
-are sRGB unless `raw` is set). Grey images become three equal channels; an alpha channel is dropped.
+- OpenEXR: through the OpenEXR library;
+- PNG, JPEG, BMP, TGA, PPM/PGM/PBM, TIFF and greyscale PFM: through Pillow (16-bit colour PNG, TIFF and PPM, which
+  Pillow decodes to 8 bits, at full precision: see `_read_wide`);
+- Radiance RGBE (`.hdr`) and colour PFM, which none of the allowed libraries reads (Pillow reads greyscale PFM
+  only; OpenEXR neither): the small readers below, after the formats' descriptions (Greg Ward's RGBE with flat or
+  new-style run-length scanlines; PFM: "PF" or "Pf", width, height, a scale whose sign gives the byte order
+  (negative: little-endian) and whose magnitude multiplies the values, as Mitsuba applies it; rows bottom-up).
+
+`read_image(path)` returns (pixels as float32 H x W x 3, linear). Mitsuba's conventions: EXR, HDR, PFM and float
+TIFF hold linear values; 8- and 16-bit images hold sRGB-encoded values, which are decoded unless `raw`. A 16-bit
+image's (decoded) values are kept as half floats, as Mitsuba's `bitmap` texture stores them (`half=False`: as
+float32, as its `envmap` does). Grey images become three equal channels; an alpha channel is dropped, as Mitsuba's
+`bitmap` and `envmap` drop it (colours as stored, not divided by alpha).
 """
 from __future__ import annotations
 
@@ -14,6 +23,11 @@ import numpy as np
 
 from ..errors import SceneError
 
+#: Pillow's names of the formats we read through it (Mitsuba 3.9.1 reads PNG, JPEG, BMP, TGA, PPM; TIFF is ours).
+PILLOW_FORMATS = ("PNG", "JPEG", "BMP", "TGA", "PPM", "TIFF")
+EXR_MAGIC = b"\x76\x2f\x31\x01"
+FORMATS_SAID = "OpenEXR, Radiance HDR, PFM, PNG, JPEG, BMP, TGA, PPM/PGM or TIFF"
+
 
 def srgb_to_linear(x: np.ndarray) -> np.ndarray:
     """The sRGB transfer function's inverse on values in [0, 1] (IEC 61966-2-1)."""
@@ -21,28 +35,30 @@ def srgb_to_linear(x: np.ndarray) -> np.ndarray:
     return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
 
 
-def read_image(path, raw: bool = False, location=None) -> np.ndarray:
+def read_image(path, raw: bool = False, location=None, half: bool = True) -> np.ndarray:
     path = Path(path)
     if not path.is_file():
         what = "not found" if not path.exists() else "is not a regular file (a folder or a device)"
         raise SceneError(f"image file '{path}' {what}", location)
-    suffix = path.suffix.lower()
     try:
-        if suffix == ".exr":
+        with open(path, "rb") as f:
+            head = f.read(4)
+        if head == EXR_MAGIC:
             img = _read_exr(path)
-        elif suffix in (".hdr", ".rgbe", ".pic"):
+        elif head[:2] == b"#?":
             img = _read_rgbe(path)
-        elif suffix in (".png", ".jpg", ".jpeg"):
-            img = _read_8bit(path, raw)
+        elif head[:2] == b"PF":
+            img = _read_pfm(path)
         else:
-            raise SceneError(f"'{path.name}': unsupported image format '{suffix}'; expected .exr, .hdr, .png, "
-                             ".jpg or .jpeg", location)
+            img = _read_pillow(path, raw, half, location)
     except SceneError:
         raise
     except MemoryError:
         raise SceneError(f"image '{path}' is too large for the host memory", location) from None
     except Exception as exc:  # OpenEXR raises RuntimeError for a corrupt file, Pillow its DecompressionBombError
         raise SceneError(f"cannot read image '{path}': {exc}", location) from None
+    if img.shape[0] < 1 or img.shape[1] < 1:
+        raise SceneError(f"image '{path}' holds no pixels", location)
     if not np.all(np.isfinite(img)):
         raise SceneError(f"image '{path}' holds NaN or infinite values", location)
     return img
@@ -64,49 +80,98 @@ def _read_exr(path: Path) -> np.ndarray:
     return np.ascontiguousarray(img, np.float32)
 
 
-def _read_8bit(path: Path, raw: bool) -> np.ndarray:
-    from PIL import Image
+def _read_pillow(path: Path, raw: bool, half: bool, location) -> np.ndarray:
+    from PIL import Image, UnidentifiedImageError
 
-    with Image.open(path) as im:
+    try:
+        im = Image.open(path, formats=PILLOW_FORMATS)
+    except UnidentifiedImageError:
+        raise SceneError(f"cannot read image '{path}': unsupported image format (its content is none of "
+                         f"{FORMATS_SAID})", location) from None
+    with im:
+        if im.mode == "F":   # greyscale PFM (Pillow gives its scale's magnitude), float TIFF: linear already
+            a = np.asarray(im, np.float64) * im.info.get("scale", 1.0)
+            return np.repeat(a[..., None], 3, axis=-1).astype(np.float32)
         wide = True
-        if im.mode in ("I;16", "I;16L", "I;16B") or (im.mode == "I" and path.suffix.lower() == ".png"):  # 16-bit grey
+        if im.mode.startswith("I;16") or (im.mode == "I" and im.format in ("PNG", "PPM")):   # 16-bit grey
             a = np.repeat((np.asarray(im, np.float64) / 65535.0)[..., None], 3, axis=-1)
-        elif im.mode not in ("L", "LA", "RGB", "RGBA", "P"):
-            raise ValueError(f"only 8- or 16-bit grey or RGB images are supported, this one is mode {im.mode}")
-        elif _png16_layout(im) is not None:
-            a = _read_png16(path)
-        else:
+        elif im.mode in ("I", "I;32", "RGBX;16"):
+            raise ValueError(f"only 8- or 16-bit integer or float images are supported, this one is mode {im.mode}")
+        elif (wide_rgb := _read_wide(path, im)) is not None:
+            a = wide_rgb
+        else:   # 1-, 8-bit grey (+ alpha), palette, RGB(A), CMYK: 8 bits a channel
             a, wide = np.asarray(im.convert("RGB"), np.float64) / 255.0, False
     a = a if raw else srgb_to_linear(a)
-    # Mitsuba keeps a 16-bit image's (decoded) values as half floats (checked against Mitsuba 3.9.1's bitmap)
-    return (a.astype(np.float16) if wide else a).astype(np.float32)
+    # Mitsuba's bitmap keeps a 16-bit image's (decoded) values as half floats (checked against Mitsuba 3.9.1's bitmap)
+    return (a.astype(np.float16) if wide and half else a).astype(np.float32)
 
 
-#: 16-bit colour PNG sample layouts that Pillow decodes to 8 bits (its high bytes). (16-bit grey + alpha, which
-#: Pillow has no little-endian unpacker for, is read at 8 bits.)
-_PNG16 = ("RGB;16B", "RGBA;16B")
+#: Raw modes of 16-bit colour samples that Pillow decodes to 8 bits (keeping the high byte of each), and the raw
+#: mode of the other byte order. (16-bit grey + alpha, which Pillow has no unpacker for, is read at 8 bits.)
+_WIDE = {"RGB;16B": "RGB;16L", "RGBA;16B": "RGBA;16L", "RGB;16L": "RGB;16B", "RGBA;16L": "RGBA;16B"}
 
 
-def _png16_layout(im):
-    tile = getattr(im, "tile", None)
-    if im.format != "PNG" or not tile or len(tile) != 1:
-        return None
-    return tile[0].args if tile[0].args in _PNG16 else None
-
-
-def _read_png16(path: Path) -> np.ndarray:
-    """A 16-bit colour PNG at full precision, as RGB in [0, 1]. Pillow has no 16-bit colour mode: it unfilters the
-    rows as 16-bit data, then keeps one byte of each sample; reading the file twice, keeping the high bytes
-    (big-endian unpacking) and then the low ones (little-endian unpacking), gives both."""
+def _read_wide(path: Path, im) -> np.ndarray | None:
+    """A 16-bit colour image at full precision, as RGB in [0, 1]; None if `im` is not one. Pillow has no 16-bit
+    colour mode: it decodes (unfilters, decompresses) the samples as 16-bit data, then keeps one byte of each.
+    Decoding the file twice, with its own byte order and then the other one, gives both bytes. A binary 16-bit PPM
+    (maxval above 255), which Pillow rescales to 8 bits, is big-endian samples after the header Pillow parsed."""
     from PIL import Image
 
+    tile = getattr(im, "tile", None)
+    if not tile or len(tile) != 1:
+        return None
+    t = tile[0]
+    if im.format == "PPM" and t.codec_name == "ppm" and isinstance(t.args, tuple) and t.args[1] > 255:
+        h, w = im.size[1], im.size[0]
+        n = h * w * len(im.mode)
+        data = np.fromfile(path, ">u2", count=n, offset=t.offset)
+        if data.size != n:
+            raise ValueError(f"the file ends before its {n} samples")
+        return data.reshape(h, w, len(im.mode))[..., :3] / float(t.args[1])
+    args = t.args if isinstance(t.args, tuple) else (t.args,)
+    if not args or args[0] not in _WIDE:
+        return None
+    own = args[0]
     halves = []
-    for order in ("B", "L"):
-        with Image.open(path) as im:
-            im.tile = [im.tile[0]._replace(args=_png16_layout(im)[:-1] + order)]
-            im.load()
-            halves.append(np.asarray(im, np.float64)[..., :3])
+    for rawmode in (own, _WIDE[own]):   # the high bytes, then the low ones
+        with Image.open(path, formats=(im.format,)) as again:
+            t2 = again.tile[0]
+            a2 = t2.args if isinstance(t2.args, tuple) else (t2.args,)
+            new = (rawmode,) + a2[1:]
+            again.tile = [t2._replace(args=new if isinstance(t2.args, tuple) else rawmode)]
+            again.load()
+            halves.append(np.asarray(again, np.float64)[..., :3])
     return (halves[0] * 256.0 + halves[1]) / 65535.0
+
+
+def _read_pfm(path: Path) -> np.ndarray:
+    """A colour PFM ("PF"; greyscale "Pf" goes through Pillow)."""
+    data = path.read_bytes()
+    fields, pos = [], 0
+    while len(fields) < 4:   # magic, width, height, scale: separated by whitespace, one whitespace byte after scale
+        while pos < len(data) and data[pos:pos + 1].isspace():
+            pos += 1
+        start = pos
+        while pos < len(data) and not data[pos:pos + 1].isspace():
+            pos += 1
+        if start == pos or pos - start > 32:
+            raise ValueError("not a PFM header (PF, width, height, scale)")
+        fields.append(data[start:pos])
+    pos += 1
+    if fields[0] != b"PF":
+        raise ValueError("not a PFM header (PF, width, height, scale)")
+    try:
+        w, h, scale = int(fields[1]), int(fields[2]), float(fields[3])
+    except ValueError:
+        raise ValueError(f"cannot parse the PFM header {b' '.join(fields).decode(errors='replace')!r}") from None
+    if w < 0 or h < 0 or scale == 0 or not np.isfinite(scale):
+        raise ValueError(f"bad PFM header {b' '.join(fields).decode(errors='replace')!r}")
+    n = w * h * 3
+    if len(data) - pos < 4 * n:
+        raise ValueError(f"the file ends before its {w} x {h} pixels")
+    px = np.frombuffer(data, "<f4" if scale < 0 else ">f4", count=n, offset=pos).reshape(h, w, 3)
+    return (px[::-1].astype(np.float64) * abs(scale)).astype(np.float32)
 
 
 def _read_rgbe(path: Path) -> np.ndarray:
@@ -166,8 +231,9 @@ def _read_rgbe(path: Path) -> np.ndarray:
 
 
 def write_rgbe(path, img: np.ndarray) -> None:
-    """Write linear RGB (H x W x 3) as a flat (not run-length encoded) Radiance file (test assets)."""
-    img = np.asarray(img, np.float64)
+    """Write linear RGB (H x W x 3) as a flat (not run-length encoded) Radiance file (`-o NAME.hdr`, test assets).
+    Negative values become 0, values beyond RGBE's largest (2^127 · 255/256) that largest."""
+    img = np.clip(np.asarray(img, np.float64), 0.0, 2.0 ** 127 * 255 / 256)
     h, w, _ = img.shape
     m = img.max(axis=-1)
     mant, e = np.frexp(m)
@@ -178,3 +244,10 @@ def write_rgbe(path, img: np.ndarray) -> None:
     rgbe[..., 3] = np.where(ok, e + 128, 0).astype(np.uint8)
     head = f"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y {h} +X {w}\n".encode()
     Path(path).write_bytes(head + rgbe.tobytes())
+
+
+def write_pfm(path, img: np.ndarray) -> None:
+    """Write linear RGB (H x W x 3) as a little-endian colour PFM (scale -1, bottom row first)."""
+    img = np.asarray(img, np.float32)
+    h, w, _ = img.shape
+    Path(path).write_bytes(f"PF\n{w} {h}\n-1\n".encode() + np.ascontiguousarray(img[::-1], "<f4").tobytes())
