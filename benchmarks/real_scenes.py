@@ -1,7 +1,8 @@
 """A development harness over public scene sets: clrender and Mitsuba 3 on the same real scenes, side by side.
 
     python benchmarks/real_scenes.py FOLDER [FOLDER ...] [--res 96] [--spp 16] [--variant scalar_rgb]
-                                     [--keep-sampler] [--upgrade-0x] [--only SUBSTRING ...]
+                                     [--keep-sampler] [--upgrade-0x] [--resolve-path] [--drop NAME ...]
+                                     [--only SUBSTRING ...]
                                      [--skip SUBSTRING ...] [--json OUT]
 
 Not part of the test-suite, and nothing of these sets is ever committed: bring them onto your machine, keep them
@@ -26,7 +27,9 @@ Per scene it reports:
 - noise: clrender's per-pixel noise over Mitsuba's at equal spp (RMS of the difference of each one's two renders),
   over the whole image and over the 8 noisiest 16 x 16 blocks;
 - with --upgrade-0x, Mitsuba 0.x scenes (which clrender refuses, and whose <lookAt> Mitsuba 3 refuses) are read
-  by both from a textual upgrade to 3.x names, marked (0.x);
+  by both from a textual upgrade to 3.x names without the 0.x-only properties (DROPPED_0X), marked (0.x); with
+  --resolve-path, files found through a scene's <path> folders get absolute names and the <path>s go, marked (path);
+  --drop NAME... leaves those properties out (e.g. a pinhole's focus_distance, which Mitsuba ignores), marked (-N);
 - speed: Mitsuba's render seconds / clrender's (above 1: clrender is faster), render only (no loading, no
   kernel build), both on this machine's CPU.
 
@@ -61,6 +64,9 @@ sys.path.insert(0, str(ROOT))
 from clrender.testing.stats import block_sums  # noqa: E402
 
 BLOCK = 16
+#: Mitsuba 0.x properties that Mitsuba 3 has no counterpart for (hdrfilm's edge filtering and banner, the
+#: sampler's dimension count, 0.x's normal smoothing of serialized meshes, which leaves the file's normals)
+DROPPED_0X = ("high_quality_edges", "banner", "dimension", "max_smooth_angle", "attach_log")
 PREFIX = "_real_scenes_"
 
 
@@ -145,15 +151,37 @@ def inline_includes(text, folder, depth=0):
 
 def upgraded(text):
     """A Mitsuba 0.x scene's text in 3.x form, for both renderers (--upgrade-0x): version 3.0.0, camelCase property
-    names in snake_case (intIOR -> int_ior, toWorld -> to_world), <lookAt> as <lookat>. Textual, for comparison
-    runs only; clrender's own reader refuses 0.x files and says so."""
+    names in snake_case (intIOR -> int_ior, toWorld -> to_world), <lookAt> as <lookat>, and the 0.x-only properties
+    that Mitsuba 3 refuses (DROPPED_0X) left out. Textual, for comparison runs only; clrender's own reader refuses
+    0.x files and says so."""
     m = re.search(r'<scene\s+version="(0\.[^"]*)"', text)
     if not m:
         return text, False
     text = text.replace(m.group(0), '<scene version="3.0.0"')
     text = re.sub(r'(\bname=")([A-Za-z0-9_]+)(")', lambda q: q.group(1) + re.sub(
         r"([a-z0-9])([A-Z])", r"\1_\2", q.group(2)).lower() + q.group(3), text)
+    text = re.sub(r'<\w+\s+name="(%s)"\s+value="[^"]*"\s*/>' % "|".join(DROPPED_0X), "", text)
     return re.sub(r"<(/?)lookAt\b", r"<\1lookat", text), True
+
+
+def resolved_paths(text, folder, dirs=None):
+    """The scene's text with its <path value="..."/> elements removed and every relative filename that is not found
+    beside the scene made absolute from the first of those folders that holds it (--resolve-path: for comparison
+    runs only, like --upgrade-0x)."""
+    dirs = (dirs or []) + [folder / m for m in re.findall(r'<path\s+value="([^"]+)"\s*/>', text)]
+    if not dirs:
+        return text, False
+    text = re.sub(r'<path\s+value="[^"]+"\s*/>', "", text)
+
+    def repl(m):
+        f = m.group(2)
+        if os.path.isabs(f) or f.startswith("$") or (folder / f).exists():
+            return m.group(0)
+        for d in dirs:
+            if (d / f).exists():
+                return m.group(1) + str((d / f).resolve()) + m.group(3)
+        return m.group(0)
+    return re.sub(r'((?:name="filename"\s+value="|<include\s+filename="))([^"]+)(")', repl, text), True
 
 
 def first_line(e):
@@ -191,10 +219,18 @@ def run_scene(path, args, mi):
 
     row = {"scene": str(path), "read": None, "mitsuba_read": None, "rendered": None, "agrees": None}
     text = path.read_text()
+    dirs = [path.parent / m for m in re.findall(r'<path\s+value="([^"]+)"\s*/>', text)]
+    if args.resolve_path:
+        text, row["paths_resolved"] = resolved_paths(text, path.parent)
     if "<film" not in text:
         text = inline_includes(text, path.parent)
+        if args.resolve_path:       # the included files' names, through the main file's <path>s
+            text = resolved_paths(text, path.parent, dirs)[0]
     if args.upgrade_0x:
         text, row["upgraded"] = upgraded(text)
+    if args.drop:
+        text, n = re.subn(r'<\w+\s+name="(%s)"\s+value="[^"]*"\s*/>' % "|".join(map(re.escape, args.drop)), "", text)
+        row["dropped"] = n
     text, (w, h) = resized(text, args.res, args.keep_sampler)
     row["size"] = [w, h]
     tmp = path.parent / f"{PREFIX}{path.stem}.xml"
@@ -255,7 +291,8 @@ def fmt(row):
     def g(k, f="{:.3f}"):
         v = row.get(k)
         return "" if v is None else f.format(v)
-    name = Path(row["scene"]).parent.name + "/" + Path(row["scene"]).name + (" (0.x)" if row.get("upgraded") else "")
+    name = Path(row["scene"]).parent.name + "/" + Path(row["scene"]).name + (" (0.x)" if row.get("upgraded") else "") + \
+        (" (path)" if row.get("paths_resolved") else "") + (f" (-{row['dropped']})" if row.get("dropped") else "")
     mean = "" if "mean_ratio" not in row else f"{row['mean_ratio']:.3f} ± {row['mean_ratio_se']:.3f}"
     noise = "" if "noise" not in row else f"{row['noise']:.2f} / {row['noise_worst']:.2f}"
     blocks = "" if "blocks" not in row else f"{row['blocks']:.2f} ({row['worst_block']:.1f})"
@@ -276,6 +313,10 @@ def main(argv=None):
     ap.add_argument("--keep-sampler", action="store_true", help="keep each scene's sampler (default: independent)")
     ap.add_argument("--upgrade-0x", action="store_true",
                     help="render Mitsuba 0.x scenes from a textual 3.x upgrade (both renderers; marked '(0.x)')")
+    ap.add_argument("--resolve-path", action="store_true",
+                    help="resolve <path> folders textually for both renderers (marked '(path)')")
+    ap.add_argument("--drop", nargs="*", default=(), metavar="NAME",
+                    help="leave these properties out of every copy, for both renderers (rows marked '(-N)')")
     ap.add_argument("--only", nargs="*", default=(), help="only scenes whose path contains one of these")
     ap.add_argument("--skip", nargs="*", default=(), help="leave out scenes whose path contains one of these")
     ap.add_argument("--json", type=Path, help="write the rows and the settings here")
