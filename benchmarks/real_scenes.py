@@ -106,7 +106,7 @@ def defaults_of(text):
     return dict(re.findall(r'<default\s+name="([^"]+)"\s+value="([^"]*)"', text))
 
 
-def resized(text, res, keep_sampler):
+def resized(text, res, keep_sampler, spp=16):
     """The scene's XML with its film scaled to `res` pixels along the longer side and (unless keep_sampler) an
     independent sampler; the film's sizes may be numbers or $names with <default>s."""
     defaults = defaults_of(text)
@@ -131,6 +131,8 @@ def resized(text, res, keep_sampler):
                           f'<integer name="{name}" value="{val}"/>' + ("</film>" if m.group(2) else ""), text, count=1)
     if not keep_sampler:
         text = re.sub(r'<sampler\s+type="[^"]+"', '<sampler type="independent"', text)
+    # a sample count given by the caller (Mitsuba's documentation scenes leave $spp to their render script)
+    text = re.sub(r'(<integer\s+name="sample_count"\s+value=")\$\w+(")', rf"\g<1>{spp}\g<2>", text)
     return text, (nw, nh)
 
 
@@ -222,7 +224,7 @@ def run_scene(path, args, mi):
     dirs = [path.parent / m for m in re.findall(r'<path\s+value="([^"]+)"\s*/>', text)]
     if args.resolve_path:
         text, row["paths_resolved"] = resolved_paths(text, path.parent)
-    if "<film" not in text:
+    if "<film" not in text or (args.resolve_path and dirs):   # included files' names go through the <path>s too
         text = inline_includes(text, path.parent)
         if args.resolve_path:       # the included files' names, through the main file's <path>s
             text = resolved_paths(text, path.parent, dirs)[0]
@@ -231,7 +233,7 @@ def run_scene(path, args, mi):
     if args.drop:
         text, n = re.subn(r'<\w+\s+name="(%s)"\s+value="[^"]*"\s*/>' % "|".join(map(re.escape, args.drop)), "", text)
         row["dropped"] = n
-    text, (w, h) = resized(text, args.res, args.keep_sampler)
+    text, (w, h) = resized(text, args.res, args.keep_sampler, args.spp)
     row["size"] = [w, h]
     tmp = path.parent / f"{PREFIX}{path.stem}.xml"
     tmp.write_text(text)
