@@ -187,3 +187,28 @@ def compare_mean_to_value(film, reference, alpha: float = 0.01, mask=None) -> ZT
     m, se = mean_and_error(film, mask)
     ref = np.broadcast_to(np.asarray(reference, np.float64), m.shape)
     return _ztest(m - ref, se * se, alpha, "image mean vs reference")
+
+
+
+def block_sums(image: np.ndarray, block: int = 16) -> tuple[np.ndarray, np.ndarray]:
+    """Sums of the image over block x block tiles (the last row and column of tiles may be smaller), and the
+    number of pixels in each tile: (ceil(H / block), ceil(W / block)) + image.shape[2:], and (ceil(H / block),
+    ceil(W / block))."""
+    a = np.asarray(image, np.float64)
+    h, w = a.shape[:2]
+    ys, xs = range(0, h, block), range(0, w, block)
+    sums = np.stack([np.stack([a[y:y + block, x:x + block].sum(axis=(0, 1)) for x in xs]) for y in ys])
+    counts = np.array([[min(block, h - y) * min(block, w - x) for x in xs] for y in ys], np.float64)
+    return sums, counts
+
+
+def compare_block_means_to_value(film, reference, block: int = 16, alpha: float = 0.01) -> ZTestResult:
+    """Each block x block tile's mean (per channel) against a reference value, for scenes whose every pixel has
+    the same value: local like a per-pixel test (a leak along one edge fails it) but pooling a tile's samples, so
+    the means are close to normal where a pixel's few samples are skewed (Russian roulette, small bright lights)."""
+    sums, n = block_sums(film.image, block)
+    var, _ = block_sums(film.variance(), block)
+    n = n.reshape(n.shape + (1,) * (sums.ndim - 2))
+    m = sums / n
+    ref = np.broadcast_to(np.asarray(reference, np.float64), m.shape)
+    return _ztest(m - ref, var / (n * n), alpha, f"{block}x{block} block means vs reference")
