@@ -84,6 +84,7 @@ def _device_spec(plan, worker_name):
 
 
 def _renderer_for(payload, spec, worker):
+    from . import plugins  # noqa: F401  (a worker is a composition root: shipped tables need the plugins' code)
     from .renderer import Renderer
 
     key = (payload.key, spec)

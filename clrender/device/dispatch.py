@@ -35,6 +35,8 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..scene import registry
+
 
 @dataclass(frozen=True)
 class Method:
@@ -188,13 +190,6 @@ RFILTER = Kind(
 KINDS = {k.tag: k for k in (TEXTURE, SHAPE, BSDF, EMITTER, INTEGRATOR, RFILTER)}
 
 
-def _registry():
-    from .. import plugins  # noqa: F401  (registers every plugin)
-    from ..scene import registry
-
-    return registry
-
-
 def prefix_of(cls) -> str:
     return getattr(cls, "prefix", None) or Path(cls.kernel).stem.split(".")[0]
 
@@ -271,10 +266,9 @@ def flags_of(cls) -> int:
 
 
 def _classes(kind: Kind) -> list[type]:
-    reg = _registry()
     out = []
     for t in kind.tags:
-        out += [c for c in reg.registered_classes(t) if c not in out]
+        out += [c for c in registry.registered_classes(t) if c not in out]
     return out
 
 

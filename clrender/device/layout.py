@@ -109,7 +109,7 @@ def _layout(fields):
 
 
 def _signature() -> tuple:
-    from .. import plugins  # noqa: F401  (registers every plugin before the registry is read)
+    # the registry as it stands: whoever assembles the application (loader, CLI, testing, ...) imports the plugins
     from ..scene.registry import snapshot
 
     return _signature_of(snapshot())
@@ -120,7 +120,12 @@ def _signature_of(registrations: tuple) -> tuple:
     # dispatch.signature() walks the whole registry (ms per call); dtype() asks for it for every table row packed
     from .dispatch import signature
 
-    return signature()
+    sig = signature()
+    if not any(kind == "bsdf" for kind, *_ in sig):
+        # rows and programs laid out now would hold no plugin: black renders or C errors far from the cause
+        raise RuntimeError("no device plugins are registered: the application imports clrender.plugins (as "
+                           "clrender.loader does) before it packs rows or builds programs")
+    return sig
 
 
 def _plain_dtype(fields) -> np.dtype:

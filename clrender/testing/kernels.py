@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import plugins  # noqa: F401  (the test programs hold every plugin)
 from ..device import layout
 from ..device.program import build_program
 
