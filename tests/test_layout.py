@@ -9,18 +9,15 @@ from clrender.device.program import build_program
 
 def _entries():
     """(label, C expression of the offset or size, expected value) for every struct, field and plugin member."""
-    from clrender.device.dispatch import KINDS
-
     out = []
     for name, fields in layout.STRUCTS.items():
         dt = layout.dtype(name)
         out.append((f"sizeof {name}", f"sizeof({name})", dt.itemsize))
         out.extend((f"{name}.{f[0]}", f"OFFSET({name}, {f[0]})", dt.fields[f[0]][1]) for f in fields)
-    for name in layout.UNION_STRUCTS:
-        kind = next(k for k in KINDS.values() if k.struct == name)
+    for name, row in layout.ROWS.items():
         dt = layout.dtype(name)
         out.append((f"sizeof {name}", f"sizeof({name})", dt.itemsize))
-        header = [f[0] for f in kind.header]
+        header = [f[0] for f in row.header]
         out.extend((f"{name}.{f}", f"OFFSET({name}, {f})", dt.fields[f][1]) for f in header)
         for member in dt.names:
             if member in header:
