@@ -52,6 +52,15 @@ def _scene_tables_c() -> str:
     return "\n".join(out)
 
 
+def constants_c() -> str:
+    """The #defines of NONE, layout.ENUMS and the kinds' flag bits: all a kernel without plugin rows needs (the BVH
+    builder's), and needs no registered plugin."""
+    out = [f"#define NONE 0x{layout.NONE:08X}u"]
+    out.extend(f"#define {k} {v}u" for k, v in layout.ENUMS.items())
+    out.extend(f"#define {k} {v}u" for k, v in dispatch.flag_defines().items())
+    return "\n".join(out)
+
+
 def c_header() -> str:
     return _c_header(layout.plugin_signature())
 
@@ -69,9 +78,7 @@ def _c_header(sig: tuple) -> str:
     for name in layout.ROWS:
         out.append(_row_c(name, sig))
     out.append(_scene_tables_c())
-    out.append(f"#define NONE 0x{layout.NONE:08X}u")
-    out.extend(f"#define {k} {v}u" for k, v in layout.ENUMS.items())
-    out.extend(f"#define {k} {v}u" for k, v in dispatch.flag_defines().items())
+    out.append(constants_c())
     out.append("#endif")
     return "\n".join(out) + "\n"
 
