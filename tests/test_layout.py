@@ -66,3 +66,22 @@ def test_vectors_are_16_byte_aligned():
         for field, (sub, off, *_) in dt.fields.items():
             if {f[0]: f[1] for f in layout.STRUCTS[name]}[field] in ("float4", "uint4"):
                 assert off % 16 == 0, (name, field, off)
+
+
+def test_film_accumulators_match_device(ctx, queue):
+    # FILM_ARGS as the render kernel takes them: each accumulator's element, sized by the device, against the dtype
+    # the host allocates, downloads and reads it with.
+    names = [n for n, *_ in layout.FILM_ACCUMULATORS]
+    assert names[:3] == ["acc0", "acc1", "bad"]
+    src = "__kernel void probe(FILM_ARGS, __global uint* out) {\n"
+    src += "".join(f"    out[{i}] = (uint)sizeof(*{n});\n" for i, n in enumerate(names)) + "}\n"
+    prg = build_program(ctx, src)
+    out = np.zeros(len(names), np.uint32)
+    buf = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, out.nbytes)
+    dummy = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, 16)
+    prg.probe(queue, (1,), None, *([dummy] * len(names)), buf)
+    cl.enqueue_copy(queue, out, buf)
+    queue.finish()
+    host = [np.dtype(dt).itemsize * int(np.prod(shape)) for dt, shape in map(layout.film_element, names)]
+    assert out.tolist() == host
+    assert layout.film_bytes_per_pixel() == sum(host[:3]) and layout.film_bytes_per_pixel(True) == sum(host)

@@ -108,6 +108,19 @@ SCENE_TABLES: list[tuple[str, str, str]] = [
     ("info", "SceneInfo", "scene-wide numbers and the integrator's parameters"),
 ]
 
+# The film's per-pixel accumulators, in the render kernel's argument order: (argument, element type, what each
+# pixel's element holds, whether it exists only in builds that count rays). One buffer of one element per pixel
+# each; the kernels take them as FILM_ARGS (each the argument of its name), the host allocates, downloads and reads
+# them by these names (clrender/renderer.py, film.py Film.sums), and the film's memory is counted from their sizes
+# (memcheck.py). Without CLRENDER_COUNT_RAYS a counting-only buffer is a one-element dummy the kernel never touches,
+# so both builds take the same arguments.
+FILM_ACCUMULATORS: list[tuple[str, str, str, bool]] = [
+    ("acc0", "float4", "xyz: sum of w L, w: sum of w (the filter weights)", False),
+    ("acc1", "float4", "xyz: sum of (w L)^2, w: samples accumulated", False),
+    ("bad", "uint", "samples dropped for being NaN/Inf", False),
+    ("rays", "uint4", "rays traced: camera, other closest-hit, shadow (any-hit), 0", True),
+]
+
 # Type tags and flag bits, shared the same way (emitted as #defines).
 ENUMS: dict[str, int] = {
     # BVH encodings shared by the builders (clrender/accel) and the traversals (kernels/bvh*.h)
@@ -245,6 +258,24 @@ def table_element(name: str) -> tuple:
         raise KeyError(f"no scene table {name!r}; the tables are {list(types)}")
     t = types[name]
     return _ELEMENTS[t] if t in _ELEMENTS else (dtype(t), ())
+
+
+def film_element(name: str) -> tuple:
+    """(numpy dtype, shape of one element) of FILM_ACCUMULATORS entry `name`."""
+    types = {n: t for n, t, *_ in FILM_ACCUMULATORS}
+    if name not in types:
+        raise KeyError(f"no film accumulator {name!r}; they are {list(types)}")
+    return _ELEMENTS[types[name]]
+
+
+def film_bytes_per_pixel(count_rays: bool = False) -> int:
+    """Device bytes per pixel of the film's accumulators (with the ray counters when counting)."""
+    out = 0
+    for name, _t, _what, counting_only in FILM_ACCUMULATORS:
+        if count_rays or not counting_only:
+            dt, shape = film_element(name)
+            out += np.dtype(dt).itemsize * int(np.prod(shape))
+    return out
 
 
 def zeros(struct: str, n: int = 1) -> np.ndarray:
