@@ -23,7 +23,7 @@ from .composite import Composite
 class Mask(Composite):
     kernel = "bsdfs/mask.h"
     PARAMS = [("opacity", "texture"), ("child", "int")]
-    FLAGS = ("DELTA",)    # the pass-through
+    FLAGS = ("DELTA", "TRANSMISSION")    # the pass-through
     owner = '<bsdf type="mask">'
 
     def __init__(self, props, children, spec):

@@ -119,6 +119,10 @@ class Principled(Bsdf):
             self.eta = float(specular_to_eta(np.float32(s)))
         self.rates = read_rates(props, RATES)
 
+    def own_capabilities(self):
+        # the transmitting lobe exists when spec_trans is given (not as the float 0), as in Mitsuba
+        return super().own_capabilities() | ({"TRANSMISSION"} if self.has_spec_trans else set())
+
     def fill(self, p, row, textures):
         uses = fill_parameters(p, self, FLOAT_PARAMS, textures)
         p["eta"] = self.eta

@@ -45,7 +45,7 @@ class PrincipledThin(Bsdf):
     kernel = "bsdfs/principledthin.h"
     PARAMS = [("base_color", "texture"), ("w", "float", len(FLOAT_PARAMS)), ("w_tex", "uint", len(FLOAT_PARAMS))] + \
         [(field, "float") for _, field in RATES]
-    FLAGS = ("GLOSSY", "DIFFUSE")
+    FLAGS = ("GLOSSY", "DIFFUSE", "TRANSMISSION")   # always, as in Mitsuba (whatever spec_trans and diff_trans)
     METHODS = ("eval", "pdf", "sample", "albedo")
     children = ("texture",)
 

@@ -29,7 +29,7 @@ class RoughDielectric(Bsdf):
     PARAMS = [("specular_reflectance", "texture"), ("int_ior", "float"), ("ext_ior", "float"), ("alpha_u", "float"),
               ("specular_transmittance", "texture"), ("alpha_v", "float"), ("alpha_u_tex", "uint"),
               ("alpha_v_tex", "uint"), ("distribution", "uint"), ("sample_visible", "uint")]
-    FLAGS = ("GLOSSY",)
+    FLAGS = ("GLOSSY", "TRANSMISSION")
     children = ("texture",)
 
     def __init__(self, props, children, spec):

@@ -70,8 +70,10 @@ class Kind:
 
 BSDF = Kind(
     tag="bsdf", struct="Bsdf",
-    # UV: a parameter reads a texture that varies over the surface (set at packing; intersection computes uv)
-    flags=("DELTA", "DIFFUSE", "GLOSSY", "UV"), dispatch_name="bsdf", row="b",
+    # UV: a parameter reads a texture that varies over the surface (set at packing; intersection computes uv).
+    # TRANSMISSION: light may leave on the other side (a pass-through included, Mitsuba's Transmission); per row where
+    # a parameter decides it (Bsdf.capabilities)
+    flags=("DELTA", "DIFFUSE", "GLOSSY", "UV", "TRANSMISSION"), dispatch_name="bsdf", row="b",
     methods=(
         Method("eval", "float3", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return (float3)(0.0f);"),
         Method("pdf", "float", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return 0.0f;"),
@@ -211,10 +213,11 @@ def tag_of(cls) -> int:
     return [prefix_of(c) for c in plugins(kind.tag)].index(prefix_of(cls))
 
 
-def flags_of(cls) -> int:
+def flags_of(cls, names=None) -> int:
+    """The flag bits of `names` (default: the class's FLAGS) in the row of plugin class `cls`."""
     kind = KINDS[_kind_tag(cls)]
     bits = 0
-    for f in cls.FLAGS:
+    for f in cls.FLAGS if names is None else names:
         if f not in kind.flags:
             raise RuntimeError(f"{cls.__qualname__}: unknown {kind.tag} flag {f!r}; known: {kind.flags}")
         bits |= 1 << kind.flags.index(f)
