@@ -85,3 +85,18 @@ def test_film_accumulators_match_device(ctx, queue):
     host = [np.dtype(dt).itemsize * int(np.prod(shape)) for dt, shape in map(layout.film_element, names)]
     assert out.tolist() == host
     assert layout.film_bytes_per_pixel() == sum(host[:3]) and layout.film_bytes_per_pixel(True) == sum(host)
+
+
+def test_textured_parameters_are_a_constant_and_a_texture_row():
+    from clrender.textures.texture import TextureTable, param
+
+    fields = [("c", "texture"), ("f", "float_texture"), ("n", "uint")]
+    assert layout.expand(fields) == [("c", "float4"), ("c_tex", "uint"), ("f", "float"), ("f_tex", "uint"),
+                                     ("n", "uint")]
+    names, formats, offsets, size = layout._layout(fields)
+    p = np.zeros(1, np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": size}))[0]
+    table = TextureTable()
+    assert not param(p, "c", [0.1, 0.2, 0.3], None, table) and not param(p, "f", 0.7, None, table)
+    np.testing.assert_allclose(p["c"][:3], [0.1, 0.2, 0.3])
+    np.testing.assert_allclose(p["f"], 0.7)
+    assert p["c_tex"] == p["f_tex"] == layout.NONE

@@ -139,13 +139,19 @@ ENUMS: dict[str, int] = {
 }
 
 
+# Plugin parameters that may be a constant or a texture: (C type of the constant). Each is laid out as the constant
+# `name` and the texture row's index `name_tex` (NONE: the constant), filled by clrender.textures.texture.param and
+# read in C by kernels/texture.h's param_color / param_float.
+TEXTURED = {"texture": "float4",          # a colour (xyz)
+            "float_texture": "float"}     # a float (a texture's float view: Mitsuba's eval_1)
+
+
 def expand(fields) -> list:
-    """The fields as laid out: a "texture" parameter is a constant colour and the index of a texture row (NONE: the
-    constant)."""
+    """The fields as laid out: a TEXTURED parameter is its constant and the index of a texture row."""
     out = []
     for f in fields:
-        if f[1] == "texture":
-            out += [(f[0], "float4"), (f[0] + "_tex", "uint")]
+        if f[1] in TEXTURED:
+            out += [(f[0], TEXTURED[f[1]]), (f[0] + "_tex", "uint")]
         else:
             out.append(f)
     return out
