@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..scene.registry import snapshot
 from . import dispatch
 
 _SCALARS = {"float": ("<f4", 4, 4), "uint": ("<u4", 4, 4), "int": ("<i4", 4, 4)}
@@ -185,8 +186,6 @@ def _layout(fields):
 def plugin_signature() -> tuple:
     """dispatch.signature() of the registry as it stands (whoever assembles the application imports the plugins:
     the loader, the CLI, testing, ...), cached per registry state."""
-    from ..scene.registry import snapshot
-
     return _signature_of(snapshot())
 
 
@@ -212,8 +211,8 @@ def kind_of_row(struct: str) -> dispatch.Kind:
 
 @functools.lru_cache(maxsize=None)
 def row_members(struct: str, sig: tuple) -> tuple:
-    """The union members of ROWS[struct] for registry signature `sig`: (member name, C struct name, PARAMS) of each
-    registered plugin with parameters, in tag order."""
+    """The union members of ROWS[struct] for registry signature `sig`: (member name, C struct name, PARAMS, the
+    class's name for errors) of each registered plugin with parameters, in tag order."""
     out = []
     for cls in dispatch.plugins(kind_of_row(struct).tag):
         if getattr(cls, "PARAMS", None):  # (a mirror has nothing to store, and C has no empty structs)
