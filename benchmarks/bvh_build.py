@@ -26,6 +26,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import clrender.plugins  # noqa: E402,F401  (its kernels are built with the row types)
 from clrender.accel.bvh import build_bvh  # noqa: E402
 from clrender.accel.primitives import bvh_leaves, pack_leaf_blocks, primitive_bounds  # noqa: E402
 from vs_mitsuba import cpu_name  # noqa: E402

@@ -54,8 +54,10 @@ def vectorised_stages(renderer) -> dict:
     import pyopencl as cl
 
     ex = renderer.executor
+    from clrender.device import layout
+
     dummy = cl.Buffer(renderer.ctx, cl.mem_flags.READ_WRITE, 64)   # flush's film: it is launched over no pixels
-    ex.bind(dummy, dummy, dummy, dummy)
+    ex.bind({name: dummy for name, *_ in layout.FILM_ACCUMULATORS})
     out = {}
     for s in ex.STAGES:
         text = _capture_output(lambda: ex.warm(stages=(s,)))

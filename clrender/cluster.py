@@ -450,7 +450,7 @@ def _wait_for_a_worker(client, what):
 
 
 def _add(acc, r, added):
-    acc.add_raw(r["p0"], r["acc0"], r["acc1"], r["bad"])
+    acc.add_raw(r["p0"], r["accumulators"])
     added.append(r["index"])
 
 

@@ -16,7 +16,6 @@ from collections import OrderedDict
 from dataclasses import dataclass
 from types import SimpleNamespace
 
-import numpy as np
 
 from .errors import ClrenderError, DeviceError
 from .scenesource import SceneSource
@@ -84,6 +83,7 @@ def _device_spec(plan, worker_name):
 
 
 def _renderer_for(payload, spec, worker, driver="auto"):
+    from . import plugins  # noqa: F401  (a worker is a composition root: shipped tables need the plugins' code)
     from .renderer import Renderer
 
     key = (payload.key, spec, driver)
@@ -128,25 +128,12 @@ def render_task(payload, index, pixels, start, count, seed, plan, driver="auto")
     t0 = time.perf_counter()
     with lock:  # one Renderer per device: tasks of a multi-threaded worker take turns
         try:
-            film_acc = _render_raw(renderer, count, seed, start, p0, p1)
+            acc = renderer.render_accumulators(spp=count, seed=seed, start_sample=start, pixels=(p0, p1))
         except Exception as exc:
             with _CACHE_LOCK:
                 _CACHE.pop((payload.key, spec, driver), None)
             raise TaskFailed("device", worker, renderer.device_name, f"{type(exc).__name__}: {exc}") from None
-    acc0, acc1, bad = film_acc
-    return {"index": index, "p0": p0, "start": start, "count": count, "acc0": acc0, "acc1": acc1,
-            "bad": bad, "worker": worker, "device": renderer.device_name, "version": __version__,
+    return {"index": index, "p0": p0, "start": start, "count": count, "accumulators": acc,
+            "worker": worker, "device": renderer.device_name, "version": __version__,
             "seconds": time.perf_counter() - t0}
 
-
-def _render_raw(renderer, count, seed, start, p0, p1):
-    """The band's float32 accumulators as the device summed them (acc0 = sum wL, sum w; acc1 = sum (wL)^2,
-    count), without the float64 copy of the whole film that Film holds."""
-    film = renderer.render(spp=count, seed=seed, start_sample=start, pixels=(p0, p1))
-    acc0 = np.empty((p1 - p0, 4), np.float32)
-    acc1 = np.empty((p1 - p0, 4), np.float32)
-    acc0[:, :3] = film.sum_wl.reshape(-1, 3)[p0:p1]
-    acc0[:, 3] = film.sum_w.reshape(-1)[p0:p1]
-    acc1[:, :3] = film.sum_wl2.reshape(-1, 3)[p0:p1]
-    acc1[:, 3] = film.count.reshape(-1)[p0:p1]
-    return acc0, acc1, film.dropped.reshape(-1)[p0:p1].astype(np.uint32)

@@ -62,8 +62,9 @@ class MegakernelExecutor:
         self.args.set(cam=camera, filter_cdf=filter_cdf)
         self.global_size = _round_up(launch_pixels)
 
-    def bind(self, acc0, acc1, bad, rays) -> None:
-        self.args.set(acc0=acc0, acc1=acc1, bad=bad, rays=rays)
+    def bind(self, film: dict) -> None:
+        """The film's accumulator buffers, by their names in layout.FILM_ACCUMULATORS."""
+        self.args.set(**film)
 
     def warm(self) -> None:
         """A launch that adds no samples: PoCL compiles the work-group function at the first launch of a shape."""
@@ -150,8 +151,9 @@ class WavefrontExecutor:
             cl.enqueue_nd_range_kernel(self.queue, self.k[s], (LOCAL_SIZE,), (LOCAL_SIZE,))
         self.queue.finish()
 
-    def bind(self, acc0, acc1, bad, rays) -> None:
-        self.a["flush"].set(acc0=acc0, acc1=acc1, bad=bad)
+    def bind(self, film: dict) -> None:
+        """The film's accumulator buffers, by their names in layout.FILM_ACCUMULATORS (wf_flush adds to them)."""
+        self.a["flush"].set(**film)
 
     def _run(self, stage: str, n: int) -> None:
         import time

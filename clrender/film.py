@@ -37,12 +37,14 @@ class Film:
                 self.metadata["dropped_samples"] = int(self.dropped.sum())
 
     @classmethod
-    def from_accumulators(cls, width, height, acc0, acc1, bad, metadata=None):
+    def from_accumulators(cls, width, height, acc, metadata=None):
+        """From the device's accumulators ``acc`` ({name: array} of clrender/device/layout.py FILM_ACCUMULATORS, one
+        element per pixel): acc0 = (sum wL, sum w), acc1 = (sum (wL)^2, count), bad = dropped samples."""
         n = width * height
-        a0 = acc0[:n].astype(np.float64).reshape(height, width, 4)
-        a1 = acc1[:n].astype(np.float64).reshape(height, width, 4)
+        a0 = acc["acc0"][:n].astype(np.float64).reshape(height, width, 4)
+        a1 = acc["acc1"][:n].astype(np.float64).reshape(height, width, 4)
         return cls(width, height, a0[..., :3], a0[..., 3], a1[..., :3], a1[..., 3],
-                   bad[:n].reshape(height, width).astype(np.int64), dict(metadata or {}))
+                   acc["bad"][:n].reshape(height, width).astype(np.int64), dict(metadata or {}))
 
     @property
     def image(self) -> np.ndarray:

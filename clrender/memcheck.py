@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import os
 
+import numpy as np
+
+from .device import layout
 from .errors import SceneError
 
-#: bytes per pixel on the device: acc0, acc1 (float4 each), the NaN counter; +16 when counting rays
-DEVICE_BYTES_PER_PIXEL = 16 + 16 + 4
+#: bytes per pixel on the device: the film's accumulators (layout.FILM_ACCUMULATORS), without the ray counters
+DEVICE_BYTES_PER_PIXEL = layout.film_bytes_per_pixel(count_rays=False)
 #: bytes per pixel on the host: the downloaded accumulators plus the Film's float64 sums and its image
 HOST_BYTES_PER_PIXEL = DEVICE_BYTES_PER_PIXEL + 2 * 32 + 8 + 8 + 8 + 12 + 24
 #: pixels and sample numbers are 32-bit kernel arguments
@@ -51,8 +54,10 @@ def check_film_fits(scene, device, count_rays: bool = False, fixed_device_bytes:
     if n > MAX_PIXELS:
         raise SceneError(f"{film} has more than {MAX_PIXELS} pixels, the most a render can address{hint}",
                          where)
-    per_pixel = DEVICE_BYTES_PER_PIXEL + (16 if count_rays else 0)
-    largest = 16 * n  # acc0 / acc1: one float4 per pixel
+    per_pixel = layout.film_bytes_per_pixel(count_rays)
+    # the largest accumulator buffer (acc0, acc1: one float4 per pixel)
+    largest = n * max(np.dtype(dt).itemsize * int(np.prod(shape)) for dt, shape in
+                      (layout.film_element(name) for name, *_ in layout.FILM_ACCUMULATORS))
     if largest > device.max_mem_alloc_size:
         raise SceneError(f"{film} needs {_gib(largest)} in one device buffer, but the device allows "
                          f"{_gib(device.max_mem_alloc_size)} per buffer{hint}", where)

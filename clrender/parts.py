@@ -44,21 +44,19 @@ class Accumulator:
         self.count = np.zeros(n, np.int64)
         self.dropped = np.zeros(n, np.int64)
 
-    def add_raw(self, p0: int, acc0: np.ndarray, acc1: np.ndarray, bad: np.ndarray) -> None:
-        """Add device accumulators (acc0 = (sum wL, sum w), acc1 = (sum (wL)^2, count)) of pixels p0.."""
-        p1 = p0 + len(acc0)
-        self.sum_wl[p0:p1] += acc0[:, :3]
-        self.sum_w[p0:p1] += acc0[:, 3]
-        self.sum_wl2[p0:p1] += acc1[:, :3]
-        self.count[p0:p1] += np.rint(acc1[:, 3]).astype(np.int64)
-        self.dropped[p0:p1] += bad
+    def add_raw(self, p0: int, acc: dict) -> None:
+        """Add the device's accumulators of pixels p0.. (Renderer.render_accumulators), read as a Film of them
+        reads them (pixels whose float32 sums overflowed: dropped and counted)."""
+        self.add_film(Film.from_accumulators(len(acc["acc0"]), 1, acc), p0)
 
-    def add_film(self, film: Film) -> None:
-        self.sum_wl += film.sum_wl.reshape(-1, 3)
-        self.sum_w += film.sum_w.reshape(-1)
-        self.sum_wl2 += film.sum_wl2.reshape(-1, 3)
-        self.count += np.rint(film.count.reshape(-1)).astype(np.int64)
-        self.dropped += film.dropped.reshape(-1).astype(np.int64)
+    def add_film(self, film: Film, p0: int = 0) -> None:
+        """Add a film's sums to pixels p0.. (a whole film, or a band of its pixels)."""
+        p1 = p0 + film.width * film.height
+        self.sum_wl[p0:p1] += film.sum_wl.reshape(-1, 3)
+        self.sum_w[p0:p1] += film.sum_w.reshape(-1)
+        self.sum_wl2[p0:p1] += film.sum_wl2.reshape(-1, 3)
+        self.count[p0:p1] += np.rint(film.count.reshape(-1)).astype(np.int64)
+        self.dropped[p0:p1] += film.dropped.reshape(-1).astype(np.int64)
 
     def film(self, metadata: dict) -> Film:
         h, w = self.height, self.width

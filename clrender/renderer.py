@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import __version__
+from .device import layout
 from .device.context import get_context
 from .device.program import build_program
 from .executors import LOCAL_SIZE, MegakernelExecutor, WavefrontExecutor, choose_driver
@@ -134,12 +135,14 @@ class Renderer:
 
     def device_memory_bytes(self) -> int:
         """Bytes this renderer keeps on the device during a render: scene tables, camera, filter table,
-        and the per-pixel accumulators (acc0, acc1, bad, and the ray counters when counting)."""
+        and the per-pixel accumulators (layout.FILM_ACCUMULATORS: the ray counters' one-element dummy when not
+        counting)."""
         fixed = sum(a.nbytes for a in self.buffers.scene_arrays())
         fixed += self.buffers.camera.nbytes + self.buffers.filter_cdf.nbytes
-        per_pixel = 16 + 16 + 4 + (16 if self.count_rays else 0)
+        dummies = layout.film_bytes_per_pixel(True) - layout.film_bytes_per_pixel(False)
+        per_pixel = layout.film_bytes_per_pixel(self.count_rays)
         fixed += getattr(self.executor, "device_bytes", 0)   # the wavefront's path state
-        return int(fixed + per_pixel * self.n_pixels + (0 if self.count_rays else 16))
+        return int(fixed + per_pixel * self.n_pixels + (0 if self.count_rays else dummies))
 
     def render(self, spp: int | None = None, seed: int = 0, time_limit: float | None = None,
                progress: bool = False, on_pass=None, start_sample: int = 0, pixels=None,
@@ -150,6 +153,21 @@ class Renderer:
         cluster task): the Film is full-size with zeros elsewhere. ``partial=(seconds, callback)`` hands
         ``callback`` the Film so far (its metadata: the samples done, ``partial`` True) after the first pass that
         ends at least `seconds` after the previous one (or the start), between passes."""
+        return self._render(self._film, spp, seed, time_limit, progress, on_pass, start_sample, pixels, partial)
+
+    def render_accumulators(self, spp: int, seed: int = 0, start_sample: int = 0, pixels=None) -> dict:
+        """Render as `render` does and return the device's accumulators of the pixels rendered as it summed them
+        (float32 and uint32, by their names in layout.FILM_ACCUMULATORS, without the ray counters): what a
+        cluster task sends back, without a Film's float64 copy of the whole film."""
+        def band(done, seed, start_sample, stats, host, dev, p0, p1):
+            self._download(host, dev, p0, p1)
+            # copies: the band alone travels and stays, not the whole film's arrays behind it
+            return {name: host[name][p0:p1].copy() for name, *_, counting_only in layout.FILM_ACCUMULATORS
+                    if not counting_only}
+
+        return self._render(band, spp, seed, None, False, None, start_sample, pixels, None)
+
+    def _render(self, finish, spp, seed, time_limit, progress, on_pass, start_sample, pixels, partial):
         import pyopencl as cl
 
         spp = int(spp if spp is not None else self.scene.sample_count)
@@ -163,18 +181,15 @@ class Renderer:
         p0, p1 = (0, n) if pixels is None else (int(pixels[0]), int(pixels[1]))
         if not 0 <= p0 < p1 <= n:
             raise ValueError(f"pixel range {p0}:{p1} is not inside 0:{n}")
-        acc0 = np.zeros((n, 4), np.float32)
-        acc1 = np.zeros((n, 4), np.float32)
-        bad = np.zeros(n, np.uint32)
+        host, dev = {}, {}
         mf = cl.mem_flags
-        d_acc0 = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=acc0)
-        d_acc1 = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=acc1)
-        d_bad = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=bad)
-        # Ray counters: per pixel when counting, else a one-element dummy the kernel never touches.
-        rays = np.zeros((n if self.count_rays else 1, 4), np.uint32)
-        d_rays = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=rays)
+        for name, *_, counting_only in layout.FILM_ACCUMULATORS:
+            dt, shape = layout.film_element(name)
+            # a counting-only buffer (the ray counters) is a one-element dummy the kernel never touches otherwise
+            host[name] = np.zeros((n if self.count_rays or not counting_only else 1, *shape), dt)
+            dev[name] = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=host[name])
         ex = self.executor
-        ex.bind(d_acc0, d_acc1, d_bad, d_rays)
+        ex.bind(dev)
         stats = RenderStats(build_seconds=self.build_seconds, upload_seconds=self.upload_seconds)
         done = 0
         per_pass = 1
@@ -220,8 +235,7 @@ class Renderer:
                             time.perf_counter() - last_partial >= partial[0]:
                         snap = copy.copy(stats)   # the render's own stats go on counting
                         snap.seconds = time.perf_counter() - t_start
-                        partial[1](self._film(done, seed, start_sample, snap, (acc0, acc1, bad, rays),
-                                              (d_acc0, d_acc1, d_bad, d_rays), p0, p1, partial=True))
+                        partial[1](self._film(done, seed, start_sample, snap, host, dev, p0, p1, partial=True))
                         last_partial = time.perf_counter()
                     if stop:
                         stats.interrupted = True
@@ -240,25 +254,24 @@ class Renderer:
                 if bar is not None:
                     bar.close()
         stats.seconds = time.perf_counter() - t_start
-        return self._film(done, seed, start_sample, stats, (acc0, acc1, bad, rays), (d_acc0, d_acc1, d_bad, d_rays),
-                          p0, p1)
+        return finish(done, seed, start_sample, stats, host, dev, p0, p1)
+
+    def _download(self, host, dev, p0, p1) -> None:
+        """Copy pixels p0:p1 of the device's accumulators into `host` (only the rendered range: a band of a 4K film
+        need not download the whole film)."""
+        import pyopencl as cl
+
+        for name, a in host.items():
+            if len(a) == self.n_pixels:   # (not a one-element dummy)
+                cl.enqueue_copy(self.queue, a[p0:p1], dev[name], src_offset=p0 * a[0].nbytes)
+        self.queue.finish()
 
     def _film(self, done, seed, start_sample, stats, host, dev, p0, p1, partial=False) -> Film:
         """The Film of the `done` samples per pixel accumulated on the device so far (pixels p0:p1); fills in
         `stats`."""
-        import pyopencl as cl
-
-        acc0, acc1, bad, rays = host
-        d_acc0, d_acc1, d_bad, d_rays = dev
-        # Only the rendered range: a band of a 4K film need not download the whole film.
-        cl.enqueue_copy(self.queue, acc0[p0:p1], d_acc0, src_offset=p0 * acc0.itemsize * 4)
-        cl.enqueue_copy(self.queue, acc1[p0:p1], d_acc1, src_offset=p0 * acc1.itemsize * 4)
-        cl.enqueue_copy(self.queue, bad[p0:p1], d_bad, src_offset=p0 * bad.itemsize)
-        if self.count_rays:
-            cl.enqueue_copy(self.queue, rays, d_rays)
-        self.queue.finish()
+        self._download(host, dev, p0, p1)
         stats.samples = done * (p1 - p0)
-        stats.dropped = int(bad.sum())
+        stats.dropped = int(host["bad"].sum())
         meta = {
             "spp": done, "seed": seed, "render_seconds": round(stats.seconds, 4), "device": self.device_name,
             "integrator": self.scene.integrator.kernel, "version": __version__,
@@ -268,11 +281,11 @@ class Renderer:
         if partial:
             meta["partial"] = True
         if self.count_rays:
-            tot = rays[:, :3].astype(np.uint64).sum(axis=0)
+            tot = host["rays"][:, :3].astype(np.uint64).sum(axis=0)
             stats.rays = (int(tot[0]), int(tot[1]), int(tot[2]))
             meta.update(rays_camera=stats.rays[0], rays_closest=stats.rays[1], rays_shadow=stats.rays[2],
                         rays_total=stats.rays_total)
-        film = Film.from_accumulators(self.width, self.height, acc0, acc1, bad, meta)
+        film = Film.from_accumulators(self.width, self.height, host, meta)
         stats.dropped = int(film.dropped.sum())  # with the samples of pixels whose sums overflowed
         film.stats = stats
         film.tonemap = getattr(getattr(self.scene.camera, "film", None), "tonemap", None)  # an ldrfilm's 8-bit image

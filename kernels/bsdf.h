@@ -1,5 +1,5 @@
 /* The BSDF interface of the integrators. bsdf_eval, bsdf_pdf, bsdf_sample and bsdf_albedo are generated from
-   the registered BSDF plugins (clrender/device/dispatch.py writes gen/bsdf_dispatch.h: one switch over the row's
+   the registered BSDF plugins (clrender/device/codegen.py writes gen/bsdf_dispatch.h: one switch over the row's
    type tag per method, calling <prefix>_<method> of kernels/bsdfs/<prefix>.h):
      bsdf_eval    f (without the cosine); 0 for delta BSDFs
      bsdf_pdf     solid-angle density of wo under bsdf_sample; 0 for delta BSDFs

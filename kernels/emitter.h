@@ -1,6 +1,6 @@
 /* Emitters: the query record (emitters/common.h), per-plugin sample/pdf/eval (kernels/emitters/<prefix>.h) reached
    through switches generated from the registered plugins (gen/emitter_dispatch.h: emitter_row_sample/pdf/eval,
-   see clrender/device/dispatch.py), and scene-level light selection (a uniform choice among the N emitters, or
+   see clrender/device/codegen.py), and scene-level light selection (a uniform choice among the N emitters, or
    one proportional to their power: scene_pick_emitter).
    Kernels test the row's flags (EMITTER_DELTA, EMITTER_INFINITE, EMITTER_SURFACE), never its type; infinite
    emitters are also listed in the `infinite` index table.

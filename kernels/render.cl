@@ -3,12 +3,11 @@
 #include "filter.h"
 
 /* One pass: `spp` samples for each of `pixel_count` pixels starting at `pixel_offset`. Each work-item owns
-   one pixel, so accumulation needs no atomics. Per pixel: acc0 = (sum wL, sum w), acc1 = (sum (wL)^2, n),
-   bad = samples dropped for being NaN/Inf. rays (written only in builds with -DCLRENDER_COUNT_RAYS; otherwise a
-   one-element dummy, so both builds take the same arguments) = rays traced: (camera, other closest-hit,
-   shadow/any-hit, 0). filter_cdf is the filter's CDF followed by its guide (clrender/filters/filter.py). The first closest-hit query of a sample is its camera ray. */
-__kernel void render_pass(SCENE_ARGS, __global const Camera* cam, __global const float* filter_cdf,
-                          __global float4* acc0, __global float4* acc1, __global uint* bad, __global uint4* rays,
+   one pixel, so accumulation needs no atomics. FILM_ARGS are the film's per-pixel accumulators acc0, acc1, bad and
+   rays, declared (with what each holds) in clrender/device/layout.py FILM_ACCUMULATORS; rays is written only in
+   builds with -DCLRENDER_COUNT_RAYS. filter_cdf is the filter's CDF followed by its guide
+   (clrender/filters/filter.py). The first closest-hit query of a sample is its camera ray. */
+__kernel void render_pass(SCENE_ARGS, __global const Camera* cam, __global const float* filter_cdf, FILM_ARGS,
                           uint pixel_offset, uint pixel_count, uint sample_offset, uint spp, uint seed) {
     uint gid = get_global_id(0);
     if (gid >= pixel_count) return;

@@ -1,6 +1,7 @@
 /* Textures: rows of the scene's textures table, evaluated through texture_eval (generated from the registered
-   texture plugins: kernels/textures/<prefix>.h). A BSDF parameter declared as "texture" in Python is a constant
-   colour plus the index of a texture row (NONE: use the constant); param_color reads it at the query's uv. */
+   texture plugins: kernels/textures/<prefix>.h). A BSDF parameter declared as "texture" ("float_texture") in Python
+   is a constant colour (float) plus the index of a texture row (NONE: use the constant), fields name and name_tex
+   (clrender/device/layout.py TEXTURED); param_color (param_float) reads it at the query's uv. */
 #ifndef CLRENDER_TEXTURE_H
 #define CLRENDER_TEXTURE_H
 #include "gen/texture_dispatch.h"
@@ -9,5 +10,13 @@
 INLINE float3 param_color(const BsdfQuery* q, float4 value, uint tex) {
     return tex == NONE ? value.xyz : texture_eval(q->textures + tex, q->uv);
 }
+
+/* The host gives a float parameter the texture's float view (Texture.float_view), whose first channel it is. */
+INLINE float param_float(const BsdfQuery* q, float value, uint tex) {
+    return tex == NONE ? value : texture_eval(q->textures + tex, q->uv).x;
+}
+
+/* A float parameter by its name in a plugin's parameter struct: PARAM_FLOAT(q, b->p.principled, roughness) */
+#define PARAM_FLOAT(q, params, name) param_float(q, (params).name, (params).name##_tex)
 
 #endif

@@ -118,10 +118,9 @@ __kernel void wf_finish(SCENE_ARGS, __global const PathState* paths, __global co
     nbad[gid] = bad;
 }
 
-/* The pass's sums into the film accumulators (render.cl's layout), as render_pass adds them; the sums start again
-   from zero. */
-__kernel void wf_flush(__global float4* sum0, __global float4* sum1, __global uint* nbad,
-                       __global float4* acc0, __global float4* acc1, __global uint* bad,
+/* The pass's sums into the film accumulators (FILM_ARGS, clrender/device/layout.py FILM_ACCUMULATORS; rays is not
+   counted by this driver), as render_pass adds them; the sums start again from zero. */
+__kernel void wf_flush(__global float4* sum0, __global float4* sum1, __global uint* nbad, FILM_ARGS,
                        uint pixel_offset, uint n_pixels, uint spp) {
     uint gid = get_global_id(0);
     if (gid >= n_pixels) return;

@@ -9,6 +9,8 @@ os.environ.setdefault("POCL_CACHE_DIR", str(Path(__file__).resolve().parents[1] 
 os.environ.setdefault("CLRENDER_ICD_DIR",
                       str(Path(__file__).resolve().parents[1] / ".pocl-cache" / "opencl-vendors"))
 
+import clrender.plugins  # noqa: E402,F401  (the test-suite, like the CLI, assembles the application)
+
 
 @pytest.fixture(scope="session")
 def cl_env():

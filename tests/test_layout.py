@@ -9,18 +9,15 @@ from clrender.device.program import build_program
 
 def _entries():
     """(label, C expression of the offset or size, expected value) for every struct, field and plugin member."""
-    from clrender.device.dispatch import KINDS
-
     out = []
     for name, fields in layout.STRUCTS.items():
         dt = layout.dtype(name)
         out.append((f"sizeof {name}", f"sizeof({name})", dt.itemsize))
         out.extend((f"{name}.{f[0]}", f"OFFSET({name}, {f[0]})", dt.fields[f[0]][1]) for f in fields)
-    for name in layout.UNION_STRUCTS:
-        kind = next(k for k in KINDS.values() if k.struct == name)
+    for name, row in layout.ROWS.items():
         dt = layout.dtype(name)
         out.append((f"sizeof {name}", f"sizeof({name})", dt.itemsize))
-        header = [f[0] for f in kind.header]
+        header = [f[0] for f in row.header]
         out.extend((f"{name}.{f}", f"OFFSET({name}, {f})", dt.fields[f][1]) for f in header)
         for member in dt.names:
             if member in header:
@@ -69,3 +66,37 @@ def test_vectors_are_16_byte_aligned():
         for field, (sub, off, *_) in dt.fields.items():
             if {f[0]: f[1] for f in layout.STRUCTS[name]}[field] in ("float4", "uint4"):
                 assert off % 16 == 0, (name, field, off)
+
+
+def test_film_accumulators_match_device(ctx, queue):
+    # FILM_ARGS as the render kernel takes them: each accumulator's element, sized by the device, against the dtype
+    # the host allocates, downloads and reads it with.
+    names = [n for n, *_ in layout.FILM_ACCUMULATORS]
+    assert names[:3] == ["acc0", "acc1", "bad"]
+    src = "__kernel void probe(FILM_ARGS, __global uint* out) {\n"
+    src += "".join(f"    out[{i}] = (uint)sizeof(*{n});\n" for i, n in enumerate(names)) + "}\n"
+    prg = build_program(ctx, src)
+    out = np.zeros(len(names), np.uint32)
+    buf = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, out.nbytes)
+    dummy = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, 16)
+    prg.probe(queue, (1,), None, *([dummy] * len(names)), buf)
+    cl.enqueue_copy(queue, out, buf)
+    queue.finish()
+    host = [np.dtype(dt).itemsize * int(np.prod(shape)) for dt, shape in map(layout.film_element, names)]
+    assert out.tolist() == host
+    assert layout.film_bytes_per_pixel() == sum(host[:3]) and layout.film_bytes_per_pixel(True) == sum(host)
+
+
+def test_textured_parameters_are_a_constant_and_a_texture_row():
+    from clrender.textures.texture import TextureTable, param
+
+    fields = [("c", "texture"), ("f", "float_texture"), ("n", "uint")]
+    assert layout.expand(fields) == [("c", "float4"), ("c_tex", "uint"), ("f", "float"), ("f_tex", "uint"),
+                                     ("n", "uint")]
+    names, formats, offsets, size = layout._layout(fields)
+    p = np.zeros(1, np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": size}))[0]
+    table = TextureTable()
+    assert not param(p, "c", [0.1, 0.2, 0.3], None, table) and not param(p, "f", 0.7, None, table)
+    np.testing.assert_allclose(p["c"][:3], [0.1, 0.2, 0.3])
+    np.testing.assert_allclose(p["f"], 0.7)
+    assert p["c_tex"] == p["f_tex"] == layout.NONE

@@ -396,3 +396,29 @@ def test_error_names_the_file_and_line(tmp_path):
     with pytest.raises(SceneError) as e:
         load_scene(xml)
     assert "s.xml" in str(e.value) and ":5" in str(e.value) and "either eta or specular" in str(e.value)
+
+
+# twosided(child) in Mitsuba 3.9.1 (scalar_rgb, load_dict): refused exactly where the child's flags hold Transmission.
+# principledthin always; principled when spec_trans is given and not the float 0 (a texture counts as given).
+@pytest.mark.parametrize("kind,params,transmits", [
+    ("principledthin", {}, True),
+    ("principledthin", {"spec_trans": 0.0, "diff_trans": 0.0}, True),
+    ("principled", {}, False),
+    ("principled", {"spec_trans": 0.0, "metallic": 0.5}, False),
+    ("principled", {"spec_trans": 0.5}, True),
+    ("principled", {"spec_trans": "texture"}, True),
+])
+def test_twosided_refuses_exactly_the_transmitting_ones(kind, params, transmits):
+    floats = {k: v for k, v in params.items() if v != "texture"}
+    textured = [k for k, v in params.items() if v == "texture"]
+    child = _with_textures(textured, kind, **floats) if textured else make(kind, **floats)
+    assert bool(child.pack()["flags"] & flag_defines()["BSDF_TRANSMISSION"]) == transmits
+    assert ("TRANSMISSION" in child.capabilities()) == transmits
+    spec = child.spec
+    two = PluginSpec("bsdf", "twosided", None, PropertyList('<bsdf type="twosided">', fmt="mitsuba"), [spec], None,
+                     format="mitsuba")
+    if transmits:
+        with pytest.raises(SceneError, match=f'nested <bsdf type="{kind}"> transmits light'):
+            create(two)
+    else:
+        assert create(two).capabilities() == {"GLOSSY", "DIFFUSE"}

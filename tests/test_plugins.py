@@ -8,7 +8,7 @@ import pytest
 
 import clrender
 from clrender.bsdfs.bsdf import Bsdf
-from clrender.device import dispatch, layout
+from clrender.device import codegen, dispatch
 from clrender.emitters.emitter import Emitter, nonnegative_color
 from clrender.errors import DeviceError
 from clrender.scene import registry
@@ -71,10 +71,10 @@ CAMERA = """<camera type="perspective"><integer name="width" value="{w}"/><integ
 
 
 def test_registration_generates_dispatch_rows_and_flags(test_plugins):
-    src = dispatch.dispatch_source(dispatch.BSDF)
+    src = codegen.dispatch_source(dispatch.BSDF)
     assert f'#include "{Tinted.kernel}"' in src and "return tinted_sample(b, q, u);" in src
-    assert "return skydome_eval(sd, em, q);" in dispatch.dispatch_source(dispatch.EMITTER)
-    assert "TintedParams tinted;" in layout.c_header()
+    assert "return skydome_eval(sd, em, q);" in codegen.dispatch_source(dispatch.EMITTER)
+    assert "TintedParams tinted;" in codegen.c_header()
     t = Tinted.__new__(Tinted)
     t.albedo, t.tint = np.array([0.2, 0.4, 0.6]), 0.5
     row = t.pack()

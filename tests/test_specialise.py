@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from clrender.device import dispatch, layout
+from clrender.device import codegen, dispatch, layout
 from clrender.scene.registry import create
 from clrender.testing.mitsuba_dict import spec_from_dict
 from clrender.textures.texture import TextureTable
@@ -66,7 +66,7 @@ def test_a_texture_is_in_the_set_but_its_texel_rows_are_not():
 
 
 def test_the_generated_header_guards_every_plugin_and_level():
-    src = dispatch.dispatch_source(dispatch.BSDF)
+    src = codegen.dispatch_source(dispatch.BSDF)
     for cls in dispatch.plugins("bsdf"):
         use = dispatch.use_define(dispatch.BSDF, dispatch.prefix_of(cls))
         guard = f"#if defined(CLR_USE_ALL_PLUGINS) || defined({use})"

@@ -10,7 +10,7 @@ import pytest
 from PIL import Image
 
 from clrender.bsdfs.bsdf import Bsdf
-from clrender.device import layout
+from clrender.device import codegen, layout
 from clrender.film import read_exr, to_srgb8
 from clrender.png import encode_png
 from clrender.scene import registry
@@ -77,11 +77,11 @@ def test_row_layouts_follow_registrations():
     registry.register("bsdf", "startup_throwaway")(Throwaway)
     try:
         assert "startup_throwaway" in layout.dtype("Bsdf").names
-        assert " startup_throwaway;" in layout.c_header()
+        assert " startup_throwaway;" in codegen.c_header()
     finally:
         registry.unregister("bsdf", "startup_throwaway")
     assert "startup_throwaway" not in layout.dtype("Bsdf").names
-    assert " startup_throwaway;" not in layout.c_header()
+    assert " startup_throwaway;" not in codegen.c_header()
 
 
 def test_the_command_limits_blas_threads_unless_the_user_chose(monkeypatch):

@@ -627,11 +627,3 @@ def _flatten(blo, bhi, bstart, bcount, bleft, bdepth, ext=None):
             nodes[f:f + k] = block[a:a + k]
     return nodes.reshape(4 * K, 4), K
 
-
-def build_scene_bvh(tri_v0, tri_v1, tri_v2, spheres, **kw):
-    """Convenience: bounds, build and packed primitives in one call -> (BVH, prims float32 (3N, 4))."""
-    from .primitives import pack_primitives, primitive_bounds
-
-    lo, hi = primitive_bounds(tri_v0, tri_v1, tri_v2, spheres)
-    bvh = build_bvh(lo, hi, **kw)
-    return bvh, pack_primitives(tri_v0, tri_v1, tri_v2, spheres, bvh.order)

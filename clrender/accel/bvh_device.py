@@ -44,10 +44,12 @@ def build_subtrees(ctx_queue, L, H, ids, off, n, depth, start, max_leaf, ct, ci,
     """
     import pyopencl as cl
 
+    from ..device.codegen import constants_c
     from ..device.program import build_program
 
     ctx, queue = ctx_queue
-    prg = build_program(ctx, SOURCE, defines={"BVH_BINS": BINS})
+    # the shared constants only: the builder reads no plugin row, so it needs no registered plugin
+    prg = build_program(ctx, constants_c() + "\n" + SOURCE, defines={"BVH_BINS": BINS}, with_types=False)
     M = len(ids)
     T = len(off)
     plo = np.zeros((M, 4), np.float32)

@@ -26,6 +26,7 @@ import numpy as np
 from ..device.layout import ENUMS
 
 SPHERE_FLAG = np.uint32(ENUMS["BVH_SPHERE_BIT"])
+LEAF_FLAG = np.uint32(ENUMS["BVH_LEAF_BIT"])   # a node's reference to a leaf (clrender.accel.bvh writes them)
 
 
 def _as3(a, name):
@@ -116,13 +117,11 @@ BLOCK_WORDS = 10       # words per primitive: v0.xyz, v1.xyz, v2.xyz, id
 
 def bvh_leaves(bvh):
     """``(first, count)`` int64 arrays of the leaves of a binary BVH (``BVH.nodes`` of clrender.accel.bvh)."""
-    from .bvh import LEAF_FLAG
-
     u = np.asarray(bvh.nodes).reshape(-1, 4, 4).view(np.uint32)
     ref = u[:, [0, 2], 3].reshape(-1)
     cnt = u[:, [1, 3], 3].reshape(-1).astype(np.int64)
-    leaf = ((ref & np.uint32(LEAF_FLAG)) != 0) & (cnt > 0)
-    return (ref[leaf] & np.uint32(~np.uint32(LEAF_FLAG))).astype(np.int64), cnt[leaf]
+    leaf = ((ref & LEAF_FLAG) != 0) & (cnt > 0)
+    return (ref[leaf] & ~LEAF_FLAG).astype(np.int64), cnt[leaf]
 
 
 def _block_of(n, leaf_first, leaf_count):

@@ -13,8 +13,6 @@ non-delta parts only). A texture weight is read as Mitsuba reads a float texture
 (Texture.float_view: a bitmap's luminance). Bsdf row
 (kernels/bsdfs/blendbsdf.h): p.blendbsdf = weight(_tex), first, second (row offsets of the children).
 """
-import numpy as np
-
 from ..scene.registry import register
 from ..textures.texture import param
 from .composite import Composite
@@ -23,7 +21,7 @@ from .composite import Composite
 @register("bsdf", "blendbsdf", fmt="mitsuba")
 class BlendBsdf(Composite):
     kernel = "bsdfs/blendbsdf.h"
-    PARAMS = [("weight", "texture"), ("first", "int"), ("second", "int")]
+    PARAMS = [("weight", "float_texture"), ("first", "int"), ("second", "int")]
     owner = '<bsdf type="blendbsdf">'
 
     def __init__(self, props, children, spec):
@@ -32,4 +30,4 @@ class BlendBsdf(Composite):
 
     def fill(self, p, row, textures):
         p["first"], p["second"] = self.child_offsets
-        return param(p, "weight", np.full(3, self.weight), self.texture, textures)
+        return param(p, "weight", self.weight, self.texture, textures)

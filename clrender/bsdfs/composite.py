@@ -4,7 +4,7 @@ A composite's row refers to each child by its offset from the composite's own ro
 one array), and the generated dispatch (clrender/device/dispatch.py) calls the child through the switch one
 level down: OpenCL C has neither recursion nor function pointers, so the supported depth of nesting is fixed
 (dispatch.BSDF.composite_levels); deeper nesting is a located error. The composite's flags are its own plus the
-union of its children's (DELTA, DIFFUSE, GLOSSY, UV).
+union of its children's (DELTA, DIFFUSE, GLOSSY, UV, TRANSMISSION).
 """
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from ..device import dispatch
 from ..errors import SceneError
 from .bsdf import Bsdf
 
-_CHILD_FLAGS = ("DELTA", "DIFFUSE", "GLOSSY", "UV")
+_CHILD_FLAGS = ("DELTA", "DIFFUSE", "GLOSSY", "UV", "TRANSMISSION")
 
 
 def composite_depth(bsdf) -> int:
@@ -70,6 +70,12 @@ class Composite(Bsdf):
             raise SceneError(f"{article} {name} texture must stay within [0, 1]",
                              getattr(texture.spec, "location", None))
         return value, texture
+
+    def capabilities(self) -> frozenset:
+        out = set(self.own_capabilities())
+        for c in self.bsdfs:
+            out |= c.capabilities() & set(_CHILD_FLAGS)
+        return frozenset(out)
 
     def pack_rows(self, textures) -> list:
         rows, offsets = [None], []

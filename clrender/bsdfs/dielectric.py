@@ -34,7 +34,7 @@ DIELECTRIC_PARAMS = [("specular_reflectance", "texture"), ("specular_transmittan
 class Dielectric(Bsdf):
     kernel = "bsdfs/dielectric.h"
     PARAMS = DIELECTRIC_PARAMS
-    FLAGS = ("DELTA",)
+    FLAGS = ("DELTA", "TRANSMISSION")
     METHODS = ("sample",)
 
     def __init__(self, props, children, spec):

@@ -12,8 +12,6 @@ parts. A texture opacity is read as Mitsuba reads a float texture
 (Texture.float_view: a bitmap's luminance). Bsdf row (kernels/bsdfs/mask.h): p.mask =
 opacity(_tex), child (row offset).
 """
-import numpy as np
-
 from ..scene.registry import register
 from ..textures.texture import param
 from .composite import Composite
@@ -22,8 +20,8 @@ from .composite import Composite
 @register("bsdf", "mask", fmt="mitsuba")
 class Mask(Composite):
     kernel = "bsdfs/mask.h"
-    PARAMS = [("opacity", "texture"), ("child", "int")]
-    FLAGS = ("DELTA",)    # the pass-through
+    PARAMS = [("opacity", "float_texture"), ("child", "int")]
+    FLAGS = ("DELTA", "TRANSMISSION")    # the pass-through
     owner = '<bsdf type="mask">'
 
     def __init__(self, props, children, spec):
@@ -32,4 +30,4 @@ class Mask(Composite):
 
     def fill(self, p, row, textures):
         p["child"] = self.child_offsets[0]
-        return param(p, "opacity", np.full(3, self.opacity), self.texture, textures)
+        return param(p, "opacity", self.opacity, self.texture, textures)

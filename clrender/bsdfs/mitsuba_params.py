@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..device import layout
 from ..errors import SceneError
 
 #: kernels/bsdfs/distribution.h's MF_BECKMANN / MF_GGX
@@ -94,15 +93,14 @@ class Distribution:
         Mitsuba: the shape's shading frame follows it then)."""
         uses = self.alpha_u is not self.alpha_v and self.alpha_u != self.alpha_v
         for name, (v, tex) in (("alpha_u", self.alpha_u), ("alpha_v", self.alpha_v)):
-            p[name] = v
-            p[name + "_tex"] = layout.NONE if tex is None else table.add(tex)
-            uses |= tex is not None
+            uses |= fill_color(p, name, (v, tex), table)
         p["distribution"] = self.type
         p["sample_visible"] = int(self.sample_visible)
         return uses
 
 
 def fill_color(p, name, value_tex, table) -> bool:
+    """Fill a "texture" or "float_texture" parameter from (value, texture or None); whether a texture is read."""
     from ..textures.texture import param
 
     return param(p, name, value_tex[0], value_tex[1], table)

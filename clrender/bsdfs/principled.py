@@ -25,19 +25,17 @@ Every parameter but eta, specular and the sampling rates may be a nested `<textu
 texture's float view, Mitsuba's eval_1). As in Mitsuba: eta and specular exclude each other, eta = 2 / (1 -
 sqrt(0.08 specular)) - 1; with a transmitting lobe (spec_trans given, not the float 0) eta = 1 becomes 1.001 and
 specular = 0 becomes 1e-3. Values outside [0, 1] are taken as given (Mitsuba does not clamp them).
-The formulas are in kernels/bsdfs/principled.h. Bsdf row: p.principled = base_color(_tex), w[10] and w_tex[10]
-(the float parameters in the order of FLOAT_PARAMS, each a constant or a texture row), eta, the three sampling rates,
-has_spec_trans.
+The formulas are in kernels/bsdfs/principled.h. Bsdf row: p.principled = base_color(_tex), each of FLOAT_PARAMS as
+a float_texture (roughness(_tex), ...), eta, the three sampling rates, has_spec_trans.
 """
 import numpy as np
 
-from ..device import layout
 from ..errors import SceneError
 from ..scene.registry import register
 from .bsdf import Bsdf
 from .mitsuba_params import color_or_texture, fill_color, float_or_texture, named_textures
 
-#: (name, Mitsuba's default); the index of each is its PR_* index in kernels/bsdfs/principled.h
+#: (name, Mitsuba's default): float_texture parameters of the row (b->p.principled.<name>)
 FLOAT_PARAMS = (("roughness", 0.5), ("anisotropic", 0.0), ("metallic", 0.0), ("spec_trans", 0.0),
                 ("spec_tint", 0.0), ("sheen", 0.0), ("sheen_tint", 0.0), ("flatness", 0.0), ("clearcoat", 0.0),
                 ("clearcoat_gloss", 0.0))
@@ -76,20 +74,17 @@ def read_rates(props, rates):
 
 
 def fill_parameters(p, bsdf, float_params, textures) -> bool:
-    """Write base_color(_tex), w[] and w_tex[]; whether a texture is read."""
+    """Write base_color and the float parameters (each a constant or a texture); whether a texture is read."""
     uses = fill_color(p, "base_color", bsdf.base_color, textures)
-    for i, (name, _) in enumerate(float_params):
-        v, t = bsdf.floats[name]
-        p["w"][i] = v
-        p["w_tex"][i] = layout.NONE if t is None else textures.add(t)
-        uses |= t is not None
+    for name, _ in float_params:
+        uses |= fill_color(p, name, bsdf.floats[name], textures)
     return uses
 
 
 @register("bsdf", "principled", fmt="mitsuba")
 class Principled(Bsdf):
     kernel = "bsdfs/principled.h"
-    PARAMS = [("base_color", "texture"), ("w", "float", len(FLOAT_PARAMS)), ("w_tex", "uint", len(FLOAT_PARAMS)),
+    PARAMS = [("base_color", "texture")] + [(name, "float_texture") for name, _ in FLOAT_PARAMS] + [
               ("eta", "float"), ("spec_srate", "float"), ("clearcoat_srate", "float"), ("diffuse_srate", "float"),
               ("has_spec_trans", "uint")]
     FLAGS = ("GLOSSY", "DIFFUSE")
@@ -118,6 +113,10 @@ class Principled(Bsdf):
                 s = 1e-3
             self.eta = float(specular_to_eta(np.float32(s)))
         self.rates = read_rates(props, RATES)
+
+    def own_capabilities(self):
+        # the transmitting lobe exists when spec_trans is given (not as the float 0), as in Mitsuba
+        return super().own_capabilities() | ({"TRANSMISSION"} if self.has_spec_trans else set())
 
     def fill(self, p, row, textures):
         uses = fill_parameters(p, self, FLOAT_PARAMS, textures)

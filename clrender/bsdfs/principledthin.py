@@ -23,14 +23,15 @@ and sheen, and a Lambertian transmission.
 ```
 Every parameter but the sampling rates may be a nested `<texture name="...">` (eta too, as in Mitsuba). Values are
 taken as given (Mitsuba does not clamp them). The formulas are in kernels/bsdfs/principledthin.h. Bsdf row:
-p.principledthin = base_color(_tex), w[9] and w_tex[9] (FLOAT_PARAMS' order), the four sampling rates.
+p.principledthin = base_color(_tex), each of FLOAT_PARAMS as a float_texture (roughness(_tex), ...), the four
+sampling rates.
 """
 from ..scene.registry import register
 from .bsdf import Bsdf
 from .principled import fill_parameters, read_parameters, read_rates
 from ..errors import SceneError
 
-#: (name, Mitsuba's default); the index of each is its PT_* index in kernels/bsdfs/principledthin.h
+#: (name, Mitsuba's default): float_texture parameters of the row (b->p.principledthin.<name>)
 FLOAT_PARAMS = (("roughness", 0.5), ("anisotropic", 0.0), ("spec_trans", 0.0), ("spec_tint", 0.0), ("sheen", 0.0),
                 ("sheen_tint", 0.0), ("flatness", 0.0), ("diff_trans", 0.0), ("eta", 1.5))
 RATES = (("specular_reflectance_sampling_rate", "spec_refl_srate"),
@@ -43,9 +44,9 @@ OWNER = '<bsdf type="principledthin">'
 @register("bsdf", "principledthin", fmt="mitsuba")
 class PrincipledThin(Bsdf):
     kernel = "bsdfs/principledthin.h"
-    PARAMS = [("base_color", "texture"), ("w", "float", len(FLOAT_PARAMS)), ("w_tex", "uint", len(FLOAT_PARAMS))] + \
+    PARAMS = [("base_color", "texture")] + [(name, "float_texture") for name, _ in FLOAT_PARAMS] + \
         [(field, "float") for _, field in RATES]
-    FLAGS = ("GLOSSY", "DIFFUSE")
+    FLAGS = ("GLOSSY", "DIFFUSE", "TRANSMISSION")   # always, as in Mitsuba (whatever spec_trans and diff_trans)
     METHODS = ("eval", "pdf", "sample", "albedo")
     children = ("texture",)
 

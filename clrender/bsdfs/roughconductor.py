@@ -23,7 +23,7 @@ from .mitsuba_params import Distribution, color_or_texture, fill_color, named_te
 class RoughConductor(Bsdf):
     kernel = "bsdfs/roughconductor.h"
     PARAMS = [("eta", "float4"), ("k", "float4"), ("specular_reflectance", "texture"),
-              ("alpha_u", "float"), ("alpha_v", "float"), ("alpha_u_tex", "uint"), ("alpha_v_tex", "uint"),
+              ("alpha_u", "float_texture"), ("alpha_v", "float_texture"),
               ("distribution", "uint"), ("sample_visible", "uint")]
     FLAGS = ("GLOSSY",)
     children = ("texture",)

@@ -26,10 +26,10 @@ from .mitsuba_params import Distribution, color_or_texture, fill_color, named_te
 class RoughDielectric(Bsdf):
     kernel = "bsdfs/roughdielectric.h"
     # in this order to fit 80 bytes: scalars fill the gap between a texture's index and the next float4
-    PARAMS = [("specular_reflectance", "texture"), ("int_ior", "float"), ("ext_ior", "float"), ("alpha_u", "float"),
-              ("specular_transmittance", "texture"), ("alpha_v", "float"), ("alpha_u_tex", "uint"),
-              ("alpha_v_tex", "uint"), ("distribution", "uint"), ("sample_visible", "uint")]
-    FLAGS = ("GLOSSY",)
+    PARAMS = [("specular_reflectance", "texture"), ("int_ior", "float"), ("ext_ior", "float"),
+              ("alpha_u", "float_texture"), ("specular_transmittance", "texture"), ("alpha_v", "float_texture"),
+              ("distribution", "uint"), ("sample_visible", "uint")]
+    FLAGS = ("GLOSSY", "TRANSMISSION")
     children = ("texture",)
 
     def __init__(self, props, children, spec):

@@ -20,5 +20,5 @@ from .dielectric import DIELECTRIC_PARAMS, MitsubaSmoothDielectric
 class ThinDielectric(MitsubaSmoothDielectric, Bsdf):
     kernel = "bsdfs/thindielectric.h"
     PARAMS = DIELECTRIC_PARAMS
-    FLAGS = ("DELTA",)
+    FLAGS = ("DELTA", "TRANSMISSION")
     METHODS = ("sample",)

@@ -7,15 +7,13 @@
 </bsdf>
 ```
 On the back (cos theta_i < 0) the child is queried in the mirrored frame (z flipped for wi and wo). The children
-must reflect only (as in Mitsuba: a transmitting child is an error). Bsdf row (kernels/bsdfs/twosided.h):
+must reflect only: a child whose flags say TRANSMISSION (a dielectric, a mask or null, principledthin, principled
+with spec_trans, or a composite holding one) is an error, as in Mitsuba. Bsdf row (kernels/bsdfs/twosided.h):
 p.twosided = front, back (row offsets of the children).
 """
 from ..errors import SceneError
 from ..scene.registry import register
 from .composite import Composite
-
-
-TRANSMITTING = ("dielectric", "thindielectric", "roughdielectric", "mask", "null")
 
 
 def _descendants(bsdfs):
@@ -34,9 +32,11 @@ class TwoSided(Composite):
         self.read_children(spec, children, (1, 2))
         for c in _descendants(self.bsdfs):
             cspec = getattr(c, "spec", None)
-            if getattr(cspec, "type", None) in TRANSMITTING:
-                raise SceneError(f"{self.owner}: the nested <bsdf type=\"{cspec.type}\"> transmits light; "
-                                 f"twosided takes reflecting BSDFs only (as in Mitsuba)", cspec.location)
+            if "TRANSMISSION" in c.own_capabilities():   # (the one that transmits, not a composite holding it)
+                kind = getattr(cspec, "type", type(c).__name__)
+                raise SceneError(f"{self.owner}: the nested <bsdf type=\"{kind}\"> transmits light; "
+                                 f"twosided takes reflecting BSDFs only (as in Mitsuba)",
+                                 getattr(cspec, "location", None))
 
     def fill(self, p, row, textures):
         p["front"] = self.child_offsets[0]

@@ -9,15 +9,14 @@ A plugin class that runs on the device declares, beside its XML form::
         FLAGS = ("GLOSSY",)                 # capabilities the kernels test (never the type)
         METHODS = ("eval", "pdf", "sample") # which of the kind's methods its header defines
 
-From the registered plugins of each kind this module derives, at program build time:
+From the plugins registered in clrender.scene.registry (as it stands: this module imports no plugin; whoever
+assembles the application imports clrender.plugins) this module derives, per kind:
 - the tags: plugins numbered in the order of their prefixes (the kernel file's stem by default), so a tag never
   depends on import order, and no tag silently means a default plugin;
-- the row struct: the kind's header fields, then a union ``p`` of every plugin's parameter struct
-  (``b->p.microfacet.alpha`` in C, ``row["p"]``-free ``row["microfacet"]["alpha"]`` in numpy), of a fixed size
-  so rows keep one layout whatever is registered (clrender/device/layout.py emits both sides);
-- ``gen/<kind>_dispatch.h``: the plugin headers' includes and one ``switch`` per method, written into a
-  generated-headers folder that build_program puts on the include path. A plugin whose header lacks a method
-  it declares fails the build (an undeclared function is an error in OpenCL C).
+- the members of the row's union: each plugin's parameter struct (``b->p.microfacet.alpha`` in C,
+  ``row["microfacet"]["alpha"]`` in numpy), laid out in the kind's row of clrender/device/layout.py ROWS;
+- its methods and flag bits, from which clrender/device/codegen.py writes ``gen/<kind>_dispatch.h``: the plugin
+  headers' includes and one ``switch`` per method.
 
 Each plugin's include and cases are guarded by ``CLR_USE_<KIND>_<PREFIX>`` (or ``CLR_USE_ALL_PLUGINS``), and the
 composite levels by ``<KIND>_COMPOSITE_LEVELS``: a render program gets the defines of the plugins its packed
@@ -28,12 +27,10 @@ Compare pbrt-v4's TaggedPointer::Dispatch and Mitsuba 3's BSDFFlags/EmitterFlags
 """
 from __future__ import annotations
 
-import functools
-import hashlib
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+
+from ..scene import registry
 
 
 @dataclass(frozen=True)
@@ -49,9 +46,7 @@ class Method:
 @dataclass(frozen=True)
 class Kind:
     tag: str                   # registry tag, e.g. "bsdf"
-    struct: str                # C / layout name of the row, e.g. "Bsdf"
-    header: tuple              # layout fields before the union
-    param_bytes: int           # fixed size of the union (a plugin's parameters must fit)
+    struct: str                # its row in layout.ROWS, e.g. "Bsdf" (header fields, then a union of the plugins')
     flags: tuple               # capability flag names, bit i = 1 << i, emitted as <STRUCT>_<FLAG>
     dispatch_name: str         # generated functions are <dispatch_name>_<method>
     row: str                   # how the dispatcher's row pointer is named in `params`
@@ -75,9 +70,10 @@ class Kind:
 
 BSDF = Kind(
     tag="bsdf", struct="Bsdf",
-    header=(("type", "uint"), ("flags", "uint"), ("pad", "uint", 2)),
-    # UV: a parameter reads a texture that varies over the surface (set at packing; intersection computes uv)
-    param_bytes=352, flags=("DELTA", "DIFFUSE", "GLOSSY", "UV"), dispatch_name="bsdf", row="b",
+    # UV: a parameter reads a texture that varies over the surface (set at packing; intersection computes uv).
+    # TRANSMISSION: light may leave on the other side (a pass-through included, Mitsuba's Transmission); per row where
+    # a parameter decides it (Bsdf.capabilities)
+    flags=("DELTA", "DIFFUSE", "GLOSSY", "UV", "TRANSMISSION"), dispatch_name="bsdf", row="b",
     methods=(
         Method("eval", "float3", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return (float3)(0.0f);"),
         Method("pdf", "float", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return 0.0f;"),
@@ -98,18 +94,13 @@ BSDF = Kind(
 # Textures: rows of their own table (SCENE_TABLES "textures"); a BSDF colour parameter declared as "texture" is a
 # constant colour plus the index of a texture row (NONE: the constant), read through texture.h's param_color.
 TEXTURE = Kind(
-    tag="texture", struct="Texture", header=(("type", "uint"), ("pad", "uint", 3)), param_bytes=48, flags=(),
-    dispatch_name="texture", row="t",
+    tag="texture", struct="Texture", flags=(), dispatch_name="texture", row="t",
     methods=(Method("eval", "float3", "__global const Texture* t, float2 uv", "t, uv", "return (float3)(0.0f);",
                     required=True),),
     after=("math.h",))
 
 EMITTER = Kind(
-    tag="emitter", struct="Emitter",
-    header=(("type", "uint"), ("flags", "uint"),
-            ("shape", "uint"),        # surface emitters: the emitting shape (which samples its own surface)
-            ("pad", "uint", 5)),
-    param_bytes=96, flags=("DELTA", "INFINITE", "SURFACE"), dispatch_name="emitter_row", row="em",
+    tag="emitter", struct="Emitter", flags=("DELTA", "INFINITE", "SURFACE"), dispatch_name="emitter_row", row="em",
     methods=(
         Method("sample", "float3", "const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u",
                "sd, em, q, u", "q->pdf = 0.0f; q->dist = 0.0f; return (float3)(0.0f);", required=True),
@@ -125,19 +116,11 @@ EMITTER = Kind(
 # with its solid-angle density (used by the area emitter). Nori files call them <mesh>, Mitsuba files <shape>.
 SHAPE = Kind(
     tag="mesh", struct="Shape", registry_tags=("mesh", "shape"), use_name="SHAPE",
-    header=(("type", "uint"), ("flags", "uint"),
-            ("bsdf", "uint"),
-            ("emitter", "uint"),     # NONE if the shape does not emit
-            ("first", "uint"),       # emitting meshes: offset of their triangles' leaf references in the `tri_refs`
-                                     # table (NONE when not emitting); spheres: row of the spheres table
-            ("count", "uint"),       # meshes: triangle count; spheres: 1
-            ("cdf", "uint"),         # emitting meshes: offset of their triangle-area CDF in the `cdf` table
-            ("area", "float")),      # emitting shapes: total surface area
     # per shape, set at packing (not capabilities of the plugin): HAS_NORMALS / HAS_UVS: per-vertex data present;
     # NEEDS_UV: its BSDF reads a texture over the surface or is anisotropic (analytic shapes compute uv only then;
     # the shading frame then follows dp/du, as Mitsuba's); FLIP_NORMALS:
     # analytic shapes turned inside out (meshes flip their winding and normals at loading instead)
-    param_bytes=16, flags=("HAS_NORMALS", "HAS_UVS", "NEEDS_UV", "FLIP_NORMALS"), dispatch_name="shape", row="s",
+    flags=("HAS_NORMALS", "HAS_UVS", "NEEDS_UV", "FLIP_NORMALS"), dispatch_name="shape", row="s",
     methods=(
         Method("surface", "bool",
                "const SceneData* sd, __global const Shape* s, const Ray* r, const Hit* h, Intersection* its",
@@ -151,48 +134,18 @@ SHAPE = Kind(
 
 # Integrators: their parameters share SceneInfo's union `p` (sd->info->p.av.length); the program includes the one
 # integrator it runs (kernels/integrators/<kernel>.h), so there is nothing to dispatch.
-INTEGRATOR = Kind(
-    tag="integrator", struct="SceneInfo",
-    header=(("n_prims", "uint"), ("n_tris", "uint"), ("n_spheres", "uint"), ("n_emitters", "uint"),
-            ("bounds_center", "float4"),  # xyz: centre of the scene's bounding sphere, w: its radius
-            ("max_depth", "uint"),        # path length limit (0xFFFFFFFF: none)
-            ("rr_depth", "uint"),         # Russian roulette starts at this depth
-            ("n_infinite", "uint"),       # entries of the infinite-emitter index table
-            ("emitter_cdf", "uint"),      # NONE: choose a light uniformly; else its selection CDF's offset in `cdf`
-            ("n_meshes", "uint")),        # rows of the mesh_vertices table
-    param_bytes=32, flags=(), dispatch_name="integrator", row="info", methods=(), dispatched=False)
+INTEGRATOR = Kind(tag="integrator", struct="SceneInfo", flags=(), dispatch_name="integrator", row="info", methods=(),
+                  dispatched=False)
 
 # Reconstruction filters: their parameters are a union in the Camera row; the kernels evaluate the profile f(x)
 # (|x| <= radius) through filter_profile_eval (kernels/filter.h's sampling weights).
 RFILTER = Kind(
-    tag="rfilter", struct="Camera",
-    header=(("to_world", "float4", 4),   # columns of the camera-to-world matrix: x axis, y axis, z axis, origin
-            ("tan_half_fov", "float"),   # tan(fov/2), horizontal
-            ("inv_aspect", "float"),     # height / width
-            ("near_clip", "float"), ("far_clip", "float"),
-            ("width", "uint"), ("height", "uint"),
-            ("filter_type", "uint"),     # the filter's tag
-            ("filter_bins", "uint"),     # size of the filter's 1-D sampling table
-            ("filter_radius", "float"),
-            # the image is the window (crop_x, crop_y, width, height) of a film_width x film_height film
-            ("crop_x", "float"), ("crop_y", "float"), ("film_width", "float"), ("film_height", "float"),
-            ("clip_window", "uint"),     # 1: samples whose filter offset leaves the window count with weight 0
-            ("lens_radius", "float"),    # thin lens aperture radius (0: pinhole)
-            ("focus_distance", "float"),  # distance of the plane in focus along the viewing axis
-            ("ortho", "uint")),          # 1: orthographic (rays along the z axis from the film's plane)
-    param_bytes=16, flags=(), dispatch_name="filter_profile", row="cam", type_field="filter_type",
+    tag="rfilter", struct="Camera", flags=(), dispatch_name="filter_profile", row="cam", type_field="filter_type",
     methods=(Method("eval", "float", "__global const Camera* cam, float x", "cam, x", "return 0.0f;",
                     required=True),),
     after=("math.h",))
 
 KINDS = {k.tag: k for k in (TEXTURE, SHAPE, BSDF, EMITTER, INTEGRATOR, RFILTER)}
-
-
-def _registry():
-    from .. import plugins  # noqa: F401  (registers every plugin)
-    from ..scene import registry
-
-    return registry
 
 
 def prefix_of(cls) -> str:
@@ -260,10 +213,11 @@ def tag_of(cls) -> int:
     return [prefix_of(c) for c in plugins(kind.tag)].index(prefix_of(cls))
 
 
-def flags_of(cls) -> int:
+def flags_of(cls, names=None) -> int:
+    """The flag bits of `names` (default: the class's FLAGS) in the row of plugin class `cls`."""
     kind = KINDS[_kind_tag(cls)]
     bits = 0
-    for f in cls.FLAGS:
+    for f in cls.FLAGS if names is None else names:
         if f not in kind.flags:
             raise RuntimeError(f"{cls.__qualname__}: unknown {kind.tag} flag {f!r}; known: {kind.flags}")
         bits |= 1 << kind.flags.index(f)
@@ -271,10 +225,9 @@ def flags_of(cls) -> int:
 
 
 def _classes(kind: Kind) -> list[type]:
-    reg = _registry()
     out = []
     for t in kind.tags:
-        out += [c for c in reg.registered_classes(t) if c not in out]
+        out += [c for c in registry.registered_classes(t) if c not in out]
     return out
 
 
@@ -338,109 +291,3 @@ class PluginSet:
                 raise ValueError(f"{kind_tag} composites nested {depth} deep; at most {kind.composite_levels}")
             out[kind.levels_define] = int(depth)
         return out
-
-
-def dispatch_source(kind: Kind) -> str:
-    """The generated header: includes of the plugins' headers and one switch per method.
-
-    With composite plugins, level 0 is a switch over the leaf plugins and level n (1..kind.composite_levels) a
-    switch over the composites whose children are dispatched by level n-1 (any other tag falls through to level
-    n-1); <dispatch_name>_<method> calls the top level. A composite's header has no include guard: it is included
-    once per level with COMPOSITE_FN(f) naming its functions at that level (f_l<n>) and CHILD_FN(m) the level
-    below's dispatcher (<dispatch_name>_l<n-1>_<m>). Composite levels are out-of-line functions, so code size
-    grows with the number of levels, not with the product of the composites' calls.
-
-    Every plugin's include and cases sit under its CLR_USE_* guard, and the levels above
-    <KIND>_COMPOSITE_LEVELS (all of them without a plugin set) are left out: see the module docstring."""
-    up = kind.tag.upper()
-    out = [f"/* generated by clrender/device/dispatch.py from the registered {kind.tag} plugins: do not edit */",
-           f"#ifndef CLRENDER_GEN_{up}_DISPATCH_H", f"#define CLRENDER_GEN_{up}_DISPATCH_H",
-           f"#if !defined({PLUGIN_SET}) && !defined({ALL_PLUGINS})",
-           f"#define {ALL_PLUGINS} 1", "#endif"]
-    out += [f'#include "{h}"' for h in kind.after]
-    classes = plugins(kind.tag)
-    composites = [c for c in classes if is_composite(c)]
-    levels = kind.composite_levels if composites else 0
-
-    def guard(cls):
-        return f"#if defined({ALL_PLUGINS}) || defined({use_define(kind, prefix_of(cls))})"
-
-    def name(level, m):
-        return f"{kind.dispatch_name}_{m.name}" if not levels else f"{kind.dispatch_name}_l{level}_{m.name}"
-
-    def cases(m, pick, call):
-        for tag, cls in enumerate(classes):
-            if m.name in methods_of(cls, kind) and pick(cls):
-                out.extend([guard(cls), f"    case {tag}u: return {call(cls)}({m.args});", "#endif"])
-
-    for cls in classes:
-        if not is_composite(cls):
-            out.extend([guard(cls), f'#include "{cls.kernel}"', "#endif"])
-    if levels:
-        # how many composite levels this program compiles: all without a plugin set, else the set's depth
-        lv = f"CLR_{up}_LEVELS"
-        out += [f"#if defined({ALL_PLUGINS}) || !defined({kind.levels_define})", f"#define {lv} {levels}",
-                "#else", f"#define {lv} {kind.levels_define}", "#endif",
-                f"#if {lv} < 0 || {lv} > {levels}",
-                f'#error "{kind.levels_define} must be 0..{levels}"', "#endif"]
-    for m in kind.methods:
-        out.append(f"INLINE {m.ret} {name(0, m)}({m.params}) {{")
-        out.append(f"    switch ({kind.row}->{kind.type_field}) {{")
-        cases(m, lambda c: not is_composite(c), lambda c: f"{prefix_of(c)}_{m.name}")
-        out.append(f"    default: {m.default}")
-        out.append("    }")
-        out.append("}")
-    for level in range(1, levels + 1):
-        out.append(f"#if {lv} >= {level}")
-        out.append(f"#define COMPOSITE_FN(f) f##_l{level}")
-        out.append(f"#define CHILD_FN(m) {kind.dispatch_name}_l{level - 1}_##m")
-        for cls in composites:
-            out.extend([guard(cls), f'#include "{cls.kernel}"', "#endif"])
-        out.append("#undef COMPOSITE_FN")
-        out.append("#undef CHILD_FN")
-        for m in kind.methods:
-            out.append(f"static __attribute__((noinline)) {m.ret} {name(level, m)}({m.params}) {{")
-            out.append(f"    switch ({kind.row}->{kind.type_field}) {{")
-            cases(m, is_composite, lambda c: f"{prefix_of(c)}_{m.name}_l{level}")
-            out.append(f"    default: return {name(level - 1, m)}({m.args});")
-            out.append("    }")
-            out.append("}")
-        out.append("#endif")
-    if levels:
-        # the kind's entry points call the top level this program has
-        for level in range(levels + 1):
-            out.append(f"#{'if' if level == 0 else 'elif'} {lv} == {level}")
-            for m in kind.methods:
-                out.append(f"INLINE {m.ret} {kind.dispatch_name}_{m.name}({m.params}) "
-                           f"{{ return {name(level, m)}({m.args}); }}")
-        out.append("#endif")
-    out.append("#endif")
-    return "\n".join(out) + "\n"
-
-
-@functools.lru_cache(maxsize=None)
-def _generated_dir(sig: tuple) -> str:
-    text = {f"{k.tag}_dispatch.h": dispatch_source(k) for k in KINDS.values() if k.dispatched}
-    digest = hashlib.sha256(repr(sorted(text.items())).encode()).hexdigest()[:16]
-    # A stable path per content: PoCL's cache key includes the build options (our -I), so a fresh folder per
-    # process would make every build cold.
-    root = Path(tempfile.gettempdir()) / f"clrender-{os.getuid() if hasattr(os, 'getuid') else 'user'}" / "gen"
-    d = root / digest
-    (d / "gen").mkdir(parents=True, exist_ok=True)
-    for name, body in text.items():
-        p = d / "gen" / name
-        if not p.is_file() or p.read_text() != body:
-            tmp = p.with_name(f".{name}.{os.getpid()}")
-            tmp.write_text(body)
-            os.replace(tmp, p)
-    return str(d)
-
-
-def generated_include_dir() -> str:
-    """A folder holding gen/<kind>_dispatch.h for the plugins registered now (rewritten if it vanished)."""
-    sig = signature()
-    d = _generated_dir(sig)
-    if not all((Path(d) / "gen" / f"{k.tag}_dispatch.h").is_file() for k in KINDS.values() if k.dispatched):
-        _generated_dir.cache_clear()
-        d = _generated_dir(sig)
-    return d

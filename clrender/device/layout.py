@@ -1,16 +1,22 @@
 """The one source of truth for every struct shared by the host and the kernels.
 
-Each struct is declared once here as a list of (field, C type[, count]). From that we derive both the numpy
-dtype (explicit offsets, C alignment: a float4/uint4 is 16-byte aligned) used to pack tables on the host, and
-the C ``typedef struct`` text that ``program.build_program`` prepends to every kernel source. Only 4-byte
-scalars and 16-byte vectors are allowed: ``float3`` is 16 bytes on the device and 12 in numpy, so it never
-appears in a buffer. ``tests/test_layout.py`` compiles a probe kernel and compares sizeof/offsetof.
+Each struct is declared once here as a list of (field, C type[, count]): the plain ones in ``STRUCTS``, the rows
+of the scene's plugin tables in ``ROWS`` (their header fields, then a fixed-size union ``p`` of the registered
+plugins' parameter structs, which clrender/device/dispatch.py lists). From that we derive the numpy dtype (explicit
+offsets, C alignment: a float4/uint4 is 16-byte aligned) used to pack tables on the host; clrender/device/codegen.py
+writes the C ``typedef struct`` text of the same fields that ``program.build_program`` prepends to every kernel
+source. Only 4-byte scalars and 16-byte vectors are allowed: ``float3`` is 16 bytes on the device and 12 in numpy, so
+it never appears in a buffer. ``tests/test_layout.py`` compiles a probe kernel and compares sizeof/offsetof.
 """
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass
 
 import numpy as np
+
+from ..scene.registry import snapshot
+from . import dispatch
 
 _SCALARS = {"float": ("<f4", 4, 4), "uint": ("<u4", 4, 4), "int": ("<i4", 4, 4)}
 _VECTORS = {"float4": ("<f4", 16, 16), "uint4": ("<u4", 16, 16)}
@@ -18,8 +24,65 @@ _VECTORS = {"float4": ("<f4", 16, 16), "uint4": ("<u4", 16, 16)}
 NONE = 0xFFFFFFFF  # "no index" in uint fields (no emitter, no texture, ...)
 
 # Structs with no plugins behind them (none at present: the shape, BSDF, emitter, texture, integrator and camera rows
-# are the UNION_STRUCTS below).
+# are the ROWS below).
 STRUCTS: dict[str, list[tuple]] = {}
+
+
+@dataclass(frozen=True)
+class Row:
+    """A plugin table's row: the header fields, then the union `p` of its plugins' parameter structs, of a fixed
+    size so rows keep one layout whatever is registered (a plugin's PARAMS must fit)."""
+    header: tuple
+    union_bytes: int
+
+
+# Keyed by the struct name a dispatch.Kind names (Kind.struct).
+ROWS: dict[str, Row] = {
+    # Camera: the camera, then its reconstruction filter's parameters
+    "Camera": Row(header=(
+        ("to_world", "float4", 4),   # columns of the camera-to-world matrix: x axis, y axis, z axis, origin
+        ("tan_half_fov", "float"),   # tan(fov/2), horizontal
+        ("inv_aspect", "float"),     # height / width
+        ("near_clip", "float"), ("far_clip", "float"),
+        ("width", "uint"), ("height", "uint"),
+        ("filter_type", "uint"),     # the filter's tag
+        ("filter_bins", "uint"),     # size of the filter's 1-D sampling table
+        ("filter_radius", "float"),
+        # the image is the window (crop_x, crop_y, width, height) of a film_width x film_height film
+        ("crop_x", "float"), ("crop_y", "float"), ("film_width", "float"), ("film_height", "float"),
+        ("clip_window", "uint"),     # 1: samples whose filter offset leaves the window count with weight 0
+        ("lens_radius", "float"),    # thin lens aperture radius (0: pinhole)
+        ("focus_distance", "float"),  # distance of the plane in focus along the viewing axis
+        ("ortho", "uint")),          # 1: orthographic (rays along the z axis from the film's plane)
+        union_bytes=16),
+    "Texture": Row(header=(("type", "uint"), ("pad", "uint", 3)), union_bytes=48),
+    "Shape": Row(header=(
+        ("type", "uint"), ("flags", "uint"),
+        ("bsdf", "uint"),
+        ("emitter", "uint"),     # NONE if the shape does not emit
+        ("first", "uint"),       # emitting meshes: offset of their triangles' leaf references in the `tri_refs`
+                                 # table (NONE when not emitting); spheres: row of the spheres table
+        ("count", "uint"),       # meshes: triangle count; spheres: 1
+        ("cdf", "uint"),         # emitting meshes: offset of their triangle-area CDF in the `cdf` table
+        ("area", "float")),      # emitting shapes: total surface area
+        union_bytes=16),
+    "Bsdf": Row(header=(("type", "uint"), ("flags", "uint"), ("pad", "uint", 2)), union_bytes=352),
+    "Emitter": Row(header=(
+        ("type", "uint"), ("flags", "uint"),
+        ("shape", "uint"),        # surface emitters: the emitting shape (which samples its own surface)
+        ("pad", "uint", 5)),
+        union_bytes=96),
+    # SceneInfo: scene-wide numbers, then the integrator's parameters (sd->info->p.av.length)
+    "SceneInfo": Row(header=(
+        ("n_prims", "uint"), ("n_tris", "uint"), ("n_spheres", "uint"), ("n_emitters", "uint"),
+        ("bounds_center", "float4"),  # xyz: centre of the scene's bounding sphere, w: its radius
+        ("max_depth", "uint"),        # path length limit (0xFFFFFFFF: none)
+        ("rr_depth", "uint"),         # Russian roulette starts at this depth
+        ("n_infinite", "uint"),       # entries of the infinite-emitter index table
+        ("emitter_cdf", "uint"),      # NONE: choose a light uniformly; else its selection CDF's offset in `cdf`
+        ("n_meshes", "uint")),        # rows of the mesh_vertices table
+        union_bytes=32),
+}
 # The scene's tables, in kernel-argument order: (name, element type, what it holds). The kernels' SceneData
 # struct, its SCENE_ARGS argument list (each table is the argument s_<name>) and SCENE_INIT are generated from
 # this list; clrender.pack.SceneBuffers holds one numpy array per entry, and the host sets them by name.
@@ -46,11 +109,18 @@ SCENE_TABLES: list[tuple[str, str, str]] = [
     ("info", "SceneInfo", "scene-wide numbers and the integrator's parameters"),
 ]
 
-# Bsdf and Emitter rows are generated from the registered plugins (clrender/device/dispatch.py): the kind's
-# header fields, then a union `p` of every plugin's declared parameter struct.
-# SceneInfo: scene-wide numbers + the integrator's parameters; Camera: the camera + its filter's parameters.
-UNION_STRUCTS = ("Camera", "Texture", "Shape", "Bsdf", "Emitter", "SceneInfo")
-
+# The film's per-pixel accumulators, in the render kernel's argument order: (argument, element type, what each
+# pixel's element holds, whether it exists only in builds that count rays). One buffer of one element per pixel
+# each; the kernels take them as FILM_ARGS (each the argument of its name), the host allocates, downloads and reads
+# them by these names (clrender/renderer.py, film.py Film.sums), and the film's memory is counted from their sizes
+# (memcheck.py). Without CLRENDER_COUNT_RAYS a counting-only buffer is a one-element dummy the kernel never touches,
+# so both builds take the same arguments.
+FILM_ACCUMULATORS: list[tuple[str, str, str, bool]] = [
+    ("acc0", "float4", "xyz: sum of w L, w: sum of w (the filter weights)", False),
+    ("acc1", "float4", "xyz: sum of (w L)^2, w: samples accumulated", False),
+    ("bad", "uint", "samples dropped for being NaN/Inf", False),
+    ("rays", "uint4", "rays traced: camera, other closest-hit, shadow (any-hit), 0", True),
+]
 
 # Type tags and flag bits, shared the same way (emitted as #defines).
 ENUMS: dict[str, int] = {
@@ -70,23 +140,29 @@ ENUMS: dict[str, int] = {
 }
 
 
-def _expand(fields):
-    """A "texture" parameter is a constant colour and the index of a texture row (NONE: the constant)."""
+# Plugin parameters that may be a constant or a texture: (C type of the constant). Each is laid out as the constant
+# `name` and the texture row's index `name_tex` (NONE: the constant), filled by clrender.textures.texture.param and
+# read in C by kernels/texture.h's param_color / param_float.
+TEXTURED = {"texture": "float4",          # a colour (xyz)
+            "float_texture": "float"}     # a float (a texture's float view: Mitsuba's eval_1)
+
+
+def expand(fields) -> list:
+    """The fields as laid out: a TEXTURED parameter is its constant and the index of a texture row."""
     out = []
     for f in fields:
-        if f[1] == "texture":
-            out += [(f[0], "float4"), (f[0] + "_tex", "uint")]
+        if f[1] in TEXTURED:
+            out += [(f[0], TEXTURED[f[1]]), (f[0] + "_tex", "uint")]
         else:
             out.append(f)
     return out
 
 
 def _layout(fields):
-    names, formats, offsets, c_lines = [], [], [], []
+    names, formats, offsets = [], [], []
     off = 0
     align = 4
-    fields = _expand(fields)
-    for f in fields:
+    for f in expand(fields):
         name, ctype = f[0], f[1]
         count = f[2] if len(f) > 2 else 1
         if ctype in _SCALARS:
@@ -102,84 +178,78 @@ def _layout(fields):
         names.append(name)
         formats.append(np_fmt)
         offsets.append(off)
-        c_lines.append(f"    {ctype} {name}{f'[{count}]' if count > 1 else ''};")
         off += size * count
     itemsize = (off + align - 1) // align * align
-    return names, formats, offsets, itemsize, c_lines
+    return names, formats, offsets, itemsize
 
 
-def _signature() -> tuple:
-    from .. import plugins  # noqa: F401  (registers every plugin before the registry is read)
-    from ..scene.registry import snapshot
-
+def plugin_signature() -> tuple:
+    """dispatch.signature() of the registry as it stands (whoever assembles the application imports the plugins:
+    the loader, the CLI, testing, ...), cached per registry state."""
     return _signature_of(snapshot())
 
 
 @functools.lru_cache(maxsize=8)
 def _signature_of(registrations: tuple) -> tuple:
     # dispatch.signature() walks the whole registry (ms per call); dtype() asks for it for every table row packed
-    from .dispatch import signature
+    sig = dispatch.signature()
+    if not any(kind == "bsdf" for kind, *_ in sig):
+        # rows and programs laid out now would hold no plugin: black renders or C errors far from the cause
+        raise RuntimeError("no device plugins are registered: the application imports clrender.plugins (as "
+                           "clrender.loader does) before it packs rows or builds programs")
+    return sig
 
-    return signature()
 
-
-def _plain_dtype(fields) -> np.dtype:
-    names, formats, offsets, itemsize, _ = _layout(fields)
+def _dtype_of(fields) -> np.dtype:
+    names, formats, offsets, itemsize = _layout(fields)
     return np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": itemsize})
 
 
+def kind_of_row(struct: str) -> dispatch.Kind:
+    return next(k for k in dispatch.KINDS.values() if k.struct == struct)
+
+
 @functools.lru_cache(maxsize=None)
-def _union_layout(struct: str, sig: tuple):
-    """(numpy dtype, C text) of a plugin row: header fields, then the union `p` of the plugins' parameters."""
-    from .dispatch import KINDS, member_of, params_struct, plugins
+def row_members(struct: str, sig: tuple) -> tuple:
+    """The union members of ROWS[struct] for registry signature `sig`: (member name, C struct name, PARAMS, the
+    class's name for errors) of each registered plugin with parameters, in tag order."""
+    out = []
+    for cls in dispatch.plugins(kind_of_row(struct).tag):
+        if getattr(cls, "PARAMS", None):  # (a mirror has nothing to store, and C has no empty structs)
+            out.append((dispatch.member_of(cls), dispatch.params_struct(cls), tuple(cls.PARAMS), cls.__qualname__))
+    return tuple(out)
 
-    kind = next(k for k in KINDS.values() if k.struct == struct)
-    names, formats, offsets, size, c_lines = _layout(kind.header)
-    union_off = (size + 15) // 16 * 16
-    c_types, members = [], []
-    for cls in plugins(kind.tag):
-        if not getattr(cls, "PARAMS", None):
-            continue  # e.g. a mirror: nothing to store (C has no empty structs)
-        p_names, p_formats, p_offsets, p_size, p_lines = _layout(cls.PARAMS)
-        if p_size > kind.param_bytes:
-            raise ValueError(f"{cls.__qualname__}: its parameters take {p_size} bytes; a {struct} row has room "
-                             f"for {kind.param_bytes}")
-        sub = np.dtype({"names": p_names, "formats": p_formats, "offsets": p_offsets, "itemsize": p_size})
-        names.append(member_of(cls))
+
+def union_offset(struct: str) -> int:
+    return (_layout(ROWS[struct].header)[3] + 15) // 16 * 16
+
+
+@functools.lru_cache(maxsize=None)
+def _row_dtype(struct: str, sig: tuple) -> np.dtype:
+    """A plugin row: header fields, then the union `p` of the plugins' parameters."""
+    row = ROWS[struct]
+    names, formats, offsets, _ = _layout(row.header)
+    for member, _c_name, params, who in row_members(struct, sig):
+        sub = _dtype_of(params)
+        if sub.itemsize > row.union_bytes:
+            raise ValueError(f"{who}: its parameters take {sub.itemsize} bytes; a {struct} row has room "
+                             f"for {row.union_bytes}")
+        names.append(member)
         formats.append(sub)
-        offsets.append(union_off)
-        c_types.append("typedef struct {\n" + "\n".join(p_lines) + f"\n}} {params_struct(cls)};")
-        members.append(f"        {params_struct(cls)} {member_of(cls)};")
-    dt = np.dtype({"names": names, "formats": formats, "offsets": offsets,
-                   "itemsize": union_off + kind.param_bytes})
-    c = "\n".join(c_types) + "\ntypedef struct {\n" + "\n".join(c_lines) + "\n    union {\n" + "\n".join(members)
-    c += f"\n        float4 _size[{kind.param_bytes // 16}];  /* fixes the row size whatever is registered */"
-    c += f"\n    }} p;\n}} {struct};"
-    return dt, c
-
-
-def _scene_tables_c() -> str:
-    fields = [f"    __global const {t}* {n};  /* {what} */" for n, t, what in SCENE_TABLES]
-    out = ["typedef struct {", *fields,
-           "#ifdef CLRENDER_COUNT_RAYS",
-           "    uint n_closest, n_shadow;  /* rays traced by this work-item (benchmark builds only) */",
-           "#endif", "} SceneData;"]
-    args = ", ".join(f"__global const {t}* s_{n}" for n, t, _ in SCENE_TABLES)
-    init = " ".join(f"sd.{n} = s_{n};" for n, _, _ in SCENE_TABLES)
-    out.append(f"#define SCENE_ARGS {args}")
-    out.append(f"#define SCENE_INIT(sd) SceneData sd; {init} SCENE_INIT_COUNTERS(sd)")
-    return "\n".join(out)
+        offsets.append(union_offset(struct))
+    return np.dtype({"names": names, "formats": formats, "offsets": offsets,
+                     "itemsize": union_offset(struct) + row.union_bytes})
 
 
 def dtype(struct: str) -> np.dtype:
-    if struct in UNION_STRUCTS:
-        return _union_layout(struct, _signature())[0]
-    return _plain_dtype_cached(struct)
+    if struct in ROWS:
+        return _row_dtype(struct, plugin_signature())
+    return _plain_dtype(struct)
 
 
 @functools.lru_cache(maxsize=None)
-def _plain_dtype_cached(struct: str) -> np.dtype:
-    return _plain_dtype(STRUCTS[struct])
+def _plain_dtype(struct: str) -> np.dtype:
+    return _dtype_of(STRUCTS[struct])
 
 
 _ELEMENTS = {"float": (np.float32, ()), "uint": (np.uint32, ()), "ushort": (np.uint16, ()),
@@ -195,30 +265,23 @@ def table_element(name: str) -> tuple:
     return _ELEMENTS[t] if t in _ELEMENTS else (dtype(t), ())
 
 
+def film_element(name: str) -> tuple:
+    """(numpy dtype, shape of one element) of FILM_ACCUMULATORS entry `name`."""
+    types = {n: t for n, t, *_ in FILM_ACCUMULATORS}
+    if name not in types:
+        raise KeyError(f"no film accumulator {name!r}; they are {list(types)}")
+    return _ELEMENTS[types[name]]
+
+
+def film_bytes_per_pixel(count_rays: bool = False) -> int:
+    """Device bytes per pixel of the film's accumulators (with the ray counters when counting)."""
+    out = 0
+    for name, _t, _what, counting_only in FILM_ACCUMULATORS:
+        if count_rays or not counting_only:
+            dt, shape = film_element(name)
+            out += np.dtype(dt).itemsize * int(np.prod(shape))
+    return out
+
+
 def zeros(struct: str, n: int = 1) -> np.ndarray:
     return np.zeros(n, dtype(struct))
-
-
-def c_header() -> str:
-    return _c_header(_signature())
-
-
-@functools.lru_cache(maxsize=None)
-def _c_header(sig: tuple) -> str:
-    from .dispatch import flag_defines
-
-    out = ["#ifndef CLRENDER_TYPES_GEN", "#define CLRENDER_TYPES_GEN",
-           "/* generated from clrender/device/layout.py: do not edit */"]
-    for name, fields in STRUCTS.items():
-        *_, lines = _layout(fields)
-        out.append("typedef struct {")
-        out.extend(lines)
-        out.append(f"}} {name};")
-    for name in UNION_STRUCTS:
-        out.append(_union_layout(name, sig)[1])
-    out.append(_scene_tables_c())
-    out.append(f"#define NONE 0x{NONE:08X}u")
-    out.extend(f"#define {k} {v}u" for k, v in ENUMS.items())
-    out.extend(f"#define {k} {v}u" for k, v in flag_defines().items())
-    out.append("#endif")
-    return "\n".join(out) + "\n"

@@ -1,9 +1,9 @@
 """Building OpenCL programs from the kernels shipped in ``clrender.kernels``.
 
 Every program is built from a source string plus include paths (our ``kernels/`` folder and pyopencl's
-Random123 headers) and ``-D`` defines. The generated struct header from ``layout.py`` is prepended so the
-kernels and the host share one definition of every table row. Built programs are cached per context,
-source and options; PoCL's own disk cache (``POCL_CACHE_DIR``) makes a warm build take tens of ms.
+Random123 headers) and ``-D`` defines. The struct header generated from ``layout.py`` (``codegen.c_header``) is
+prepended so the kernels and the host share one definition of every table row. Built programs are cached per
+context, source and options; PoCL's own disk cache (``POCL_CACHE_DIR``) makes a warm build take tens of ms.
 """
 from __future__ import annotations
 
@@ -43,7 +43,7 @@ def pyopencl_include_dir() -> Path:
 
 
 def build_options(defines: dict | None = None, fast_math: bool = False) -> list[str]:
-    from .dispatch import generated_include_dir
+    from .codegen import generated_include_dir
 
     # kernels/, the dispatch headers generated from the registered plugins (gen/*.h), Random123
     # -cl-kernel-arg-info: the host sets arguments by name (clrender/device/kernelargs.py)
@@ -109,7 +109,7 @@ def build_program(ctx, source: str, defines: dict | None = None, fast_math: bool
     import pyopencl as cl
 
     if with_types:
-        from .layout import c_header
+        from .codegen import c_header
 
         source = c_header() + "\n" + source
     defines = dict(defines or {})

@@ -15,7 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..device import layout
+from .. import plugins  # noqa: F401  (the test programs hold every plugin)
+from ..device import codegen, layout
 from ..device.program import build_program
 
 LOCAL = 64
@@ -103,7 +104,7 @@ _KERNELS: dict = {}
 
 
 def _kernel(ctx, name, source=BSDF_SRC, defines=None):
-    key = (ctx.int_ptr, name, source, tuple(sorted((defines or {}).items())), FAST_MATH, layout.c_header())
+    key = (ctx.int_ptr, name, source, tuple(sorted((defines or {}).items())), FAST_MATH, codegen.c_header())
     k = _KERNELS.get(key)
     if k is None:
         k = _KERNELS[key] = _cl().Kernel(_program(ctx, source, defines), name)

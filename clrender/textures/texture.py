@@ -92,9 +92,13 @@ class TextureTable:
 
 
 def param(p, name: str, value, texture, table: TextureTable) -> bool:
-    """Fill a ("name", "texture") parameter: the constant `value`, or `texture`'s row in `table`. Returns whether
-    it refers to a texture (the BSDF then needs uv)."""
-    p[name][:3] = value
+    """Fill a ("name", "texture") or ("name", "float_texture") parameter (layout.TEXTURED): the constant `value` (a
+    colour, a float), or `texture`'s row in `table` (for a float, its float view). Returns whether it refers to a
+    texture (the BSDF then needs uv)."""
+    if p.dtype[name].shape:
+        p[name][:3] = value
+    else:
+        p[name] = value
     p[name + "_tex"] = layout.NONE if texture is None else table.add(texture)
     return texture is not None
 

@@ -6,7 +6,7 @@
 #ifndef CLRENDER_BSDFS_BLENDBSDF_H
 #define CLRENDER_BSDFS_BLENDBSDF_H
 INLINE float blendbsdf_weight(__global const Bsdf* b, const BsdfQuery* q) {
-    return clamp(param_color(q, b->p.blendbsdf.weight, b->p.blendbsdf.weight_tex).x, 0.0f, 1.0f);
+    return clamp(PARAM_FLOAT(q, b->p.blendbsdf, weight), 0.0f, 1.0f);
 }
 #endif
 

@@ -4,7 +4,7 @@
    Two shadowing terms: mf_g1 is Mitsuba's (for Beckmann the rational fit of Walter et al. 2007), used in f so that
    images converge to Mitsuba's; mf_g1_exact is Smith's exact term, used to normalise the visible-normal density so
    that the pdf is the density the sampler really draws from (the fit is off by up to ~0.3%).
-   Also: complex-IOR Fresnel, float parameters that may read a texture, and refraction about a microfacet. */
+   Also: complex-IOR Fresnel and refraction about a microfacet. */
 #ifndef CLRENDER_BSDFS_DISTRIBUTION_H
 #define CLRENDER_BSDFS_DISTRIBUTION_H
 #include "common.h"
@@ -19,12 +19,6 @@ typedef struct {
     float ax, ay;
     bool visible;
 } MfDist;
-
-/* A float parameter: the constant, or the first channel of its texture at the query's uv (the host gives a float
-   parameter the texture's float view: Texture.float_view). */
-INLINE float param_float(const BsdfQuery* q, float value, uint tex) {
-    return tex == NONE ? value : texture_eval(q->textures + tex, q->uv).x;
-}
 
 INLINE MfDist mf_make(const BsdfQuery* q, uint type, float au, uint au_tex, float av, uint av_tex, uint visible) {
     MfDist d;

@@ -4,7 +4,7 @@
 #ifndef CLRENDER_BSDFS_MASK_H
 #define CLRENDER_BSDFS_MASK_H
 INLINE float mask_opacity(__global const Bsdf* b, const BsdfQuery* q) {
-    return clamp(param_color(q, b->p.mask.opacity, b->p.mask.opacity_tex).x, 0.0f, 1.0f);
+    return clamp(PARAM_FLOAT(q, b->p.mask, opacity), 0.0f, 1.0f);
 }
 #endif
 

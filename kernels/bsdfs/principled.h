@@ -25,24 +25,8 @@
 #include "distribution.h"
 #include "principled_common.h"
 
-/* indices into p.principled.w: clrender/bsdfs/principled.py FLOAT_PARAMS */
-#define PR_ROUGHNESS 0
-#define PR_ANISOTROPIC 1
-#define PR_METALLIC 2
-#define PR_SPEC_TRANS 3
-#define PR_SPEC_TINT 4
-#define PR_SHEEN 5
-#define PR_SHEEN_TINT 6
-#define PR_FLATNESS 7
-#define PR_CLEARCOAT 8
-#define PR_CLEARCOAT_GLOSS 9
-
-INLINE float pr_w(__global const Bsdf* b, const BsdfQuery* q, int i) {
-    return param_float(q, b->p.principled.w[i], b->p.principled.w_tex[i]);
-}
-
 INLINE MfDist pr_dist(__global const Bsdf* b, const BsdfQuery* q) {
-    return pr_ggx(pr_w(b, q, PR_ROUGHNESS), pr_w(b, q, PR_ANISOTROPIC));
+    return pr_ggx(PARAM_FLOAT(q, b->p.principled, roughness), PARAM_FLOAT(q, b->p.principled, anisotropic));
 }
 
 /* The half vector of (wi, wo) (reflect: wo on wi's side; else refracted at eta_p), turned to the upper hemisphere */
@@ -66,7 +50,7 @@ INLINE float pr_ggx1(float3 v, float3 h, float alpha) {
 }
 
 INLINE float pr_cc_alpha(__global const Bsdf* b, const BsdfQuery* q) {
-    float g = pr_w(b, q, PR_CLEARCOAT_GLOSS);
+    float g = PARAM_FLOAT(q, b->p.principled, clearcoat_gloss);
     return 0.1f + g * (0.001f - 0.1f);
 }
 
@@ -95,7 +79,8 @@ INLINE float3 principled_eval(__global const Bsdf* b, const BsdfQuery* q) {
     bool front = ci > 0.0f;
     float eta = b->p.principled.eta;
     float eta_p = front ? eta : 1.0f / eta;
-    float metallic = pr_w(b, q, PR_METALLIC), spec_trans = pr_w(b, q, PR_SPEC_TRANS);
+    float metallic = PARAM_FLOAT(q, b->p.principled, metallic);
+    float spec_trans = PARAM_FLOAT(q, b->p.principled, spec_trans);
     float bsdf = (1.0f - metallic) * spec_trans, brdf = (1.0f - metallic) * (1.0f - spec_trans);
     float3 base = param_color(q, b->p.principled.base_color, b->p.principled.base_color_tex);
     float3 h = pr_half(wi, wo, eta_p, reflect);
@@ -110,7 +95,7 @@ INLINE float3 principled_eval(__global const Bsdf* b, const BsdfQuery* q) {
     if (reflect && compatible && F > 0.0f) {
         float3 Fp;
         if (front) {
-            float spec_tint = pr_w(b, q, PR_SPEC_TINT);
+            float spec_tint = PARAM_FLOAT(q, b->p.principled, spec_tint);
             float lum = luminance(base);
             float3 tint = lum > 0.0f ? base / lum : (float3)(1.0f);
             float eta_it = wih >= 0.0f ? eta : 1.0f / eta;
@@ -128,7 +113,7 @@ INLINE float3 principled_eval(__global const Bsdf* b, const BsdfQuery* q) {
     }
     if (!(reflect && front)) return value;
 
-    float clearcoat = pr_w(b, q, PR_CLEARCOAT);
+    float clearcoat = PARAM_FLOAT(q, b->p.principled, clearcoat);
     if (compatible && clearcoat > 0.0f) {
         float Fcc = pr_schlick((float3)(0.04f), wih, eta).x;
         float Dcc = pr_gtr1_d(pr_cc_alpha(b, q), h.z);
@@ -137,9 +122,9 @@ INLINE float3 principled_eval(__global const Bsdf* b, const BsdfQuery* q) {
     float Fo = pr_sw(aco), Fi = pr_sw(aci);
     if (brdf > 0.0f) {
         float f_diff = (1.0f - 0.5f * Fi) * (1.0f - 0.5f * Fo);
-        float rr = 2.0f * pr_w(b, q, PR_ROUGHNESS) * woh * woh;
+        float rr = 2.0f * PARAM_FLOAT(q, b->p.principled, roughness) * woh * woh;
         float f = f_diff + rr * (Fo + Fi + Fo * Fi * (rr - 1.0f));
-        float flatness = pr_w(b, q, PR_FLATNESS);
+        float flatness = PARAM_FLOAT(q, b->p.principled, flatness);
         if (flatness != 0.0f) {
             /* Hanrahan-Krueger's fake subsurface, flattening the retro-reflection */
             float fss90 = 0.5f * rr;
@@ -149,9 +134,9 @@ INLINE float3 principled_eval(__global const Bsdf* b, const BsdfQuery* q) {
         }
         value += base * (brdf * INV_PI * f);
     }
-    float sheen = pr_w(b, q, PR_SHEEN);
+    float sheen = PARAM_FLOAT(q, b->p.principled, sheen);
     if (sheen > 0.0f && 1.0f - metallic > 0.0f) {
-        float sheen_tint = pr_w(b, q, PR_SHEEN_TINT);
+        float sheen_tint = PARAM_FLOAT(q, b->p.principled, sheen_tint);
         float3 c = (float3)(1.0f);
         if (sheen_tint != 0.0f) {
             float lum = luminance(base);
@@ -174,8 +159,9 @@ INLINE float principled_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     float3 h = pr_half(wi, wo, eta_p, reflect);
     float wih = dot3(wi, h), woh = dot3(wo, h), cos_t;
     float F = fresnel_dielectric(wih, 1.0f, eta, &cos_t);
-    float clearcoat = pr_w(b, q, PR_CLEARCOAT);
-    float4 p = pr_probs(b, F, front, pr_w(b, q, PR_METALLIC), pr_w(b, q, PR_SPEC_TRANS), clearcoat);
+    float clearcoat = PARAM_FLOAT(q, b->p.principled, clearcoat);
+    float4 p = pr_probs(b, F, front, PARAM_FLOAT(q, b->p.principled, metallic),
+                        PARAM_FLOAT(q, b->p.principled, spec_trans), clearcoat);
     float dwh;
     if (reflect) {
         dwh = fabs(1.0f / (4.0f * woh));
@@ -203,10 +189,11 @@ INLINE float3 principled_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) 
     if (ci == 0.0f) return (float3)(0.0f);
     bool front = ci > 0.0f;
     float eta = b->p.principled.eta;
-    float metallic = pr_w(b, q, PR_METALLIC), spec_trans = pr_w(b, q, PR_SPEC_TRANS);
+    float metallic = PARAM_FLOAT(q, b->p.principled, metallic);
+    float spec_trans = PARAM_FLOAT(q, b->p.principled, spec_trans);
     if (!front && !((1.0f - metallic) * spec_trans > 0.0f && b->p.principled.has_spec_trans)) return (float3)(0.0f);
     /* diffuse and clearcoat odds, and the specular lobe's as a whole, do not depend on F */
-    float4 p = pr_probs(b, 0.0f, front, metallic, spec_trans, pr_w(b, q, PR_CLEARCOAT));
+    float4 p = pr_probs(b, 0.0f, front, metallic, spec_trans, PARAM_FLOAT(q, b->p.principled, clearcoat));
     float ps = p.x + p.y;
     float3 wo;
     if (u.x < p.w) {

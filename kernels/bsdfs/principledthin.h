@@ -18,26 +18,12 @@
 #include "distribution.h"
 #include "principled_common.h"
 
-/* indices into p.principledthin.w: clrender/bsdfs/principledthin.py FLOAT_PARAMS */
-#define PT_ROUGHNESS 0
-#define PT_ANISOTROPIC 1
-#define PT_SPEC_TRANS 2
-#define PT_SPEC_TINT 3
-#define PT_SHEEN 4
-#define PT_SHEEN_TINT 5
-#define PT_FLATNESS 6
-#define PT_DIFF_TRANS 7
-#define PT_ETA 8
-
-INLINE float pt_w(__global const Bsdf* b, const BsdfQuery* q, int i) {
-    return param_float(q, b->p.principledthin.w[i], b->p.principledthin.w_tex[i]);
-}
 
 /* the specular reflection's distribution, or (scaled) the specular transmission's */
 INLINE MfDist pt_dist(__global const Bsdf* b, const BsdfQuery* q, bool scaled) {
-    float r = pt_w(b, q, PT_ROUGHNESS);
-    if (scaled) r *= 0.65f * pt_w(b, q, PT_ETA) - 0.35f;
-    return pr_ggx(r, pt_w(b, q, PT_ANISOTROPIC));
+    float r = PARAM_FLOAT(q, b->p.principledthin, roughness);
+    if (scaled) r *= 0.65f * PARAM_FLOAT(q, b->p.principledthin, eta) - 0.35f;
+    return pr_ggx(r, PARAM_FLOAT(q, b->p.principledthin, anisotropic));
 }
 
 /* Lobe probabilities (specular reflection, specular transmission, diffuse reflection, diffuse transmission). */
@@ -57,17 +43,18 @@ INLINE float3 principledthin_eval(__global const Bsdf* b, const BsdfQuery* q) {
     float ci = wi.z, co = wo.z, aco = fabs(co);
     bool reflect = co > 0.0f, refract = co < 0.0f;
     if (!(reflect || refract)) return (float3)(0.0f);
-    float st = pt_w(b, q, PT_SPEC_TRANS), dt = 0.5f * pt_w(b, q, PT_DIFF_TRANS);
+    float st = PARAM_FLOAT(q, b->p.principledthin, spec_trans);
+    float dt = 0.5f * PARAM_FLOAT(q, b->p.principledthin, diff_trans);
     float3 base = param_color(q, b->p.principledthin.base_color, b->p.principledthin.base_color_tex);
     float3 h = normalize3(wi + (float3)(wo.x, wo.y, aco));
     float3 value = (float3)(0.0f);
     if (st > 0.0f && pr_compatible(h, wi, wo, reflect)) {
-        float eta = pt_w(b, q, PT_ETA), wih = dot3(wi, h), cos_t;
+        float eta = PARAM_FLOAT(q, b->p.principledthin, eta), wih = dot3(wi, h), cos_t;
         float F = fresnel_dielectric(wih, 1.0f, eta, &cos_t);
         MfDist d = pt_dist(b, q, !reflect);
         float DG = mf_d(d, h) * mf_g1(d, wi, h) * mf_g1(d, wo, h) / (4.0f * ci * aco);
         if (reflect) {
-            float spec_tint = pt_w(b, q, PT_SPEC_TINT);
+            float spec_tint = PARAM_FLOAT(q, b->p.principledthin, spec_tint);
             float lum = luminance(base);
             float3 tint = lum > 0.0f ? base / lum : (float3)(1.0f);
             float r0 = (eta - 1.0f) / (eta + 1.0f);
@@ -79,11 +66,11 @@ INLINE float3 principledthin_eval(__global const Bsdf* b, const BsdfQuery* q) {
     }
     if (reflect && st < 1.0f && dt < 1.0f) {
         float Fo = pr_sw(aco), Fi = pr_sw(ci), woh = dot3(h, wo);
-        float roughness = pt_w(b, q, PT_ROUGHNESS);
+        float roughness = PARAM_FLOAT(q, b->p.principledthin, roughness);
         float f_diff = (1.0f - 0.5f * Fi) * (1.0f - 0.5f * Fo);
         float rr = 2.0f * roughness * woh * woh;
         float f = f_diff + rr * (Fo + Fi + Fo * Fi * (rr - 1.0f));
-        float flatness = pt_w(b, q, PT_FLATNESS);
+        float flatness = PARAM_FLOAT(q, b->p.principledthin, flatness);
         if (flatness != 0.0f) {
             float fss90 = 0.5f * rr;
             float fss = (1.0f + (fss90 - 1.0f) * Fo) * (1.0f + (fss90 - 1.0f) * Fi);
@@ -92,9 +79,9 @@ INLINE float3 principledthin_eval(__global const Bsdf* b, const BsdfQuery* q) {
         }
         float w = (1.0f - st) * (1.0f - dt);
         value += base * (w * INV_PI * f);
-        float sheen = pt_w(b, q, PT_SHEEN);
+        float sheen = PARAM_FLOAT(q, b->p.principledthin, sheen);
         if (sheen != 0.0f) {
-            float sheen_tint = pt_w(b, q, PT_SHEEN_TINT);
+            float sheen_tint = PARAM_FLOAT(q, b->p.principledthin, sheen_tint);
             float3 c = (float3)(1.0f);
             if (sheen_tint != 0.0f) {
                 float lum = luminance(base);
@@ -114,7 +101,8 @@ INLINE float principledthin_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     if (wi.z < 0.0f) { wi = -wi; wo = -wo; }
     float co = wo.z;
     bool reflect = co > 0.0f, refract = co < 0.0f;
-    float4 p = pt_probs(b, pt_w(b, q, PT_SPEC_TRANS), 0.5f * pt_w(b, q, PT_DIFF_TRANS));
+    float4 p = pt_probs(b, PARAM_FLOAT(q, b->p.principledthin, spec_trans),
+                        0.5f * PARAM_FLOAT(q, b->p.principledthin, diff_trans));
     float pdf = 0.0f;
     if ((reflect && p.x > 0.0f) || (refract && p.y > 0.0f)) {
         float3 wr = (float3)(wo.x, wo.y, fabs(co));
@@ -134,7 +122,8 @@ INLINE float3 principledthin_sample(__global const Bsdf* b, BsdfQuery* q, float2
     float side = q->wi.z > 0.0f ? 1.0f : -1.0f;
     if (q->wi.z == 0.0f) return (float3)(0.0f);
     float3 wi = q->wi * side, wo;
-    float4 p = pt_probs(b, pt_w(b, q, PT_SPEC_TRANS), 0.5f * pt_w(b, q, PT_DIFF_TRANS));
+    float4 p = pt_probs(b, PARAM_FLOAT(q, b->p.principledthin, spec_trans),
+                        0.5f * PARAM_FLOAT(q, b->p.principledthin, diff_trans));
     float ux = u.x;
     /* the lobe, and u.x stretched back to [0, 1) within it */
     int lobe = 3;

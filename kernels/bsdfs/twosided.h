@@ -1,7 +1,7 @@
 /* twosided: the front child where cos theta_i >= 0, the back child in the mirrored frame (z of wi and wo flipped)
    where it is < 0. Row: p.twosided.front, back (offsets of the children's rows from this one).
    A composite's header is included once per nesting level by gen/bsdf_dispatch.h: COMPOSITE_FN names this level's
-   functions and CHILD_FN the dispatcher one level down (see clrender/device/dispatch.py). */
+   functions and CHILD_FN the dispatcher one level down (see clrender/device/codegen.py). */
 #ifndef CLRENDER_BSDFS_TWOSIDED_H
 #define CLRENDER_BSDFS_TWOSIDED_H
 INLINE float3 flip_z(float3 v) { return (float3)(v.x, v.y, -v.z); }

@@ -13,7 +13,7 @@ def add_parsers(sub):
     t.add_argument("--seed", type=int, default=0)
     t.add_argument("--json", metavar="OUT", help="also write the results as JSON ('-' for stdout)")
     t.add_argument("--no-plots", action="store_true", help="do not write histogram PNGs for failing chi2 tests")
-    from .cli import add_dialect_option
+    from .options import add_dialect_option
 
     add_dialect_option(t)
     t.set_defaults(func=cmd_test)
@@ -28,10 +28,10 @@ def add_parsers(sub):
 
 
 def cmd_test(args) -> int:
-    from .testing.nori import Runner, results_json
+    from ..testing.nori import Runner, results_json
 
     if args.json and args.json != "-":  # before the tests run, not after
-        from .output import check_writable
+        from ..output import check_writable
 
         check_writable(Path(args.json))
     runner = Runner(device=args.device, seed=args.seed, plots=not args.no_plots, nori_dialect=args.nori_dialect)
@@ -48,7 +48,7 @@ def cmd_test(args) -> int:
         if args.json == "-":
             print(text)
         else:
-            from .film import _atomic_write
+            from ..film import _atomic_write
 
             _atomic_write(Path(args.json), lambda tmp: tmp.write_text(text + "\n"))
     print(f"{n_ok} passed, {n_bad} failed")
@@ -56,10 +56,10 @@ def cmd_test(args) -> int:
 
 
 def cmd_warptest(args) -> int:
-    from .output import check_writable
-    from .testing.kernels import WARPS
-    from .testing.nori import write_histograms
-    from .testing.warptest import run_warptest
+    from ..output import check_writable
+    from ..testing.kernels import WARPS
+    from ..testing.nori import write_histograms
+    from ..testing.warptest import run_warptest
 
     out = args.plot or f"warptest_{args.warp}.png"
     try:

@@ -1,13 +1,13 @@
 """Command line of distributed rendering: `render --cluster` (Dask), `render --sample-range` (farm parts)
-and `merge` (parts -> image). Kept apart from cli.py, which calls in here."""
+and `merge` (parts -> image). app.py calls in here."""
 from __future__ import annotations
 
 import sys
 import time
 from pathlib import Path
 
-from .errors import ClrenderError
-from .scenesource import SceneSource
+from ..errors import ClrenderError
+from ..scenesource import SceneSource
 
 
 def add_render_arguments(r) -> None:
@@ -42,9 +42,9 @@ def parse_sample_range(text: str) -> tuple[int, int]:
 
 def cmd_render_distributed(args, defines: dict) -> int:
     """`render` with --cluster and/or --sample-range."""
-    from .parts import write_part
+    from ..parts import write_part
 
-    from .scene.dialect import resolve
+    from ..scene.dialect import resolve
 
     dialect = resolve(getattr(args, "nori_dialect", None))  # the option, else $CLRENDER_NORI_DIALECT, else upstream
     start, spp = 0, args.spp
@@ -56,7 +56,7 @@ def cmd_render_distributed(args, defines: dict) -> int:
         raise ClrenderError("--tasks must be at least 1")
     if not args.cluster and (args.tasks is not None or args.scene_files != "ship"):
         raise ClrenderError("--tasks and --scene-files apply to --cluster renders only")
-    from .output import output_paths
+    from ..output import output_paths
 
     # the same -o rules as a plain render, checked before work; but a part, or what an interrupted cluster render
     # keeps, is an accumulator EXR
@@ -86,7 +86,7 @@ def cmd_render_distributed(args, defines: dict) -> int:
         return every, lambda film: write(film, scene_hash or film.metadata["scene_hash"])
 
     if args.cluster:
-        from . import cluster
+        from .. import cluster
 
         film = cluster.render(source.path, spp=spp, seed=args.seed, cluster=args.cluster, start_sample=start,
                               files=args.scene_files, defines=defines, dialect=dialect, device=args.device,
@@ -94,7 +94,7 @@ def cmd_render_distributed(args, defines: dict) -> int:
                               partial=partial(args.partial_every), driver=args.driver)
         scene_hash = film.metadata["scene_hash"]
     else:
-        from .renderer import Interrupted, Renderer
+        from ..renderer import Interrupted, Renderer
 
         t0 = time.perf_counter()
         scene_hash = source.content_hash()
@@ -134,8 +134,8 @@ def add_merge_parser(sub) -> None:
 
 
 def cmd_merge(args) -> int:
-    from .output import check_writable
-    from .parts import merge_parts, read_part
+    from ..output import check_writable
+    from ..parts import merge_parts, read_part
 
     out = Path(args.output)
     if out.suffix.lower() != ".exr":

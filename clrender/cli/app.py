@@ -1,56 +1,33 @@
-"""Command line: `clrender render | devices | bench | merge` (a thin wrapper over the Python API)."""
+"""Command line: the parser, `clrender render | devices | bench`, and how errors and Ctrl-C end the process."""
 from __future__ import annotations
 
 import argparse
 import logging
-import math
 import os
 import sys
 import time
 
-from .errors import ClrenderError
-from .executors import DRIVERS, choose_driver
-
-
-def _defines(items):
-    out = {}
-    for item in items or []:
-        if "=" not in item:
-            raise ClrenderError(f"-D expects name=value, got '{item}'")
-        k, v = item.split("=", 1)
-        if not k.strip():
-            raise ClrenderError(f"-D expects name=value, got '{item}' (no name)")
-        out[k.strip()] = v
-    return out
-
-
-def _seconds(text: str) -> float:
-    """argparse type for --time-limit: a positive, finite number of seconds."""
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds, got '{text}'") from None
-    if not (math.isfinite(v) and v > 0):
-        raise argparse.ArgumentTypeError(f"must be a positive, finite number of seconds, got '{text}'")
-    return v
+from ..errors import ClrenderError
+from ..executors import DRIVERS, choose_driver
+from .options import add_dialect_option, defines, seconds
 
 
 def cmd_render(args) -> int:
-    from .loader import load_scene
-    from .output import output_paths
-    from .renderer import Interrupted, Renderer
+    from ..loader import load_scene
+    from ..output import output_paths
+    from ..renderer import Interrupted, Renderer
 
     if args.cluster or args.sample_range:
         if args.emitter_selection != "uniform":   # the workers' scene loading does not take it yet
             print("clrender: error: --emitter-selection power is not supported with --cluster or --sample-range "
                   "yet", file=sys.stderr)
             return 2
-        from .cli_cluster import cmd_render_distributed
+        from .distributed import cmd_render_distributed
 
-        return cmd_render_distributed(args, _defines(args.define))
+        return cmd_render_distributed(args, defines(args.define))
     t0 = time.perf_counter()
     out, png = output_paths(args.output, args.scene)  # before any work: an unwritable -o fails now
-    scene = load_scene(args.scene, nori_dialect=args.nori_dialect, **_defines(args.define))
+    scene = load_scene(args.scene, nori_dialect=args.nori_dialect, **defines(args.define))
     if args.emitter_selection == "power":
         if getattr(getattr(scene, "spec", None), "format", "nori") != "mitsuba":
             print(f"clrender: error: {args.scene}: --emitter-selection power is for Mitsuba scenes (a Nori file "
@@ -116,7 +93,7 @@ def _exit_written(args, code: int) -> None:
 
 
 def cmd_devices(args) -> int:
-    from .device.context import build_check, choose_device, list_devices
+    from ..device.context import build_check, choose_device, list_devices
 
     devices = list_devices()
     try:
@@ -131,7 +108,7 @@ def cmd_devices(args) -> int:
               f"max work-group {d.max_work_group_size}")
         why = build_check(p, d)
         print("      builds kernels: yes" if why is None else f"      builds kernels: NO ({why})")
-    from .device import intel_cpu
+    from ..device import intel_cpu
 
     if (intel_cpu.state or {}).get("problem"):
         print(f"Intel's OpenCL CPU runtime is not listed: {intel_cpu.state['problem']}")
@@ -145,8 +122,8 @@ def cmd_devices(args) -> int:
 def cmd_bench(args) -> int:
     import os
 
-    from . import bench
-    from .scene.dialect import ENV_VAR, resolve
+    from .. import bench
+    from ..scene.dialect import ENV_VAR, resolve
 
     if args.nori_dialect:  # through the environment, so the cold-build child process reads the same
         os.environ[ENV_VAR] = resolve(args.nori_dialect)
@@ -180,17 +157,8 @@ def cmd_bench(args) -> int:
     return 1 if bad else 0
 
 
-def add_dialect_option(p) -> None:
-    from .scene.dialect import DIALECTS, ENV_VAR
-
-    p.add_argument("--nori-dialect", choices=DIALECTS, default=None,
-                   help=f"how to read Nori XML: upstream (wjakob/nori, EPFL; camera +x on the image's left, "
-                        f"rotate axes normalised) or eth (ETH Zürich, Dartmouth; +x on the right, axes as "
-                        f"written). Default: ${ENV_VAR}, else upstream")
-
-
 def build_parser() -> argparse.ArgumentParser:
-    from . import __version__
+    from .. import __version__
 
     ap = argparse.ArgumentParser(prog="clrender", description="OpenCL path tracer for Nori and Mitsuba 3 XML scenes")
     ap.add_argument("--version", action="version", version=f"clrender {__version__}")
@@ -203,8 +171,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--spp", type=int, help="samples per pixel (default: the scene's sampler)")
     r.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     r.add_argument("--device", help="OpenCL device: index, cpu, gpu or name substring (default: PoCL CPU)")
-    r.add_argument("--time-limit", type=_seconds, metavar="SEC", help="stop after about SEC seconds")
-    r.add_argument("--partial-every", type=_seconds, metavar="SEC",
+    r.add_argument("--time-limit", type=seconds, metavar="SEC", help="stop after about SEC seconds")
+    r.add_argument("--partial-every", type=seconds, metavar="SEC",
                    help="while rendering, write the image so far over the output every SEC seconds (atomically, "
                         "its EXR metadata giving the samples done), to look at a long render or keep its work if "
                         "the process dies")
@@ -219,13 +187,13 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--progress", action="store_true",
                    help="show the progress bar even when stderr is not a terminal (e.g. a log file)")
     add_dialect_option(r)
-    from .cli_cluster import add_merge_parser, add_render_arguments
+    from .distributed import add_merge_parser, add_render_arguments
 
     add_render_arguments(r)
     r.set_defaults(func=cmd_render)
     d = sub.add_parser("devices", help="list OpenCL platforms and devices")
     d.set_defaults(func=cmd_devices)
-    from .cli_tests import add_parsers
+    from .tests import add_parsers
 
     add_parsers(sub)
     add_merge_parser(sub)
@@ -261,7 +229,7 @@ def main(argv=None) -> int:
         # spin it after every small product, on cores PoCL renders with; our BLAS work is 4x4 transforms. An
         # OPENBLAS_NUM_THREADS the user set wins.
         os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    from .interrupt import CtrlC
+    from ..interrupt import CtrlC
 
     # From the start: a Ctrl-C during the first imports must not be swallowed by a library's import guard.
     with CtrlC() as ctrl_c:
@@ -320,7 +288,3 @@ def _report(exc: Exception) -> int | None:
         print(f"clrender: OpenCL error on the device: {exc}", file=sys.stderr)
         return 3
     return None
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,0 +1,191 @@
+"""The C the kernels are built with, generated from clrender/device/layout.py and the registry (dispatch.py).
+
+- ``c_header()``: the ``typedef struct`` of every struct and plugin row that layout.py lays out (the very fields,
+  in the same order, that its numpy dtypes hold), the scene tables' SceneData, SCENE_ARGS and SCENE_INIT, and
+  the #defines of NONE, layout.ENUMS and the kinds' flag bits; program.build_program prepends it to every source.
+- ``gen/<kind>_dispatch.h`` (``generated_include_dir()``): the plugin headers' includes and one ``switch`` per
+  method, written into a generated-headers folder that build_program puts on the include path. A plugin whose
+  header lacks a method it declares fails the build (an undeclared function is an error in OpenCL C).
+"""
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+import tempfile
+from pathlib import Path
+
+from . import dispatch, layout
+
+
+def _c_fields(fields) -> list[str]:
+    out = []
+    for f in layout.expand(fields):
+        count = f[2] if len(f) > 2 else 1
+        out.append(f"    {f[1]} {f[0]}{f'[{count}]' if count > 1 else ''};")
+    return out
+
+
+def _row_c(struct: str, sig: tuple) -> str:
+    """A plugin row's C: each plugin's parameter struct, then the row's header fields and the union `p`."""
+    row = layout.ROWS[struct]
+    members = layout.row_members(struct, sig)
+    c_types = ["typedef struct {\n" + "\n".join(_c_fields(params)) + f"\n}} {c_name};"
+               for _m, c_name, params, _who in members]
+    c = "\n".join(c_types) + "\ntypedef struct {\n" + "\n".join(_c_fields(row.header)) + "\n    union {\n"
+    c += "\n".join(f"        {c_name} {member};" for member, c_name, _p, _who in members)
+    c += f"\n        float4 _size[{row.union_bytes // 16}];  /* fixes the row size whatever is registered */"
+    c += f"\n    }} p;\n}} {struct};"
+    return c
+
+
+def _scene_tables_c() -> str:
+    fields = [f"    __global const {t}* {n};  /* {what} */" for n, t, what in layout.SCENE_TABLES]
+    out = ["typedef struct {", *fields,
+           "#ifdef CLRENDER_COUNT_RAYS",
+           "    uint n_closest, n_shadow;  /* rays traced by this work-item (benchmark builds only) */",
+           "#endif", "} SceneData;"]
+    args = ", ".join(f"__global const {t}* s_{n}" for n, t, _ in layout.SCENE_TABLES)
+    init = " ".join(f"sd.{n} = s_{n};" for n, _, _ in layout.SCENE_TABLES)
+    out.append(f"#define SCENE_ARGS {args}")
+    out.append(f"#define SCENE_INIT(sd) SceneData sd; {init} SCENE_INIT_COUNTERS(sd)")
+    film = ", ".join(f"__global {t}* {n}" for n, t, *_ in layout.FILM_ACCUMULATORS)
+    out.append(f"#define FILM_ARGS {film}")
+    return "\n".join(out)
+
+
+def constants_c() -> str:
+    """The #defines of NONE, layout.ENUMS and the kinds' flag bits: all a kernel without plugin rows needs (the BVH
+    builder's), and needs no registered plugin."""
+    out = [f"#define NONE 0x{layout.NONE:08X}u"]
+    out.extend(f"#define {k} {v}u" for k, v in layout.ENUMS.items())
+    out.extend(f"#define {k} {v}u" for k, v in dispatch.flag_defines().items())
+    return "\n".join(out)
+
+
+def c_header() -> str:
+    return _c_header(layout.plugin_signature())
+
+
+@functools.lru_cache(maxsize=None)
+def _c_header(sig: tuple) -> str:
+    for struct in layout.ROWS:
+        layout._row_dtype(struct, sig)   # a plugin whose parameters overflow its row is refused here as in packing
+    out = ["#ifndef CLRENDER_TYPES_GEN", "#define CLRENDER_TYPES_GEN",
+           "/* generated from clrender/device/layout.py: do not edit */"]
+    for name, fields in layout.STRUCTS.items():
+        out.append("typedef struct {")
+        out.extend(_c_fields(fields))
+        out.append(f"}} {name};")
+    for name in layout.ROWS:
+        out.append(_row_c(name, sig))
+    out.append(_scene_tables_c())
+    out.append(constants_c())
+    out.append("#endif")
+    return "\n".join(out) + "\n"
+
+
+def dispatch_source(kind: dispatch.Kind) -> str:
+    """The generated header: includes of the plugins' headers and one switch per method.
+
+    With composite plugins, level 0 is a switch over the leaf plugins and level n (1..kind.composite_levels) a
+    switch over the composites whose children are dispatched by level n-1 (any other tag falls through to level
+    n-1); <dispatch_name>_<method> calls the top level. A composite's header has no include guard: it is included
+    once per level with COMPOSITE_FN(f) naming its functions at that level (f_l<n>) and CHILD_FN(m) the level
+    below's dispatcher (<dispatch_name>_l<n-1>_<m>). Composite levels are out-of-line functions, so code size
+    grows with the number of levels, not with the product of the composites' calls.
+
+    Every plugin's include and cases sit under its CLR_USE_* guard, and the levels above
+    <KIND>_COMPOSITE_LEVELS (all of them without a plugin set) are left out: see the module docstring."""
+    up = kind.tag.upper()
+    out = [f"/* generated by clrender/device/codegen.py from the registered {kind.tag} plugins: do not edit */",
+           f"#ifndef CLRENDER_GEN_{up}_DISPATCH_H", f"#define CLRENDER_GEN_{up}_DISPATCH_H",
+           f"#if !defined({dispatch.PLUGIN_SET}) && !defined({dispatch.ALL_PLUGINS})",
+           f"#define {dispatch.ALL_PLUGINS} 1", "#endif"]
+    out += [f'#include "{h}"' for h in kind.after]
+    classes = dispatch.plugins(kind.tag)
+    composites = [c for c in classes if dispatch.is_composite(c)]
+    levels = kind.composite_levels if composites else 0
+
+    def guard(cls):
+        return f"#if defined({dispatch.ALL_PLUGINS}) || defined({dispatch.use_define(kind, dispatch.prefix_of(cls))})"
+
+    def name(level, m):
+        return f"{kind.dispatch_name}_{m.name}" if not levels else f"{kind.dispatch_name}_l{level}_{m.name}"
+
+    def cases(m, pick, call):
+        for tag, cls in enumerate(classes):
+            if m.name in dispatch.methods_of(cls, kind) and pick(cls):
+                out.extend([guard(cls), f"    case {tag}u: return {call(cls)}({m.args});", "#endif"])
+
+    for cls in classes:
+        if not dispatch.is_composite(cls):
+            out.extend([guard(cls), f'#include "{cls.kernel}"', "#endif"])
+    if levels:
+        # how many composite levels this program compiles: all without a plugin set, else the set's depth
+        lv = f"CLR_{up}_LEVELS"
+        out += [f"#if defined({dispatch.ALL_PLUGINS}) || !defined({kind.levels_define})", f"#define {lv} {levels}",
+                "#else", f"#define {lv} {kind.levels_define}", "#endif",
+                f"#if {lv} < 0 || {lv} > {levels}",
+                f'#error "{kind.levels_define} must be 0..{levels}"', "#endif"]
+    for m in kind.methods:
+        out.append(f"INLINE {m.ret} {name(0, m)}({m.params}) {{")
+        out.append(f"    switch ({kind.row}->{kind.type_field}) {{")
+        cases(m, lambda c: not dispatch.is_composite(c), lambda c: f"{dispatch.prefix_of(c)}_{m.name}")
+        out.append(f"    default: {m.default}")
+        out.append("    }")
+        out.append("}")
+    for level in range(1, levels + 1):
+        out.append(f"#if {lv} >= {level}")
+        out.append(f"#define COMPOSITE_FN(f) f##_l{level}")
+        out.append(f"#define CHILD_FN(m) {kind.dispatch_name}_l{level - 1}_##m")
+        for cls in composites:
+            out.extend([guard(cls), f'#include "{cls.kernel}"', "#endif"])
+        out.append("#undef COMPOSITE_FN")
+        out.append("#undef CHILD_FN")
+        for m in kind.methods:
+            out.append(f"static __attribute__((noinline)) {m.ret} {name(level, m)}({m.params}) {{")
+            out.append(f"    switch ({kind.row}->{kind.type_field}) {{")
+            cases(m, dispatch.is_composite, lambda c: f"{dispatch.prefix_of(c)}_{m.name}_l{level}")
+            out.append(f"    default: return {name(level - 1, m)}({m.args});")
+            out.append("    }")
+            out.append("}")
+        out.append("#endif")
+    if levels:
+        # the kind's entry points call the top level this program has
+        for level in range(levels + 1):
+            out.append(f"#{'if' if level == 0 else 'elif'} {lv} == {level}")
+            for m in kind.methods:
+                out.append(f"INLINE {m.ret} {kind.dispatch_name}_{m.name}({m.params}) "
+                           f"{{ return {name(level, m)}({m.args}); }}")
+        out.append("#endif")
+    out.append("#endif")
+    return "\n".join(out) + "\n"
+
+
+@functools.lru_cache(maxsize=None)
+def _generated_dir(sig: tuple) -> str:
+    text = {f"{k.tag}_dispatch.h": dispatch_source(k) for k in dispatch.KINDS.values() if k.dispatched}
+    digest = hashlib.sha256(repr(sorted(text.items())).encode()).hexdigest()[:16]
+    # A stable path per content: PoCL's cache key includes the build options (our -I), so a fresh folder per
+    # process would make every build cold.
+    root = Path(tempfile.gettempdir()) / f"clrender-{os.getuid() if hasattr(os, 'getuid') else 'user'}" / "gen"
+    d = root / digest
+    (d / "gen").mkdir(parents=True, exist_ok=True)
+    for name, body in text.items():
+        p = d / "gen" / name
+        if not p.is_file() or p.read_text() != body:
+            tmp = p.with_name(f".{name}.{os.getpid()}")
+            tmp.write_text(body)
+            os.replace(tmp, p)
+    return str(d)
+
+
+def generated_include_dir() -> str:
+    """A folder holding gen/<kind>_dispatch.h for the plugins registered now (rewritten if it vanished)."""
+    sig = dispatch.signature()
+    d = _generated_dir(sig)
+    if not all((Path(d) / "gen" / f"{k.tag}_dispatch.h").is_file() for k in dispatch.KINDS.values() if k.dispatched):
+        _generated_dir.cache_clear()
+        d = _generated_dir(sig)
+    return d
