@@ -74,8 +74,8 @@ LAYERS = (
     ("accel", ("clrender.accel",)),
     ("plugins", PLUGIN_PACKAGES + ("clrender.scene.scene", "clrender.scene.checks")),
     # composing plugins into a scene, packed tables, a render and its film
-    ("assembly", ("clrender.plugins", "clrender.pack", "clrender.film", "clrender.memcheck", "clrender.renderer",
-                  "clrender.loader", "clrender.scenesource", "clrender.parts")),
+    ("assembly", ("clrender.plugins", "clrender.pack", "clrender.film", "clrender.memcheck", "clrender.executors",
+                  "clrender.renderer", "clrender.loader", "clrender.scenesource", "clrender.parts")),
     ("front ends", ("clrender", "clrender.cli", "clrender.bench", "clrender.testing", "clrender.cluster",
                     "clrender.cluster_worker", "clrender.dask_plugins")),
 )
