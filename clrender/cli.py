@@ -36,10 +36,12 @@ def _seconds(text: str) -> float:
 
 
 def cmd_render(args) -> int:
+    from .adaptive import options_from_args
     from .loader import load_scene
     from .output import output_paths
     from .renderer import Interrupted, Renderer
 
+    options_from_args(args, None)   # adaptive sampling's options with the distributed ones: refused
     if args.cluster or args.sample_range:
         if args.emitter_selection != "uniform":   # the workers' scene loading does not take it yet
             print("clrender: error: --emitter-selection power is not supported with --cluster or --sample-range "
@@ -58,6 +60,7 @@ def cmd_render(args) -> int:
             return 2
         scene.emitter_selection = "power"
     args.ctrl_c.check()  # a Ctrl-C that a library swallowed still stops us
+    adaptive = options_from_args(args, scene)
     try:
         choose_driver(args.driver, scene.integrator.kernel)
     except ValueError as e:
@@ -77,8 +80,12 @@ def cmd_render(args) -> int:
 
     partial = None if args.partial_every is None else (args.partial_every, write_partial)
     try:
-        film = renderer.render(spp=args.spp, seed=args.seed, time_limit=args.time_limit, progress=progress,
-                               partial=partial)
+        if adaptive is not None:
+            film = renderer.render_adaptive(adaptive.target_error, adaptive.min_spp, adaptive.max_spp, seed=args.seed,
+                                            time_limit=args.time_limit, progress=progress, partial=partial)
+        else:
+            film = renderer.render(spp=args.spp, seed=args.seed, time_limit=args.time_limit, progress=progress,
+                                   partial=partial)
     except Interrupted:
         print("clrender: aborted (second Ctrl-C); nothing written", file=sys.stderr)
         _exit_now(args, 130)
@@ -89,6 +96,9 @@ def cmd_render(args) -> int:
     rate = s.samples / s.seconds / 1e6 if s.seconds > 0 else 0.0
     msg = (f"clrender: wrote {out} and {png}: {film.spp} spp in {s.seconds:.2f} s "
            f"({rate:.2f} M samples/s)")
+    if adaptive is not None:
+        msg += (f"; adaptive: {film.metadata['spp_mean']:.1f} spp on average, {film.metadata['converged']:.1%} of "
+                f"the pixels within {adaptive.target_error:g}")
     if s.interrupted:
         msg += " [interrupted: partial image]"
     if s.dropped:
@@ -218,9 +228,11 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--progress", action="store_true",
                    help="show the progress bar even when stderr is not a terminal (e.g. a log file)")
     add_dialect_option(r)
+    from .adaptive import add_render_arguments as add_adaptive_arguments
     from .cli_cluster import add_merge_parser, add_render_arguments
 
     add_render_arguments(r)
+    add_adaptive_arguments(r)
     r.set_defaults(func=cmd_render)
     d = sub.add_parser("devices", help="list OpenCL platforms and devices")
     d.set_defaults(func=cmd_devices)

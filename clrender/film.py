@@ -23,6 +23,8 @@ class Film:
     count: np.ndarray         # (H, W) samples that were accumulated
     dropped: np.ndarray       # (H, W) samples dropped for NaN/Inf
     metadata: dict = field(default_factory=dict)
+    #: layers write_exr adds beside RGB (names aov() knows): an adaptive render's film has ("count",)
+    layers: tuple = ()
 
     def __post_init__(self) -> None:
         # Finite samples of absurd size (a reflectance of 3e38) overflow a pixel's float32 sums on the device, which
@@ -64,6 +66,15 @@ class Film:
                                                                     self.sum_w[..., None], 1), 0.0)
         return var / np.maximum(n - 1, 1) * scale * scale
 
+    def aov(self, name: str) -> np.ndarray:
+        """A layer beside the image: ``"variance"`` (H, W, 3), variance(); ``"count"`` (H, W) float32, the samples
+        each pixel holds (an adaptive render's differ per pixel)."""
+        if name == "variance":
+            return self.variance().astype(np.float32)
+        if name == "count":
+            return np.asarray(self.count, np.float32)
+        raise ValueError(f"unknown AOV {name!r}: expected one of variance, count")
+
     @property
     def spp(self) -> int:
         return int(self.metadata.get("spp", int(self.count.max()) if self.count.size else 0))
@@ -76,8 +87,10 @@ class Film:
         for k, v in self.metadata.items():
             header[f"clrender.{k}"] = str(v)
         # OpenEXR 3.x writes non-contiguous arrays wrongly without an error: always hand it a fresh copy.
-        img = np.ascontiguousarray(self.image, dtype=np.float32)
-        return _atomic_write(Path(path), lambda tmp: OpenEXR.File(header, {"RGB": img}).write(str(tmp)))
+        channels = {"RGB": np.ascontiguousarray(self.image, dtype=np.float32)}
+        for name in self.layers:   # (H, W, 3) layers become channels NAME.R, NAME.G, NAME.B
+            channels[name] = np.ascontiguousarray(self.aov(name), dtype=np.float32)
+        return _atomic_write(Path(path), lambda tmp: OpenEXR.File(header, channels).write(str(tmp)))
 
     def write_png(self, path) -> Path:
         from .png import encode_png

@@ -141,6 +141,42 @@ class Renderer:
         fixed += getattr(self.executor, "device_bytes", 0)   # the wavefront's path state
         return int(fixed + per_pixel * self.n_pixels + (0 if self.count_rays else 16))
 
+    def accumulators(self):
+        """Zeroed per-pixel accumulators on the host and the device, bound to the executor: (acc0, acc1, bad, rays)
+        twice (kernels/render.cl's layout)."""
+        import pyopencl as cl
+
+        n = self.n_pixels
+        # Ray counters: per pixel when counting, else a one-element dummy the kernel never touches.
+        host = (np.zeros((n, 4), np.float32), np.zeros((n, 4), np.float32), np.zeros(n, np.uint32),
+                np.zeros((n if self.count_rays else 1, 4), np.uint32))
+        mf = cl.mem_flags
+        dev = tuple(cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=a) for a in host)
+        self.executor.bind(*dev)
+        return host, dev
+
+    def start_stats(self) -> RenderStats:
+        """The stats of a render about to start; warms the executor first if it is cold: PoCL compiles the
+        work-group function at the first launch of a shape (0.3-2 s), done with a launch that adds no samples, so
+        timings, pass sizes and the ETA are those of the render."""
+        if not self._warm:
+            t0 = time.perf_counter()
+            self.executor.warm()
+            wait_for(self.queue)
+            self._warm = True
+            self.build_seconds += time.perf_counter() - t0
+        return RenderStats(build_seconds=self.build_seconds, upload_seconds=self.upload_seconds)
+
+    def render_adaptive(self, target_error: float = 0.01, min_spp: int | None = None, max_spp: int | None = None,
+                        seed: int = 0, time_limit: float | None = None, progress: bool = False,
+                        partial=None) -> Film:
+        """Adaptive sampling: rounds over the pixels whose estimate's relative error is still above
+        `target_error` (clrender/adaptive.py); `max_spp` defaults to the scene's sample count."""
+        from .adaptive import AdaptiveOptions, render_adaptive
+
+        opts = AdaptiveOptions.make(target_error, min_spp, max_spp, self.scene.sample_count)
+        return render_adaptive(self, opts, seed=seed, time_limit=time_limit, progress=progress, partial=partial)
+
     def render(self, spp: int | None = None, seed: int = 0, time_limit: float | None = None,
                progress: bool = False, on_pass=None, start_sample: int = 0, pixels=None,
                partial=None) -> Film:
@@ -150,7 +186,6 @@ class Renderer:
         cluster task): the Film is full-size with zeros elsewhere. ``partial=(seconds, callback)`` hands
         ``callback`` the Film so far (its metadata: the samples done, ``partial`` True) after the first pass that
         ends at least `seconds` after the previous one (or the start), between passes."""
-        import pyopencl as cl
 
         spp = int(spp if spp is not None else self.scene.sample_count)
         if spp < 1:
@@ -163,30 +198,11 @@ class Renderer:
         p0, p1 = (0, n) if pixels is None else (int(pixels[0]), int(pixels[1]))
         if not 0 <= p0 < p1 <= n:
             raise ValueError(f"pixel range {p0}:{p1} is not inside 0:{n}")
-        acc0 = np.zeros((n, 4), np.float32)
-        acc1 = np.zeros((n, 4), np.float32)
-        bad = np.zeros(n, np.uint32)
-        mf = cl.mem_flags
-        d_acc0 = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=acc0)
-        d_acc1 = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=acc1)
-        d_bad = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=bad)
-        # Ray counters: per pixel when counting, else a one-element dummy the kernel never touches.
-        rays = np.zeros((n if self.count_rays else 1, 4), np.uint32)
-        d_rays = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=rays)
+        host, dev = self.accumulators()
         ex = self.executor
-        ex.bind(d_acc0, d_acc1, d_bad, d_rays)
-        stats = RenderStats(build_seconds=self.build_seconds, upload_seconds=self.upload_seconds)
+        stats = self.start_stats()
         done = 0
         per_pass = 1
-        if not self._warm:
-            # PoCL compiles the work-group function at the first launch of a shape (0.3-2 s): do it with a
-            # launch that adds no samples, so timings, pass sizes and the ETA are those of the render.
-            t0 = time.perf_counter()
-            ex.warm()
-            wait_for(self.queue)
-            self._warm = True
-            self.build_seconds += time.perf_counter() - t0
-            stats.build_seconds = self.build_seconds
         bar = None
         if progress:  # after the warm-up launch: the bar says rendering has started (a Ctrl-C now keeps an image)
             from tqdm import tqdm
@@ -220,8 +236,7 @@ class Renderer:
                             time.perf_counter() - last_partial >= partial[0]:
                         snap = copy.copy(stats)   # the render's own stats go on counting
                         snap.seconds = time.perf_counter() - t_start
-                        partial[1](self._film(done, seed, start_sample, snap, (acc0, acc1, bad, rays),
-                                              (d_acc0, d_acc1, d_bad, d_rays), p0, p1, partial=True))
+                        partial[1](self._film(done, seed, start_sample, snap, host, dev, p0, p1, partial=True))
                         last_partial = time.perf_counter()
                     if stop:
                         stats.interrupted = True
@@ -240,8 +255,7 @@ class Renderer:
                 if bar is not None:
                     bar.close()
         stats.seconds = time.perf_counter() - t_start
-        return self._film(done, seed, start_sample, stats, (acc0, acc1, bad, rays), (d_acc0, d_acc1, d_bad, d_rays),
-                          p0, p1)
+        return self._film(done, seed, start_sample, stats, host, dev, p0, p1)
 
     def _film(self, done, seed, start_sample, stats, host, dev, p0, p1, partial=False) -> Film:
         """The Film of the `done` samples per pixel accumulated on the device so far (pixels p0:p1); fills in
