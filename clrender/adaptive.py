@@ -94,10 +94,11 @@ def relative_error(film) -> np.ndarray:
 def pooled_error(film) -> np.ndarray:
     """(H, W) what the stopping rule tests: relative_error's square averaged over the pixel and its 8 neighbours (the
     image's edge repeats its border pixels), square-rooted."""
-    from scipy.ndimage import uniform_filter
-
-    err2 = np.minimum(relative_error(film) ** 2, 1e30)
-    return np.sqrt(uniform_filter(err2, size=3, mode="nearest"))
+    err2 = np.minimum(relative_error(film) ** 2, 1e12)   # inf (fewer than two samples) as a huge error
+    # nine shifted sums, not scipy's uniform_filter: its running sums lose small errors beside huge ones
+    p = np.pad(err2, 1, mode="edge")
+    h, w = err2.shape
+    return np.sqrt(sum(p[i:i + h, j:j + w] for i in range(3) for j in range(3)) / 9.0)
 
 
 def converged(film, target_error: float) -> np.ndarray:
@@ -172,7 +173,7 @@ def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: 
                         cnt = min(cnt, max(LOCAL_SIZE, fit // LOCAL_SIZE * LOCAL_SIZE))
                     cnt = min(cnt, len(active) - off)
                     t0 = time.perf_counter()
-                    ex.launch(off, cnt, prev, step, seed & 0xFFFFFFFF, pixel_list=d_list)
+                    r.launch(off, cnt, prev, step, seed & 0xFFFFFFFF, pixel_list=d_list)
                     wait_for(r.queue)
                     dt = time.perf_counter() - t0
                     seconds_per_sample = dt / (cnt * step)

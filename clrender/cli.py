@@ -37,11 +37,13 @@ def _seconds(text: str) -> float:
 
 def cmd_render(args) -> int:
     from .adaptive import options_from_args
+    from .layers import layers_from_args, needs_features
     from .loader import load_scene
     from .output import output_paths
     from .renderer import Interrupted, Renderer
 
     options_from_args(args, None)   # adaptive sampling's options with the distributed ones: refused
+    layers = layers_from_args(args)
     if args.cluster or args.sample_range:
         if args.emitter_selection != "uniform":   # the workers' scene loading does not take it yet
             print("clrender: error: --emitter-selection power is not supported with --cluster or --sample-range "
@@ -66,7 +68,7 @@ def cmd_render(args) -> int:
     except ValueError as e:
         print(f"clrender: error: {args.scene}: --driver: {e}", file=sys.stderr)
         return 2
-    renderer = Renderer(scene, device=args.device, driver=args.driver)
+    renderer = Renderer(scene, device=args.device, driver=args.driver, feature_aovs=needs_features(layers))
     args.ctrl_c.check()
     st = renderer.buffers.stats
     print(f"clrender: {args.scene}: {st['triangles']} triangles, {st['spheres']} spheres, "
@@ -74,11 +76,12 @@ def cmd_render(args) -> int:
           f"device {renderer.device_name}", file=sys.stderr)
     progress = not args.quiet and (args.progress or sys.stderr.isatty())
 
-    def write_partial(film):
+    def write_film(film):
+        film.layers = tuple(dict.fromkeys(film.layers + layers))
         film.write_exr(out)
         film.write_png(png)
 
-    partial = None if args.partial_every is None else (args.partial_every, write_partial)
+    partial = None if args.partial_every is None else (args.partial_every, write_film)
     try:
         if adaptive is not None:
             film = renderer.render_adaptive(adaptive.target_error, adaptive.min_spp, adaptive.max_spp, seed=args.seed,
@@ -90,8 +93,7 @@ def cmd_render(args) -> int:
         print("clrender: aborted (second Ctrl-C); nothing written", file=sys.stderr)
         _exit_now(args, 130)
         return 130
-    film.write_exr(out)
-    film.write_png(png)
+    write_film(film)   # the whole image now
     s = film.stats
     rate = s.samples / s.seconds / 1e6 if s.seconds > 0 else 0.0
     msg = (f"clrender: wrote {out} and {png}: {film.spp} spp in {s.seconds:.2f} s "
@@ -230,9 +232,11 @@ def build_parser() -> argparse.ArgumentParser:
     add_dialect_option(r)
     from .adaptive import add_render_arguments as add_adaptive_arguments
     from .cli_cluster import add_merge_parser, add_render_arguments
+    from .layers import add_render_arguments as add_layer_arguments
 
     add_render_arguments(r)
     add_adaptive_arguments(r)
+    add_layer_arguments(r)
     r.set_defaults(func=cmd_render)
     d = sub.add_parser("devices", help="list OpenCL platforms and devices")
     d.set_defaults(func=cmd_devices)

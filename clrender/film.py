@@ -13,6 +13,11 @@ from pathlib import Path
 import numpy as np
 
 
+#: the layers a film can write beside its image (Film.aov); the first four are rendered by kernels/feature_aovs.h
+FEATURE_AOVS = ("albedo", "normal", "depth", "position")
+AOVS = FEATURE_AOVS + ("variance", "count")
+
+
 @dataclass
 class Film:
     width: int
@@ -25,6 +30,8 @@ class Film:
     metadata: dict = field(default_factory=dict)
     #: layers write_exr adds beside RGB (names aov() knows): an adaptive render's film has ("count",)
     layers: tuple = ()
+    #: (H, W, 12) sums of the feature AOVs (kernels/feature_aovs.h) when the Renderer rendered them, else None
+    features: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         # Finite samples of absurd size (a reflectance of 3e38) overflow a pixel's float32 sums on the device, which
@@ -67,13 +74,29 @@ class Film:
         return var / np.maximum(n - 1, 1) * scale * scale
 
     def aov(self, name: str) -> np.ndarray:
-        """A layer beside the image: ``"variance"`` (H, W, 3), variance(); ``"count"`` (H, W) float32, the samples
-        each pixel holds (an adaptive render's differ per pixel)."""
+        """A layer beside the image, (H, W, 3) or (H, W) float32 (names: AOVS):
+        - ``albedo``, ``normal``: of the first non-specular surface the camera sample meets (through mirrors and
+          glass, tinted by them): the BSDF's directional reflectance estimate and the world-space shading normal
+          (the pixel's mean: shorter than 1 where a pixel straddles an edge); what Open Image Denoise takes;
+        - ``depth``, ``position``: of the camera ray's first hit (depth from the near clip plane, as Mitsuba's);
+          zero where the ray escapes;
+        - ``variance``: variance(), of the pixel's estimate; ``count``: the samples each pixel holds.
+        The first four need a Renderer made with ``feature_aovs=True``."""
         if name == "variance":
             return self.variance().astype(np.float32)
         if name == "count":
             return np.asarray(self.count, np.float32)
-        raise ValueError(f"unknown AOV {name!r}: expected one of variance, count")
+        if name not in FEATURE_AOVS:
+            raise ValueError(f"unknown AOV {name!r}: expected one of {', '.join(AOVS)}")
+        if self.features is None:
+            raise ValueError(f"this film has no {name} AOV: render with feature AOVs (--aov {name}, "
+                             f"Renderer(..., feature_aovs=True))")
+        f = self.features
+        w = f[..., 7:8]
+        sl = {"albedo": slice(0, 3), "depth": slice(3, 4), "normal": slice(4, 7), "position": slice(8, 11)}[name]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out = np.where(w != 0, f[..., sl] / np.where(w != 0, w, 1), 0.0)
+        return (out[..., 0] if name == "depth" else out).astype(np.float32)
 
     @property
     def spp(self) -> int:

@@ -93,14 +93,17 @@ class Renderer:
     """
 
     def __init__(self, scene, device=None, fast_math: bool = False, buffers=None, defines=None,
-                 count_rays: bool = False, driver: str = "auto"):
+                 count_rays: bool = False, driver: str = "auto", feature_aovs: bool = False):
         import pyopencl as cl
 
         self.scene = scene
         self.count_rays = bool(count_rays)
+        self.feature_aovs = bool(feature_aovs)
         defines = dict(defines or {})
         if self.count_rays:
             defines["CLRENDER_COUNT_RAYS"] = 1
+        if self.feature_aovs:   # only then: a program without them is the very program it always was
+            defines["CLR_FEATURE_AOVS"] = 1
         self.ctx, self.queue = get_context(device)
         dev = self.ctx.devices[0]
         self.device_name = f"{dev.platform.name.strip()} / {dev.name.strip()}"
@@ -127,6 +130,13 @@ class Renderer:
         self.executor = executor(self.ctx, self.queue, self.program, self._scene_bufs, self._camera, self._filter,
                                  self.launch_pixels)
         self.global_size = -(-self.launch_pixels // LOCAL_SIZE) * LOCAL_SIZE   # the megakernel's launch shape
+        self._features = None
+        if self.feature_aovs:
+            from .device.kernelargs import KernelArgs
+
+            self._features = KernelArgs(cl.Kernel(self.program, "feature_pass")).set_scene(self._scene_bufs)
+            self._features.set(cam=self._camera, filter_cdf=self._filter)
+            self._no_list = cl.Buffer(self.ctx, mf.READ_ONLY, 4)
         if self.driver == "megakernel":   # the benchmarks launch render_pass themselves
             self.kernel, self.args = self.executor.kernel, self.executor.args
         self.upload_seconds = time.perf_counter() - t0
@@ -153,7 +163,26 @@ class Renderer:
         mf = cl.mem_flags
         dev = tuple(cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=a) for a in host)
         self.executor.bind(*dev)
+        if self._features is not None:   # kernels/feature_aovs.h: three float4 per pixel
+            feat = np.zeros((n, 12), np.float32)
+            self._feature_acc = (feat, cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=feat))
+            self._features.set(aov=self._feature_acc[1])
         return host, dev
+
+    def launch(self, off: int, count: int, sample_offset: int, spp: int, seed: int, pixel_list=None) -> None:
+        """The executor's launch (clrender/executors.py), and the feature AOVs' of the same samples if asked for."""
+        self.executor.launch(off, count, sample_offset, spp, seed, pixel_list=pixel_list)
+        self._launch_features(off, count, sample_offset, spp, seed, pixel_list)
+
+    def _launch_features(self, off, count, sample_offset, spp, seed, pixel_list=None) -> None:
+        if self._features is not None:
+            import pyopencl as cl
+
+            self._features.set(pixel_list=self._no_list if pixel_list is None else pixel_list,
+                               listed=np.uint32(pixel_list is not None), pixel_offset=np.uint32(off),
+                               pixel_count=np.uint32(count), sample_offset=np.uint32(sample_offset),
+                               spp=np.uint32(spp), seed=np.uint32(seed))
+            cl.enqueue_nd_range_kernel(self.queue, self._features.kernel, (self.global_size,), (LOCAL_SIZE,))
 
     def start_stats(self) -> RenderStats:
         """The stats of a render about to start; warms the executor first if it is cold: PoCL compiles the
@@ -162,6 +191,7 @@ class Renderer:
         if not self._warm:
             t0 = time.perf_counter()
             self.executor.warm()
+            self._launch_features(0, 0, 0, 0, 0)
             wait_for(self.queue)
             self._warm = True
             self.build_seconds += time.perf_counter() - t0
@@ -199,7 +229,6 @@ class Renderer:
         if not 0 <= p0 < p1 <= n:
             raise ValueError(f"pixel range {p0}:{p1} is not inside 0:{n}")
         host, dev = self.accumulators()
-        ex = self.executor
         stats = self.start_stats()
         done = 0
         per_pass = 1
@@ -219,7 +248,7 @@ class Renderer:
                     t0 = time.perf_counter()
                     for off in range(p0, p1, self.launch_pixels):
                         cnt = min(self.launch_pixels, p1 - off)
-                        ex.launch(off, cnt, start_sample + done, batch, seed & 0xFFFFFFFF)
+                        self.launch(off, cnt, start_sample + done, batch, seed & 0xFFFFFFFF)
                         stats.launches += 1
                     wait_for(self.queue)  # not queue.finish(): a second Ctrl-C must not wait for the pass
                     dt = time.perf_counter() - t0
@@ -270,6 +299,9 @@ class Renderer:
         cl.enqueue_copy(self.queue, bad[p0:p1], d_bad, src_offset=p0 * bad.itemsize)
         if self.count_rays:
             cl.enqueue_copy(self.queue, rays, d_rays)
+        if self._features is not None:
+            feat, d_feat = self._feature_acc
+            cl.enqueue_copy(self.queue, feat[p0:p1], d_feat, src_offset=p0 * feat.itemsize * 12)
         self.queue.finish()
         stats.samples = done * (p1 - p0)
         stats.dropped = int(bad.sum())
@@ -287,6 +319,8 @@ class Renderer:
             meta.update(rays_camera=stats.rays[0], rays_closest=stats.rays[1], rays_shadow=stats.rays[2],
                         rays_total=stats.rays_total)
         film = Film.from_accumulators(self.width, self.height, acc0, acc1, bad, meta)
+        if self._features is not None:
+            film.features = self._feature_acc[0].astype(np.float64).reshape(self.height, self.width, 12)
         stats.dropped = int(film.dropped.sum())  # with the samples of pixels whose sums overflowed
         film.stats = stats
         return film

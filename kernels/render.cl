@@ -1,6 +1,9 @@
 /* The render kernels: the integrator chosen at build time (li.h) over pixels, with the film's filter. */
 #include "li.h"
 #include "filter.h"
+#ifdef CLR_FEATURE_AOVS
+#include "feature_aovs.h"
+#endif
 
 /* `spp` samples of pixel `pix`, numbered from `sample_offset`, added to its accumulators. Per pixel: acc0 = (sum wL,
    sum w), acc1 = (sum (wL)^2, n), bad = samples dropped for being NaN/Inf. rays (written only in builds with

@@ -7,6 +7,9 @@
    summed in the megakernel's order (wf_finish, wf_flush): both drivers give the same image up to float rounding. */
 #include "li.h"
 #include "filter.h"
+#ifdef CLR_FEATURE_AOVS
+#include "feature_aovs.h"
+#endif
 
 #ifndef CLR_PATH_STAGES
 #error "the wavefront driver runs the path integrators only (kernels/integrators/path_loop.h)"
