@@ -37,7 +37,7 @@ def _seconds(text: str) -> float:
 
 def cmd_render(args) -> int:
     from .adaptive import options_from_args
-    from .layers import layers_from_args, needs_features
+    from .layers import layers_from_args, needs_features, write_denoised
     from .loader import load_scene
     from .output import output_paths
     from .renderer import Interrupted, Renderer
@@ -68,7 +68,7 @@ def cmd_render(args) -> int:
     except ValueError as e:
         print(f"clrender: error: {args.scene}: --driver: {e}", file=sys.stderr)
         return 2
-    renderer = Renderer(scene, device=args.device, driver=args.driver, feature_aovs=needs_features(layers))
+    renderer = Renderer(scene, device=args.device, driver=args.driver, feature_aovs=needs_features(args, layers))
     args.ctrl_c.check()
     st = renderer.buffers.stats
     print(f"clrender: {args.scene}: {st['triangles']} triangles, {st['spheres']} spheres, "
@@ -94,6 +94,10 @@ def cmd_render(args) -> int:
         _exit_now(args, 130)
         return 130
     write_film(film)   # the whole image now
+    if args.denoise:
+        d_exr, _ = write_denoised(film, out)
+        print(f"clrender: wrote {d_exr} and its PNG (denoised in {film.metadata['denoise_seconds']:.2f} s)",
+              file=sys.stderr)
     s = film.stats
     rate = s.samples / s.seconds / 1e6 if s.seconds > 0 else 0.0
     msg = (f"clrender: wrote {out} and {png}: {film.spp} spp in {s.seconds:.2f} s "

@@ -98,27 +98,37 @@ class Film:
             out = np.where(w != 0, f[..., sl] / np.where(w != 0, w, 1), 0.0)
         return (out[..., 0] if name == "depth" else out).astype(np.float32)
 
+    def denoised(self) -> np.ndarray:
+        """(H, W, 3) float32: the image denoised by Open Image Denoise (clrender/denoise.py; the `denoise` extra),
+        guided by the albedo and normal AOVs when the film has them."""
+        from .denoise import denoise
+
+        if self.features is None:
+            return denoise(self.image)
+        return denoise(self.image, self.aov("albedo"), self.aov("normal"))
+
     @property
     def spp(self) -> int:
         return int(self.metadata.get("spp", int(self.count.max()) if self.count.size else 0))
 
     # -- output -------------------------------------------------------------------------------------------
-    def write_exr(self, path) -> Path:
+    def write_exr(self, path, image: np.ndarray | None = None) -> Path:
+        """The image (or `image` in its place: a denoised one) and the film's layers, as an EXR with the metadata."""
         import OpenEXR
 
         header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
         for k, v in self.metadata.items():
             header[f"clrender.{k}"] = str(v)
         # OpenEXR 3.x writes non-contiguous arrays wrongly without an error: always hand it a fresh copy.
-        channels = {"RGB": np.ascontiguousarray(self.image, dtype=np.float32)}
+        channels = {"RGB": np.ascontiguousarray(self.image if image is None else image, dtype=np.float32)}
         for name in self.layers:   # (H, W, 3) layers become channels NAME.R, NAME.G, NAME.B
             channels[name] = np.ascontiguousarray(self.aov(name), dtype=np.float32)
         return _atomic_write(Path(path), lambda tmp: OpenEXR.File(header, channels).write(str(tmp)))
 
-    def write_png(self, path) -> Path:
+    def write_png(self, path, image: np.ndarray | None = None) -> Path:
         from .png import encode_png
 
-        data = encode_png(to_srgb8(self.image))
+        data = encode_png(to_srgb8(self.image if image is None else image))
         return _atomic_write(Path(path), lambda tmp: tmp.write_bytes(data))
 
 
