@@ -81,9 +81,11 @@ def relative_error(film) -> np.ndarray:
     sqrt(var_up / (value^2 + 1e-2)). Pixels without two samples: inf."""
     from scipy.stats import chi2
 
-    n = film.count
-    dof = np.maximum(n - 1, 1)
-    factor = np.where(n >= 2, dof / chi2.ppf(1.0 - CONFIDENCE, dof), np.inf)
+    # the counts take a few values (the checkpoints): the quantile once per value (chi2.ppf per pixel took 11 % of
+    # an adaptive render of a 128 x 128 Cornell box)
+    counts, inverse = np.unique(film.count, return_inverse=True)
+    dof = np.maximum(counts - 1, 1)
+    factor = np.where(counts >= 2, dof / chi2.ppf(1.0 - CONFIDENCE, dof), np.inf)[inverse].reshape(film.count.shape)
     img = film.image.astype(np.float64)
     with np.errstate(invalid="ignore"):
         err2 = film.variance() * factor[..., None] / (img * img + RELMSE_EPS)
