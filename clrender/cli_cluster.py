@@ -65,11 +65,15 @@ def cmd_render_distributed(args, defines: dict) -> int:
             raise ClrenderError(f"{exc} (a --sample-range part is an accumulator EXR)") from None
         raise
     say = lambda msg: print(f"clrender: {msg}", file=sys.stderr, flush=True)  # noqa: E731
+    from .layers import layers_from_args, needs_features
+
+    layers = layers_from_args(args)   # a part carries the feature AOVs' sums and names its layers; merge adds them
     source = SceneSource(str(Path(args.scene).resolve()), defines, dialect)
 
     def write(film, scene_hash):
         """Write `film` where -o says; a sample range, or an image short of its samples, as a part."""
         incomplete = int(film.count.min()) < spp if film.count.size else False
+        film.layers = layers
         if args.sample_range or incomplete:
             # A partial image keeps its true per-pixel counts (in a cluster render they differ by band): as a
             # part, it also merges with the rest of its samples later.
@@ -99,7 +103,7 @@ def cmd_render_distributed(args, defines: dict) -> int:
 
         t0 = time.perf_counter()
         scene_hash = source.content_hash()
-        renderer = Renderer(source.load(), device=args.device)
+        renderer = Renderer(source.load(), device=args.device, feature_aovs=needs_features(args, layers))
         say(f"{args.scene}: load {time.perf_counter() - t0:.2f} s; device {renderer.device_name}")
         try:
             film = renderer.render(spp=spp, seed=args.seed, time_limit=args.time_limit,

@@ -30,13 +30,14 @@ def layers_from_args(args) -> tuple[str, ...]:
     for n in names:
         if n not in AOVS:
             raise ClrenderError(f"--aov: unknown layer '{n}': expected some of {', '.join(AOVS)}")
-    if getattr(args, "cluster", None) or getattr(args, "sample_range", None):
-        raise ClrenderError("--aov is not supported with --cluster or --sample-range yet (their parts carry the "
-                            "image's sums only)")
+    if getattr(args, "cluster", None):
+        raise ClrenderError("--aov is not supported with --cluster yet (its tasks carry the image's sums only); "
+                            "--sample-range parts carry them")
     return names
 
 
 def needs_features(args, layers) -> bool:
+    """Whether the render needs feature AOVs: for `layers`, or for --denoise in `args` (may be None)."""
     return bool(getattr(args, "denoise", False)) or any(n in FEATURE_AOVS for n in layers)
 
 

@@ -95,3 +95,28 @@ def test_command_line(tmp_path, capsys):
     assert img.shape == (2, 2, 3)
     assert main(["render", str(tmp_path / "s.xml"), "-o", str(out), "-q", "--aov", "albedo,nope"]) == 2
     assert "unknown layer 'nope'" in capsys.readouterr().err
+
+
+def test_parts_and_merge_carry_them(tmp_path):
+    """Two --sample-range parts with --aov merge into the layers of the single render of their union."""
+    import OpenEXR
+
+    from clrender.cli import main
+
+    (tmp_path / "s.xml").write_text(f'<scene><integrator type="path_mis"/>{camera(2, 2)}'
+                                    f'{plane_mesh(tmp_path / "plane.obj")}</scene>')
+    common = ["-q", "--seed", "3", "--aov", "albedo,normal,count"]
+    for i, rng in enumerate(("0:3", "3:5")):
+        assert main(["render", str(tmp_path / "s.xml"), "--sample-range", rng, "-o", str(tmp_path / f"p{i}.exr"),
+                     *common]) == 0
+    assert main(["merge", str(tmp_path / "p0.exr"), str(tmp_path / "p1.exr"), "-o", str(tmp_path / "m.exr")]) == 0
+    assert main(["render", str(tmp_path / "s.xml"), "--spp", "8", "-o", str(tmp_path / "w.exr"), *common]) == 0
+    with OpenEXR.File(str(tmp_path / "m.exr")) as m, OpenEXR.File(str(tmp_path / "w.exr")) as w:
+        for name in ("albedo", "normal", "count"):
+            np.testing.assert_allclose(np.asarray(m.channels()[name].pixels), np.asarray(w.channels()[name].pixels),
+                                       rtol=1e-5, atol=1e-7)
+    # a part without the layers does not belong with one that has them
+    assert main(["render", str(tmp_path / "s.xml"), "--sample-range", "5:1", "-o", str(tmp_path / "p2.exr"),
+                 "-q", "--seed", "3"]) == 0
+    assert main(["merge", str(tmp_path / "p0.exr"), str(tmp_path / "p1.exr"), str(tmp_path / "p2.exr"), "-o",
+                 str(tmp_path / "m2.exr")]) == 2
