@@ -161,3 +161,25 @@ def test_command_line(tmp_path, capsys):
                         (["--adaptive", "--min-spp", "1"], "at least 2")]:
         assert main(["render", scene, "-o", str(tmp_path / "b.exr"), "-q", *extra]) == 2
         assert said in capsys.readouterr().err
+
+
+def test_ctrl_c_stops_after_the_launch_in_flight(cornell):
+    """A Ctrl-C during the second round: the render stops after the launch in flight, marked interrupted, each pixel
+    with the samples it really got (64-pixel launches, so the round is cut part-way)."""
+    import os
+    import signal
+
+    r = Renderer(cornell)
+    r.launch_pixels = 64
+
+    def press(rnd, mark, active):
+        if rnd == 1:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    film = r.render_adaptive(target_error=0.001, max_spp=64, seed=1, on_round=press)
+    assert film.metadata["interrupted"] and film.stats.interrupted
+    assert set(np.unique(film.count)) == {16, 32}, "first round whole, the second cut after one launch"
+    assert (film.count == 32).sum() == 64
+    uniform = r.render(spp=32, seed=1)
+    m = film.count == 32
+    np.testing.assert_allclose(film.image[m], uniform.image[m], rtol=2e-5, atol=1e-7)
