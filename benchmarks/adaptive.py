@@ -91,7 +91,7 @@ def bench_scene(name, xml_clr: Path, xml_mi: Path | None, res: int, spp: int, re
     say(f"{name}: reference, {ref_spp} spp")
     ref_film = r.render(spp=ref_spp, seed=12345)
     ref, ref_var = ref_film.image.astype(np.float64), ref_film.variance()
-    out = {"width": r.width, "height": r.height, "uniform": [], "adaptive": [], "mitsuba": []}
+    out = {"width": r.width, "height": r.height, "uniform": [], "adaptive": [], "adaptive_relmse": [], "mitsuba": []}
     for s in spp_ladder(spp):
         f = r.render(spp=s, seed=7)
         out["uniform"].append({"spp": s, "seconds": f.stats.seconds, **corrected_relmse(f.image, ref, ref_var)})
@@ -99,10 +99,11 @@ def bench_scene(name, xml_clr: Path, xml_mi: Path | None, res: int, spp: int, re
     say(f"{name}: uniform at {spp} spp: relMSE {target:.4g}; adaptive")
     # the fixed targets, and three around sqrt(R) (each pixel at about the uniform render's error)
     errors = sorted({*TARGET_ERRORS, *(round(float(np.sqrt(target)) * k, 4) for k in (1.5, 1.0, 0.7))}, reverse=True)
-    for e in errors:
-        f = r.render_adaptive(target_error=e, max_spp=16 * spp, seed=7)
-        out["adaptive"].append({"target_error": e, "spp_mean": float(f.count.mean()), "seconds": f.stats.seconds,
-                                "converged": f.metadata["converged"], **corrected_relmse(f.image, ref, ref_var)})
+    for key, allocation in (("adaptive", "error"), ("adaptive_relmse", "relmse")):
+        for e in errors:
+            f = r.render_adaptive(target_error=e, max_spp=16 * spp, seed=7, allocation=allocation)
+            out[key].append({"target_error": e, "spp_mean": float(f.count.mean()), "seconds": f.stats.seconds,
+                             "converged": f.metadata["converged"], **corrected_relmse(f.image, ref, ref_var)})
     if xml_mi is not None:
         say(f"{name}: Mitsuba")
         mi = vm.Mitsuba(xml_mi, variant)
@@ -112,12 +113,14 @@ def bench_scene(name, xml_clr: Path, xml_mi: Path | None, res: int, spp: int, re
     for metric in ("relmse", "relmse_robust"):
         target = out["uniform"][-1][metric]
         times = {k: time_to([(p["seconds"], p[metric]) for p in out[k]], target) if out[k] else None
-                 for k in ("uniform", "adaptive", "mitsuba")}
+                 for k in ("uniform", "adaptive", "adaptive_relmse", "mitsuba")}
         # samples (mean spp) to the target: free of the shared machine's timing noise, blind to per-sample costs
         spp = {k: time_to([(p.get("spp_mean", p.get("spp")), p[metric]) for p in out[k]], target)
-               for k in ("uniform", "adaptive")}
+               for k in ("uniform", "adaptive", "adaptive_relmse")}
         out[metric] = {"target": target, "time_to_target": times, "spp_to_target": spp,
                        "samples_ratio": spp["uniform"] / spp["adaptive"],
+                       "relmse_allocation": {"speedup_over_uniform": times["uniform"] / times["adaptive_relmse"],
+                                             "samples_ratio": spp["uniform"] / spp["adaptive_relmse"]},
                        "speedup_over_uniform": times["uniform"] / times["adaptive"],
                        "speedup_over_mitsuba": None if times["mitsuba"] is None
                        else times["mitsuba"] / times["adaptive"]}
@@ -164,7 +167,7 @@ def main(argv=None):
     path = write_results("adaptive", a.json, results, res=a.res, spp=a.spp, reference_spp=a.reference_spp,
                          mitsuba_variant=variant)
     print(f"{'scene':16} {'size':>8} {'metric':>13} {'target':>9} {'uniform s':>10} {'adaptive s':>10} "
-          f"{'mitsuba s':>10} {'vs uniform':>10} {'vs mitsuba':>10} {'spp ratio':>9}")
+          f"{'mitsuba s':>10} {'vs uniform':>10} {'vs mitsuba':>10} {'spp ratio':>9} {'relmse alloc: time, spp':>24}")
     for name, r in results.items():
         for metric in ("relmse", "relmse_robust"):
             m = r[metric]
@@ -173,7 +176,8 @@ def main(argv=None):
             smi = "-" if m["speedup_over_mitsuba"] is None else f"{m['speedup_over_mitsuba']:.2f}x"
             print(f"{name:16} {r['width']:>4}x{r['height']:<3} {metric:>13} {m['target']:9.4g} {t['uniform']:10.2f} "
                   f"{t['adaptive']:10.2f} {mi:>10} {m['speedup_over_uniform']:9.2f}x {smi:>10} "
-                  f"{m['samples_ratio']:8.2f}x")
+                  f"{m['samples_ratio']:8.2f}x {m['relmse_allocation']['speedup_over_uniform']:11.2f}x "
+                  f"{m['relmse_allocation']['samples_ratio']:8.2f}x")
     print(f"wrote {path}", file=sys.stderr)
 
 

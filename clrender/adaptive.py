@@ -42,16 +42,24 @@ CONFIDENCE = 0.95
 ROUND_GROWTH = 0.25
 
 
+#: how the samples are shared out: "error", every pixel to the target error; "relmse", the least relMSE of the image
+ALLOCATIONS = ("error", "relmse")
+
+
 @dataclass(frozen=True)
 class AdaptiveOptions:
     target_error: float
     min_spp: int
     max_spp: int
+    allocation: str = "error"
 
     @classmethod
-    def make(cls, target_error, min_spp=None, max_spp=None, default_max_spp: int = 64) -> "AdaptiveOptions":
+    def make(cls, target_error, min_spp=None, max_spp=None, default_max_spp: int = 64,
+             allocation: str = "error") -> "AdaptiveOptions":
         """Checked options; `max_spp` defaults to `default_max_spp` (the scene's sample count), `min_spp` to 16
         (at most max_spp). Raises ValueError naming the option that is wrong."""
+        if allocation not in ALLOCATIONS:
+            raise ValueError(f"allocation must be one of {', '.join(ALLOCATIONS)}, got {allocation!r}")
         try:
             e = float(target_error)
         except (TypeError, ValueError):
@@ -65,7 +73,7 @@ class AdaptiveOptions:
         if not 2 <= lo <= hi:
             raise ValueError(f"min spp must be at least 2 (a variance needs two samples) and at most max spp "
                              f"({hi}), got {lo}")
-        return cls(e, lo, hi)
+        return cls(e, lo, hi, allocation)
 
     def checkpoints(self) -> list[int]:
         """The sample counts at which every still-active pixel is tested."""
@@ -103,9 +111,19 @@ def pooled_error(film) -> np.ndarray:
     return np.sqrt(sum(p[i:i + h, j:j + w] for i in range(3) for j in range(3)) / 9.0)
 
 
-def converged(film, target_error: float) -> np.ndarray:
-    """(H, W) bool: the pixel's pooled error meets the target."""
-    return pooled_error(film) <= target_error
+def converged(film, target_error: float, allocation: str = "error", min_spp: int = 16) -> np.ndarray:
+    """(H, W) bool: the pixel's pooled error meets the target: `target_error` itself ("error"), or, for the least
+    relMSE of the whole image for its samples ("relmse"), target_error * sqrt(n / min_spp) for a pixel of n samples.
+
+    Why the second: with a_p the relative variance of one sample of pixel p, n_p samples leave it an error a_p / n_p;
+    for a given total of samples the image's mean is least at n_p ~ sqrt(a_p) (Lagrange; Cauchy-Schwarz gives the gain
+    over uniform sampling, mean(a) / mean(sqrt a)^2), whereas equal errors (n_p ~ a_p) give the very mean relMSE of
+    uniform sampling, gaining only where pixels converge for free. n_p ~ sqrt(a_p) is where a_p / n_p <= c n_p, i.e.
+    the error falls below a bound growing as sqrt(n_p): noisy pixels get more samples, not all they would need."""
+    bound = target_error
+    if allocation == "relmse":
+        bound = target_error * np.sqrt(np.maximum(film.count, 1) / float(min_spp))
+    return pooled_error(film) <= bound
 
 
 def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: float | None = None,
@@ -147,7 +165,8 @@ def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: 
         f = r._film(int(done.max()), seed, 0, st, host, dev, 0, n, partial=snapshot)
         st.samples = int(done.sum())
         f.layers = ("count",)
-        f.metadata.update(adaptive=True, target_error=opts.target_error, min_spp=opts.min_spp,
+        f.metadata.update(adaptive=True, target_error=opts.target_error, allocation=opts.allocation,
+                          min_spp=opts.min_spp,
                           max_spp=opts.max_spp, spp_mean=round(float(done.mean()), 3), rounds=rounds,
                           converged=round(float(conv.mean()), 6))
         return f
@@ -196,7 +215,7 @@ def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: 
                     break
                 prev = mark
                 film = film_now()
-                conv = converged(film, opts.target_error)
+                conv = converged(film, opts.target_error, opts.allocation, opts.min_spp)
                 keep = ~conv.reshape(-1)[active]
                 active = active[keep]
                 if len(active) == 0:
@@ -210,7 +229,7 @@ def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: 
                 bar.close()
     film = film_now()
     if not stop:
-        conv = converged(film, opts.target_error)
+        conv = converged(film, opts.target_error, opts.allocation, opts.min_spp)
         film.metadata["converged"] = round(float(conv.mean()), 6)
     return film
 
@@ -228,6 +247,10 @@ def add_render_arguments(r) -> None:
                                                             "(default 16)")
     g.add_argument("--max-spp", type=int, metavar="N",
                    help="samples per pixel at most (default: --spp, else the scene's sample count)")
+    g.add_argument("--allocation", choices=ALLOCATIONS, default="error",
+                   help="error (default): every pixel to the target error; relmse: the least relMSE of the whole "
+                        "image for its samples (a pixel's bound grows as sqrt(its samples / min-spp): noisy pixels "
+                        "get more samples, not all they would need)")
 
 
 def options_from_args(args, scene) -> AdaptiveOptions | None:
@@ -237,9 +260,9 @@ def options_from_args(args, scene) -> AdaptiveOptions | None:
 
     wanted = args.adaptive or args.target_error is not None
     if not wanted:
-        if args.min_spp is not None or args.max_spp is not None:
-            raise ClrenderError("--min-spp and --max-spp are options of adaptive sampling: add --adaptive or "
-                                "--target-error E")
+        if args.min_spp is not None or args.max_spp is not None or args.allocation != "error":
+            raise ClrenderError("--min-spp, --max-spp and --allocation are options of adaptive sampling: add "
+                                "--adaptive or --target-error E")
         return None
     if scene is None:   # before the distributed renders
         if getattr(args, "cluster", None) or getattr(args, "sample_range", None):
@@ -250,6 +273,7 @@ def options_from_args(args, scene) -> AdaptiveOptions | None:
         raise ClrenderError("--spp and --max-spp both set the most samples per pixel of an adaptive render: give one")
     try:
         return AdaptiveOptions.make(0.01 if args.target_error is None else args.target_error, args.min_spp,
-                                    args.max_spp if args.max_spp is not None else args.spp, scene.sample_count)
+                                    args.max_spp if args.max_spp is not None else args.spp, scene.sample_count,
+                                    args.allocation)
     except ValueError as e:
         raise ClrenderError(f"adaptive sampling: {e}") from None

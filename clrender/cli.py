@@ -85,7 +85,8 @@ def cmd_render(args) -> int:
     try:
         if adaptive is not None:
             film = renderer.render_adaptive(adaptive.target_error, adaptive.min_spp, adaptive.max_spp, seed=args.seed,
-                                            time_limit=args.time_limit, progress=progress, partial=partial)
+                                            time_limit=args.time_limit, progress=progress, partial=partial,
+                                            allocation=adaptive.allocation)
         else:
             film = renderer.render(spp=args.spp, seed=args.seed, time_limit=args.time_limit, progress=progress,
                                    partial=partial)

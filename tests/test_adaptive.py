@@ -156,6 +156,7 @@ def test_command_line(tmp_path, capsys):
     assert count.min() >= 4 and count.max() <= 20 and count.min() < count.max()
     for extra, said in [(["--adaptive", "--sample-range", "0:16"], "--sample-range"),
                         (["--max-spp", "16"], "add --adaptive"),
+                        (["--allocation", "relmse"], "add --adaptive"),
                         (["--adaptive", "--spp", "8", "--max-spp", "16"], "give one"),
                         (["--target-error", "-1"], "positive"),
                         (["--adaptive", "--min-spp", "1"], "at least 2")]:
@@ -183,3 +184,22 @@ def test_ctrl_c_stops_after_the_launch_in_flight(cornell):
     uniform = r.render(spp=32, seed=1)
     m = film.count == 32
     np.testing.assert_allclose(film.image[m], uniform.image[m], rtol=2e-5, atol=1e-7)
+
+
+def test_relmse_allocation_relaxes_with_the_samples(cornell):
+    """allocation="relmse": after the round ending at n samples a pixel stops when its pooled error is within
+    E * sqrt(n / min_spp). Checked at the first two rounds against renders that stop there (same samples, same
+    decisions); and its noisiest pixels get fewer samples than the "error" allocation gives them."""
+    opts = dict(OPTS, allocation="relmse")
+    full = Renderer(cornell).render_adaptive(**opts)
+    r = Renderer(cornell)
+    first, second = (r.render_adaptive(**{**opts, "max_spp": m}) for m in (16, 32))
+    e = OPTS["target_error"]
+    np.testing.assert_array_equal(full.count == 16, pooled_error(first) <= e)
+    went_on = full.count > 16
+    stopped_at_32 = went_on & (pooled_error(second) <= e * np.sqrt(2))
+    assert stopped_at_32.any()
+    np.testing.assert_array_equal(full.count[went_on] == 32, stopped_at_32[went_on])
+    assert full.metadata["allocation"] == "relmse"
+    plain = Renderer(cornell).render_adaptive(**OPTS)
+    assert full.count.sum() < plain.count.sum()
