@@ -203,3 +203,14 @@ def test_relmse_allocation_relaxes_with_the_samples(cornell):
     assert full.metadata["allocation"] == "relmse"
     plain = Renderer(cornell).render_adaptive(**OPTS)
     assert full.count.sum() < plain.count.sum()
+
+
+def test_python_api(cornell):
+    film = clrender.render(cornell, target_error=OPTS["target_error"], max_spp=32, seed=OPTS["seed"])
+    same = Renderer(cornell).render_adaptive(target_error=OPTS["target_error"], max_spp=32, seed=OPTS["seed"])
+    np.testing.assert_array_equal(film.count, same.count)
+    assert film.layers == ("count",)
+    with pytest.raises(ValueError, match="one process"):
+        clrender.render(cornell, target_error=0.1, cluster="local:1")
+    with pytest.raises(TypeError, match="target_error"):
+        clrender.render(cornell, max_spp=8)
