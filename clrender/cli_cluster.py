@@ -135,6 +135,9 @@ def add_merge_parser(sub) -> None:
     m.add_argument("--png", action="store_true", help="also write OUT.png")
     m.add_argument("--partial", action="store_true",
                    help="merge even if sample ranges are missing or a part was interrupted")
+    m.add_argument("--denoise", action="store_true",
+                   help="also write the merged image denoised (OUT.denoised.exr and .png; guided by the parts' "
+                        "albedo and normal when they were rendered with --aov albedo,normal); needs the denoise extra")
     m.set_defaults(func=cmd_merge)
 
 
@@ -150,11 +153,19 @@ def cmd_merge(args) -> int:
             raise ClrenderError(f"-o {out}: that is one of the parts being merged; name another file")
     for path in [out] + ([out.with_suffix(".png")] if args.png else []):
         check_writable(path, args.output)  # before the parts are read
+    if args.denoise:
+        from .denoise import available
+
+        available()   # a missing extra is said before any work
     film = merge_parts([read_part(p) for p in args.parts], allow_missing=args.partial)
     film.write_exr(out)
     written = [str(out)]
     if args.png:
         written.append(str(film.write_png(out.with_suffix(".png"))))
+    if args.denoise:
+        from .layers import write_denoised
+
+        written.append(str(write_denoised(film, out)[0]))
     m = film.metadata
     note = f"; missing samples {m['missing']}" if m["missing"] else ""
     print(f"clrender: merged {m['parts']} part(s), samples {m['sample_ranges']} ({m['spp']} spp){note}: "

@@ -71,3 +71,21 @@ def test_missing_extra_says_what_to_install(tmp_path, monkeypatch, capsys):
                  "--denoise"]) == 2
     assert 'pip install "clrender[denoise]"' in capsys.readouterr().err
     assert not out.exists(), "refused before rendering"
+
+
+def test_merge_denoises_the_merged_image(tmp_path):
+    """Parts rendered with the albedo and normal AOVs, merged with --denoise: the denoised file beside the merged one,
+    equal to denoising the single render of the same samples (the same guides: merge adds the parts' sums)."""
+    pytest.importorskip("pyoidn", reason="the denoise extra (pyoidn) is not installed")
+    from clrender.cli import main
+
+    xml = str(small_cornell_xml(tmp_path, 16))
+    common = ["-q", "--seed", "4", "--aov", "albedo,normal"]
+    for i, rng in enumerate(("0:2", "2:2")):
+        assert main(["render", xml, "--sample-range", rng, "-o", str(tmp_path / f"p{i}.exr"), *common]) == 0
+    assert main(["merge", str(tmp_path / "p0.exr"), str(tmp_path / "p1.exr"), "-o", str(tmp_path / "m.exr"),
+                 "--denoise"]) == 0
+    assert main(["render", xml, "--spp", "4", "-o", str(tmp_path / "w.exr"), "--denoise", *common]) == 0
+    merged, _ = read_exr(tmp_path / "m.denoised.exr")
+    whole, _ = read_exr(tmp_path / "w.denoised.exr")
+    np.testing.assert_allclose(merged, whole, rtol=1e-3, atol=1e-4)
