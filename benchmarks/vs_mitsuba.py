@@ -384,15 +384,21 @@ def relmse(img, ref):
     return float(np.mean((img - ref) ** 2 / (ref * ref + 1e-2)))
 
 
-def bench_twin(t: dict, d: Path, spp: int, repeat: int, ref_spp: int, say, count_rays: bool = True,
-               device: str | None = None, variant: str = "llvm_ad_rgb") -> dict:
+def write_twin(t: dict, d: Path) -> dict:
+    """The twin's scene files in folder `d`: {"clrender": path, "mitsuba": path}."""
     if "xml" in t:  # one Mitsuba 3 file, read by both
         (d / "scene.xml").write_text(t["xml"])
-        files = {"clrender": d / "scene.xml", "mitsuba": d / "scene.xml"}
-    else:  # our Nori XML and Mitsuba 3's, from one description
-        files = {"clrender": d / "clrender.xml", "mitsuba": d / "mitsuba.xml"}
-        files["clrender"].write_text(scene_xml(t, "nori"))
-        files["mitsuba"].write_text(scene_xml(t, "mitsuba"))
+        return {"clrender": d / "scene.xml", "mitsuba": d / "scene.xml"}
+    # our Nori XML and Mitsuba 3's, from one description
+    files = {"clrender": d / "clrender.xml", "mitsuba": d / "mitsuba.xml"}
+    files["clrender"].write_text(scene_xml(t, "nori"))
+    files["mitsuba"].write_text(scene_xml(t, "mitsuba"))
+    return files
+
+
+def bench_twin(t: dict, d: Path, spp: int, repeat: int, ref_spp: int, say, count_rays: bool = True,
+               device: str | None = None, variant: str = "llvm_ad_rgb") -> dict:
+    files = write_twin(t, d)
     say(f"{t['name']}: loading, building, warming up")
     rs = [Clrender(files["clrender"], device), Mitsuba(files["mitsuba"], variant)]
     say(f"{t['name']}: reference ({ref_spp} spp, Mitsuba)")

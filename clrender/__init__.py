@@ -7,7 +7,7 @@
     film.write_exr("cornell.exr"); film.write_png("cornell.png")
     film = clrender.render(scene, spp=1024, cluster="local:4")   # on Dask (clrender[cluster]): cluster.py
 """
-__version__ = "0.1.0"
+from .version import __version__
 
 
 def load_scene(path, nori_dialect=None, **defines):
@@ -20,14 +20,28 @@ def load_scene(path, nori_dialect=None, **defines):
     return _load(path, nori_dialect=nori_dialect, **defines)
 
 
-def render(scene, spp=None, seed=0, device=None, time_limit=None, progress=False, cluster=None, driver="auto",
-           **cluster_options):
+def render(scene, spp=None, seed=0, device=None, time_limit=None, progress=False, cluster=None, target_error=None,
+           min_spp=None, max_spp=None, driver="auto", **cluster_options):
     """Render a loaded scene on an OpenCL device and return its Film.
 
     ``driver``: "megakernel", "wavefront" (the path integrators) or "auto" (clrender/executors.py).
+    With ``target_error=E`` the render is adaptive (clrender/adaptive.py): rounds over the pixels whose relative error
+    is still above E, from ``min_spp`` (16) up to ``max_spp`` (default: ``spp``, else the scene's sample count)
+    samples per pixel; ``film.count`` says where the samples went. One process only (not with ``cluster=``).
+
     With ``cluster=`` (a ``distributed.Client``, ``"local[:N]"``, ``"tcp://HOST:PORT"`` or a scheduler file)
     the samples are rendered by Dask workers; ``scene`` may then also be the XML path, and
     ``cluster_options`` are those of :func:`clrender.cluster.render` (files=, defines=, tasks=, ...)."""
+    if target_error is not None:
+        if cluster is not None:
+            raise ValueError("adaptive sampling (target_error=) runs in one process, not on a cluster")
+        from .renderer import Renderer
+
+        return Renderer(scene, device=device, driver=driver).render_adaptive(
+            target_error, min_spp, spp if max_spp is None else max_spp, seed=seed, time_limit=time_limit,
+            progress=progress)
+    if min_spp is not None or max_spp is not None:
+        raise TypeError("min_spp and max_spp are options of adaptive renders (pass target_error=)")
     if cluster is not None:
         from .cluster import render as _cluster_render
 

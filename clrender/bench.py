@@ -46,7 +46,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from .version import __version__
 from . import plugins  # noqa: F401  (a composition root: the cold-build child builds the render program)
 from .errors import ClrenderError
 

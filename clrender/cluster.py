@@ -237,7 +237,8 @@ def render(scene, spp: int | None = None, seed: int = 0, cluster="local", *, sta
     ``partial`` set), so a killed client leaves its work behind. ``driver``: how workers run passes
     (clrender/executors.py; both give the same image).
     """
-    from .renderer import RenderStats, _SigintFlag
+    from .interrupt import PassFlag as _SigintFlag
+    from .renderer import RenderStats
 
     say = say or (lambda msg: None)
     # A loaded Scene knows the dialect it was read in; a path is read in `dialect` (None: $CLRENDER_NORI_DIALECT,
@@ -253,7 +254,7 @@ def render(scene, spp: int | None = None, seed: int = 0, cluster="local", *, sta
 
 def _render(client, what, local, scene, spp, seed, start_sample, files, defines, dialect, device, n_tasks, bands,
             time_limit, progress, say, on_result, partial, RenderStats, SigintFlag, driver="auto"):
-    from . import __version__
+    from .version import __version__
     from .parts import Accumulator
 
     distributed = _distributed()

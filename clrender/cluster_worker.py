@@ -119,7 +119,7 @@ def _renderer_for(payload, spec, worker, driver="auto"):
 def render_task(payload, index, pixels, start, count, seed, plan, driver="auto"):
     """One task on a worker: samples start..start+count-1 of pixels [pixels[0], pixels[1]), by `driver`
     (clrender/executors.py)."""
-    from . import __version__
+    from .version import __version__
 
     worker, name = _worker_identity()
     spec = _device_spec(plan, name)

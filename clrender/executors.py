@@ -24,6 +24,7 @@ WAVEFRONT_INTEGRATORS = frozenset({"path_mats", "path_ems", "path_mis", "path_mi
 DRIVERS = ("auto", "megakernel", "wavefront")
 LOCAL_SIZE = 64              # one fixed work-group size: every new one costs PoCL a fresh compile
 MAX_WAVE_SLOTS = 1 << 17     # paths in flight at once in the wavefront (device memory: ~300 bytes each)
+TARGET_LAUNCH_SECONDS = 0.2  # passes are sized to about this: keeps progress, Ctrl-C and time limits responsive
 
 
 def _round_up(n: int) -> int:
@@ -47,7 +48,7 @@ def choose_driver(driver: str, integrator: str, count_rays: bool = False) -> str
 
 
 class MegakernelExecutor:
-    """render_pass over launches of up to `launch_pixels` pixels."""
+    """render_pass over launches of up to `launch_pixels` pixels (render_list over a list of pixels)."""
 
     name = "megakernel"
 
@@ -60,23 +61,36 @@ class MegakernelExecutor:
         self.kernel = cl.Kernel(program, "render_pass")
         self.args = KernelArgs(self.kernel).set_scene(scene_bufs)
         self.args.set(cam=camera, filter_cdf=filter_cdf)
+        self.list_kernel = cl.Kernel(program, "render_list")
+        self.list_args = KernelArgs(self.list_kernel).set_scene(scene_bufs)
+        self.list_args.set(cam=camera, filter_cdf=filter_cdf)
         self.global_size = _round_up(launch_pixels)
 
     def bind(self, film: dict) -> None:
         """The film's accumulator buffers, by their names in layout.FILM_ACCUMULATORS."""
         self.args.set(**film)
+        self.list_args.set(**film)
 
     def warm(self) -> None:
         """A launch that adds no samples: PoCL compiles the work-group function at the first launch of a shape."""
         self.launch(0, 1, 0, 0, 0)
 
-    def launch(self, off: int, count: int, sample_offset: int, spp: int, seed: int) -> None:
+    def warm_list(self, pixel_list) -> None:
+        """warm() for render_list (only adaptive renders launch it, so only they pay its first-launch compile)."""
+        self.launch(0, 0, 0, 0, 0, pixel_list=pixel_list)
+
+    def launch(self, off: int, count: int, sample_offset: int, spp: int, seed: int, pixel_list=None) -> None:
+        """Pixels off .. off + count - 1, or with `pixel_list` (a device buffer of pixel indices) the pixels
+        pixel_list[off .. off + count - 1]."""
         import numpy as np
         import pyopencl as cl
 
-        self.args.set(pixel_offset=np.uint32(off), pixel_count=np.uint32(count),
-                      sample_offset=np.uint32(sample_offset), spp=np.uint32(spp), seed=np.uint32(seed))
-        cl.enqueue_nd_range_kernel(self.queue, self.kernel, (self.global_size,), (LOCAL_SIZE,))
+        kernel, args = (self.kernel, self.args) if pixel_list is None else (self.list_kernel, self.list_args)
+        if pixel_list is not None:
+            args.set(pixel_list=pixel_list)
+        args.set(pixel_offset=np.uint32(off), pixel_count=np.uint32(count),
+                 sample_offset=np.uint32(sample_offset), spp=np.uint32(spp), seed=np.uint32(seed))
+        cl.enqueue_nd_range_kernel(self.queue, kernel, (self.global_size,), (LOCAL_SIZE,))
 
 
 class WavefrontExecutor:
@@ -116,6 +130,7 @@ class WavefrontExecutor:
         self.wt = cl.Buffer(ctx, rw, n * 8)
         self.queues = [cl.Buffer(ctx, rw, n * 4) for _ in range(3)]   # trace now, trace next, shadow
         self.counts = cl.Buffer(ctx, rw, 16)
+        self._no_list = cl.Buffer(ctx, rw, 4)   # bound to pixel_list when a launch runs over a range
         self._counts = np.zeros(4, np.uint32)
         zeros = np.zeros((launch_pixels, 4), np.float32)
         self.sum0 = cl.Buffer(ctx, rw | mf.COPY_HOST_PTR, hostbuf=zeros)
@@ -140,16 +155,20 @@ class WavefrontExecutor:
         import pyopencl as cl
 
         zero = np.uint32(0)
-        self.a["camera"].set(queue=self.queues[0], pixel_offset=zero, n_slots=zero, k=np.uint32(1),
+        self.a["camera"].set(queue=self.queues[0], pixel_list=self._no_list, listed=zero, pixel_offset=zero,
+                             n_slots=zero, k=np.uint32(1),
                              sample_offset=zero, seed=zero)
         self.a["trace"].set(queue=self.queues[0], n=zero)
         self.a["shade"].set(queue=self.queues[0], n=zero, next_queue=self.queues[1], shadow_queue=self.queues[2])
         self.a["shadow"].set(n=zero)
         self.a["finish"].set(n_pixels=zero, k=np.uint32(1))
-        self.a["flush"].set(pixel_offset=zero, n_pixels=zero, spp=zero)
+        self.a["flush"].set(pixel_list=self._no_list, listed=zero, pixel_offset=zero, n_pixels=zero, spp=zero)
         for s in stages or self.STAGES:
             cl.enqueue_nd_range_kernel(self.queue, self.k[s], (LOCAL_SIZE,), (LOCAL_SIZE,))
         self.queue.finish()
+
+    def warm_list(self, pixel_list) -> None:
+        """Nothing to do: launches over a list run the very stage kernels that warm() compiled."""
 
     def bind(self, film: dict) -> None:
         """The film's accumulator buffers, by their names in layout.FILM_ACCUMULATORS (wf_flush adds to them)."""
@@ -176,10 +195,15 @@ class WavefrontExecutor:
         cl.enqueue_fill_buffer(self.queue, self.counts, np.uint32(0), 0, 16)
         return n_next, n_shadow
 
-    def launch(self, off: int, count: int, sample_offset: int, spp: int, seed: int) -> None:
+    def launch(self, off: int, count: int, sample_offset: int, spp: int, seed: int, pixel_list=None) -> None:
+        """As MegakernelExecutor.launch."""
         import numpy as np
         import pyopencl as cl
 
+        listing = dict(pixel_list=self._no_list if pixel_list is None else pixel_list,
+                       listed=np.uint32(pixel_list is not None))
+        self.a["camera"].set(**listing)
+        self.a["flush"].set(**listing)
         cl.enqueue_fill_buffer(self.queue, self.counts, np.uint32(0), 0, 16)
         k_max = max(1, self.slots // count)
         done = 0

@@ -13,6 +13,11 @@ from pathlib import Path
 import numpy as np
 
 
+#: the layers a film can write beside its image (Film.aov); the first four are rendered by kernels/feature_aovs.h
+FEATURE_AOVS = ("albedo", "normal", "depth", "position")
+AOVS = FEATURE_AOVS + ("variance", "count")
+
+
 @dataclass
 class Film:
     width: int
@@ -23,6 +28,10 @@ class Film:
     count: np.ndarray         # (H, W) samples that were accumulated
     dropped: np.ndarray       # (H, W) samples dropped for NaN/Inf
     metadata: dict = field(default_factory=dict)
+    #: layers write_exr adds beside RGB (names aov() knows): an adaptive render's film has ("count",)
+    layers: tuple = ()
+    #: (H, W, 12) sums of the feature AOVs (kernels/feature_aovs.h) when the Renderer rendered them, else None
+    features: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         # Finite samples of absurd size (a reflectance of 3e38) overflow a pixel's float32 sums on the device, which
@@ -66,6 +75,40 @@ class Film:
                                                                     self.sum_w[..., None], 1), 0.0)
         return var / np.maximum(n - 1, 1) * scale * scale
 
+    def aov(self, name: str) -> np.ndarray:
+        """A layer beside the image, (H, W, 3) or (H, W) float32 (names: AOVS):
+        - ``albedo``, ``normal``: of the first non-specular surface the camera sample meets (through mirrors and
+          glass, tinted by them): the BSDF's directional reflectance estimate and the world-space shading normal
+          (the pixel's mean: shorter than 1 where a pixel straddles an edge); what Open Image Denoise takes;
+        - ``depth``, ``position``: of the camera ray's first hit (depth from the near clip plane, as Mitsuba's);
+          zero where the ray escapes;
+        - ``variance``: variance(), of the pixel's estimate; ``count``: the samples each pixel holds.
+        The first four need a Renderer made with ``feature_aovs=True``."""
+        if name == "variance":
+            return self.variance().astype(np.float32)
+        if name == "count":
+            return np.asarray(self.count, np.float32)
+        if name not in FEATURE_AOVS:
+            raise ValueError(f"unknown AOV {name!r}: expected one of {', '.join(AOVS)}")
+        if self.features is None:
+            raise ValueError(f"this film has no {name} AOV: render with feature AOVs (--aov {name}, "
+                             f"Renderer(..., feature_aovs=True))")
+        f = self.features
+        w = f[..., 7:8]
+        sl = {"albedo": slice(0, 3), "depth": slice(3, 4), "normal": slice(4, 7), "position": slice(8, 11)}[name]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out = np.where(w != 0, f[..., sl] / np.where(w != 0, w, 1), 0.0)
+        return (out[..., 0] if name == "depth" else out).astype(np.float32)
+
+    def denoised(self) -> np.ndarray:
+        """(H, W, 3) float32: the image denoised by Open Image Denoise (clrender/denoise.py; the `denoise` extra),
+        guided by the albedo and normal AOVs when the film has them."""
+        from .denoise import denoise
+
+        if self.features is None:
+            return denoise(self.image)
+        return denoise(self.image, self.aov("albedo"), self.aov("normal"))
+
     @property
     def spp(self) -> int:
         return int(self.metadata.get("spp", int(self.count.max()) if self.count.size else 0))
@@ -90,22 +133,25 @@ class Film:
             return _atomic_write(Path(path), lambda tmp: (write_rgbe if suffix == ".hdr" else write_pfm)(tmp, img))
         return self.write_exr(path)
 
-    def write_exr(self, path) -> Path:
+    def write_exr(self, path, image: np.ndarray | None = None) -> Path:
+        """The image (or `image` in its place: a denoised one) and the film's layers, as an EXR with the metadata."""
         import OpenEXR
 
         header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
         for k, v in self.metadata.items():
             header[f"clrender.{k}"] = str(v)
         # OpenEXR 3.x writes non-contiguous arrays wrongly without an error: always hand it a fresh copy.
-        img = np.ascontiguousarray(self.image, dtype=np.float32)
-        return _atomic_write(Path(path), lambda tmp: OpenEXR.File(header, {"RGB": img}).write(str(tmp)))
+        channels = {"RGB": np.ascontiguousarray(self.image if image is None else image, dtype=np.float32)}
+        for name in self.layers:   # (H, W, 3) layers become channels NAME.R, NAME.G, NAME.B
+            channels[name] = np.ascontiguousarray(self.aov(name), dtype=np.float32)
+        return _atomic_write(Path(path), lambda tmp: OpenEXR.File(header, channels).write(str(tmp)))
 
-    def write_png(self, path) -> Path:
-        """The sRGB 8-bit image, or the scene's own tone map where its film has one (``tonemap``, set by the
-        renderer from e.g. an ``ldrfilm``)."""
+    def write_png(self, path, image: np.ndarray | None = None) -> Path:
+        """The sRGB 8-bit image (or `image` in its place), or the scene's own tone map where its film has one
+        (``tonemap``, set by the renderer from e.g. an ``ldrfilm``)."""
         from .png import encode_png
 
-        data = encode_png((getattr(self, "tonemap", None) or to_srgb8)(self.image))
+        data = encode_png((getattr(self, "tonemap", None) or to_srgb8)(self.image if image is None else image))
         return _atomic_write(Path(path), lambda tmp: tmp.write_bytes(data))
 
 

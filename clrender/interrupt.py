@@ -183,3 +183,26 @@ class CtrlC(SigintHandler):
         """Raise KeyboardInterrupt if Ctrl-C was pressed, even if someone swallowed the first one."""
         if self.pressed:
             raise KeyboardInterrupt
+
+
+class Interrupted(Exception):
+    """Raised when the user pressed Ctrl-C twice."""
+
+
+class PassFlag(SigintHandler):
+    """First Ctrl-C: ask the loop to stop after the pass in flight (and say so, if `notice` is given: a pass
+    can take seconds, and a Ctrl-C that seems ignored gets pressed again). Second: abort."""
+
+    def __init__(self, notice: str | None = None):
+        self.requested = False
+        self.notice = notice
+
+    def _handle(self, signum, frame):
+        if self.requested:
+            raise Interrupted("aborted by a second Ctrl-C")
+        self.requested = True
+        if self.notice:
+            try:  # os.write, not print: the handler may run inside a write to sys.stderr (the progress bar)
+                os.write(2, self.notice.encode())
+            except OSError:
+                pass

@@ -11,6 +11,10 @@ beside an RGB preview of its own samples, and says in its header what it is a pa
     clrender.dialect       the Nori dialect the scene was read with ("upstream" when absent)
     clrender.version       clrender's version (samples of different versions need not agree)
     clrender.integrator    the integrator kernel
+    clrender.aovs          the layers asked for with --aov (comma-separated; "" when none)
+
+With feature AOVs (albedo, normal, depth, position) it also holds their twelve per-pixel sums as channels
+feature.0 .. feature.11 (kernels/feature_aovs.h's layout), which merge adds up like the image's.
 
 Samples are numbered globally, so parts with disjoint ranges add up to the render of their union.
 """
@@ -22,13 +26,14 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ClrenderError
-from .film import Film, _atomic_write
+from .film import FEATURE_AOVS, Film, _atomic_write
 from .scenesource import DEFAULT_DIALECT
 
 KIND = "accumulators"
 _SUM_CHANNELS = {"sum_wl": ("sum_wl.R", "sum_wl.G", "sum_wl.B"), "sum_wl2": ("sum_wl2.R", "sum_wl2.G", "sum_wl2.B")}
 #: header fields that every part of one frame must share
-MATCHING = ("scene_hash", "seed", "width", "height", "version", "dialect", "integrator")
+MATCHING = ("scene_hash", "seed", "width", "height", "version", "dialect", "integrator", "aovs")
+FEATURE_CHANNELS = tuple(f"feature.{i}" for i in range(12))
 
 
 class Accumulator:
@@ -43,6 +48,7 @@ class Accumulator:
         self.sum_wl2 = np.zeros((n, 3))
         self.count = np.zeros(n, np.int64)
         self.dropped = np.zeros(n, np.int64)
+        self.features = None   # (n, 12) once a film with feature AOVs is added
 
     def add_raw(self, p0: int, acc: dict) -> None:
         """Add the device's accumulators of pixels p0.. (Renderer.render_accumulators), read as a Film of them
@@ -57,12 +63,17 @@ class Accumulator:
         self.sum_wl2[p0:p1] += film.sum_wl2.reshape(-1, 3)
         self.count[p0:p1] += np.rint(film.count.reshape(-1)).astype(np.int64)
         self.dropped[p0:p1] += film.dropped.reshape(-1).astype(np.int64)
+        if film.features is not None:
+            if self.features is None:
+                self.features = np.zeros((self.width * self.height, 12))
+            self.features[p0:p1] += film.features.reshape(-1, 12)
 
     def film(self, metadata: dict) -> Film:
         h, w = self.height, self.width
         return Film(w, h, self.sum_wl.reshape(h, w, 3).copy(), self.sum_w.reshape(h, w).copy(),
                     self.sum_wl2.reshape(h, w, 3).copy(), self.count.reshape(h, w).copy(),
-                    self.dropped.reshape(h, w).copy(), dict(metadata))
+                    self.dropped.reshape(h, w).copy(), dict(metadata),
+                    features=None if self.features is None else self.features.reshape(h, w, 12).copy())
 
 
 def write_part(film: Film, path, scene_hash: str, seed: int, sample_start: int, sample_count: int,
@@ -70,11 +81,12 @@ def write_part(film: Film, path, scene_hash: str, seed: int, sample_start: int, 
     """Write `film` (samples sample_start .. sample_start+sample_count-1) as an accumulator EXR."""
     import OpenEXR
 
-    from . import __version__
+    from .version import __version__
 
     meta = {"kind": KIND, "scene_hash": scene_hash, "seed": int(seed), "sample_start": int(sample_start),
             "sample_count": int(sample_count), "dialect": dialect or DEFAULT_DIALECT, "version": __version__,
-            "integrator": film.metadata.get("integrator", ""), "width": film.width, "height": film.height}
+            "integrator": film.metadata.get("integrator", ""), "width": film.width, "height": film.height,
+            "aovs": ",".join(film.layers)}
     for k, v in (extra or {}).items():
         meta.setdefault(k, v)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
@@ -86,6 +98,9 @@ def write_part(film: Film, path, scene_hash: str, seed: int, sample_start: int, 
                 "dropped": np.ascontiguousarray(film.dropped, np.uint32)}
     for name in _SUM_CHANNELS:  # (H, W, 3) arrays are written as channels NAME.R, NAME.G, NAME.B
         channels[name] = f32(getattr(film, name))
+    if film.features is not None:
+        for i, name in enumerate(FEATURE_CHANNELS):
+            channels[name] = f32(film.features[..., i])
     return _atomic_write(Path(path), lambda tmp: OpenEXR.File(header, channels).write(str(tmp)))
 
 
@@ -120,6 +135,7 @@ def read_part(path) -> Part:
         raise ClrenderError(f"{path}: not an accumulator EXR (written by `clrender render --sample-range`); "
                             "a plain image holds no sample counts and cannot be merged")
     meta.setdefault("dialect", DEFAULT_DIALECT)  # parts written before the dialect was recorded
+    meta.setdefault("aovs", "")  # and before the layers were
     for name, names in _SUM_CHANNELS.items():  # OpenEXR groups NAME.R/G/B into one (H, W, 3) array
         if name not in ch and all(c in ch for c in names):
             ch[name] = np.stack([ch[c] for c in names], -1)
@@ -135,9 +151,14 @@ def read_part(path) -> Part:
     h, w = ch["sum_w"].shape
     if (w, h) != (meta["width"], meta["height"]):
         raise ClrenderError(f"{path}: the header says {meta['width']}x{meta['height']}, the pixels are {w}x{h}")
+    features = None
+    if any(c in ch for c in FEATURE_CHANNELS):
+        if not all(c in ch for c in FEATURE_CHANNELS):
+            raise ClrenderError(f"{path}: accumulator EXR has some feature AOV channels but not all twelve")
+        features = np.stack([ch[c] for c in FEATURE_CHANNELS], -1).astype(np.float64)
     film = Film(w, h, ch["sum_wl"].astype(np.float64), ch["sum_w"].astype(np.float64),
                 ch["sum_wl2"].astype(np.float64),
-                ch["count"].astype(np.int64), ch["dropped"].astype(np.int64), dict(meta))
+                ch["count"].astype(np.int64), ch["dropped"].astype(np.int64), dict(meta), features=features)
     return Part(path, meta, film)
 
 
@@ -184,4 +205,9 @@ def merge_parts(parts: list[Part], allow_missing: bool = False) -> Film:
     meta.update(spp=spp, spp_max=int(acc.count.max()) if acc.count.size else 0,
                 sample_ranges=format_ranges([(p.start, p.stop) for p in parts]), parts=len(parts),
                 dropped_samples=int(acc.dropped.sum()), missing=format_ranges(gaps) if gaps else "")
-    return acc.film(meta)
+    film = acc.film(meta)
+    film.layers = tuple(n for n in str(first.meta.get("aovs", "")).split(",") if n)
+    if any(n in FEATURE_AOVS for n in film.layers) and film.features is None:
+        raise ClrenderError(f"{first.path}: its header names the layers {first.meta['aovs']} but the parts hold no "
+                            "feature AOV channels")
+    return film

@@ -8,25 +8,24 @@ clFinish, so Python's signal handler runs while the device works).
 """
 from __future__ import annotations
 
-import os
 import copy
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
-from . import __version__
+from .version import __version__
 from .device import layout
 from .device.context import get_context
 from .device.program import build_program
-from .executors import LOCAL_SIZE, MegakernelExecutor, WavefrontExecutor, choose_driver
+from .executors import (LOCAL_SIZE, TARGET_LAUNCH_SECONDS, MegakernelExecutor, WavefrontExecutor,
+                        choose_driver)
 from .film import Film
-from .interrupt import SigintHandler, wait_for
+from .interrupt import Interrupted, PassFlag as _SigintFlag, wait_for  # noqa: F401  (Interrupted: the API)
 from .memcheck import check_film_fits
 from .pack import pack_scene
 
 MAX_LAUNCH_PIXELS = 1 << 16  # pixels per launch; a pass over a larger image is several launches
-TARGET_LAUNCH_SECONDS = 0.2  # keeps progress, Ctrl-C and time limits responsive
 
 
 def render_defines(scene, buffers, extra: dict | None = None) -> dict:
@@ -41,10 +40,6 @@ def render_defines(scene, buffers, extra: dict | None = None) -> dict:
     if getattr(buffers, "plugins", None) is not None:
         defines.update(buffers.plugins.defines())
     return {**defines, **(extra or {})}
-
-
-class Interrupted(Exception):
-    """Raised when the user pressed Ctrl-C twice."""
 
 
 @dataclass
@@ -65,25 +60,6 @@ class RenderStats:
         return None if self.rays is None else int(sum(self.rays))
 
 
-class _SigintFlag(SigintHandler):
-    """First Ctrl-C: ask the loop to stop after the pass in flight (and say so, if `notice` is given: a pass
-    can take seconds, and a Ctrl-C that seems ignored gets pressed again). Second: abort."""
-
-    def __init__(self, notice: str | None = None):
-        self.requested = False
-        self.notice = notice
-
-    def _handle(self, signum, frame):
-        if self.requested:
-            raise Interrupted("aborted by a second Ctrl-C")
-        self.requested = True
-        if self.notice:
-            try:  # os.write, not print: the handler may run inside a write to sys.stderr (the progress bar)
-                os.write(2, self.notice.encode())
-            except OSError:
-                pass
-
-
 class Renderer:
     """A scene uploaded to one device, with its program built; `render()` may be called repeatedly.
 
@@ -94,14 +70,17 @@ class Renderer:
     """
 
     def __init__(self, scene, device=None, fast_math: bool = False, buffers=None, defines=None,
-                 count_rays: bool = False, driver: str = "auto"):
+                 count_rays: bool = False, driver: str = "auto", feature_aovs: bool = False):
         import pyopencl as cl
 
         self.scene = scene
         self.count_rays = bool(count_rays)
+        self.feature_aovs = bool(feature_aovs)
         defines = dict(defines or {})
         if self.count_rays:
             defines["CLRENDER_COUNT_RAYS"] = 1
+        if self.feature_aovs:   # only then: a program without them is the very program it always was
+            defines["CLR_FEATURE_AOVS"] = 1
         self.ctx, self.queue = get_context(device)
         dev = self.ctx.devices[0]
         self.device_name = f"{dev.platform.name.strip()} / {dev.name.strip()}"
@@ -128,6 +107,13 @@ class Renderer:
         self.executor = executor(self.ctx, self.queue, self.program, self._scene_bufs, self._camera, self._filter,
                                  self.launch_pixels)
         self.global_size = -(-self.launch_pixels // LOCAL_SIZE) * LOCAL_SIZE   # the megakernel's launch shape
+        self._features = None
+        if self.feature_aovs:
+            from .device.kernelargs import KernelArgs
+
+            self._features = KernelArgs(cl.Kernel(self.program, "feature_pass")).set_scene(self._scene_bufs)
+            self._features.set(cam=self._camera, filter_cdf=self._filter)
+            self._no_list = cl.Buffer(self.ctx, mf.READ_ONLY, 4)
         if self.driver == "megakernel":   # the benchmarks launch render_pass themselves
             self.kernel, self.args = self.executor.kernel, self.executor.args
         self.upload_seconds = time.perf_counter() - t0
@@ -143,6 +129,65 @@ class Renderer:
         per_pixel = layout.film_bytes_per_pixel(self.count_rays)
         fixed += getattr(self.executor, "device_bytes", 0)   # the wavefront's path state
         return int(fixed + per_pixel * self.n_pixels + (0 if self.count_rays else dummies))
+
+    def accumulators(self):
+        """Zeroed per-pixel accumulators on the host and the device ({name: array}, {name: buffer} of
+        layout.FILM_ACCUMULATORS), bound to the executor; the feature AOVs' too, when asked for."""
+        import pyopencl as cl
+
+        n = self.n_pixels
+        host, dev = {}, {}
+        mf = cl.mem_flags
+        for name, *_, counting_only in layout.FILM_ACCUMULATORS:
+            dt, shape = layout.film_element(name)
+            # a counting-only buffer (the ray counters) is a one-element dummy the kernel never touches otherwise
+            host[name] = np.zeros((n if self.count_rays or not counting_only else 1, *shape), dt)
+            dev[name] = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=host[name])
+        self.executor.bind(dev)
+        if self._features is not None:   # kernels/feature_aovs.h: three float4 per pixel
+            feat = np.zeros((n, 12), np.float32)
+            self._feature_acc = (feat, cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=feat))
+            self._features.set(aov=self._feature_acc[1])
+        return host, dev
+
+    def launch(self, off: int, count: int, sample_offset: int, spp: int, seed: int, pixel_list=None) -> None:
+        """The executor's launch (clrender/executors.py), and the feature AOVs' of the same samples if asked for."""
+        self.executor.launch(off, count, sample_offset, spp, seed, pixel_list=pixel_list)
+        self._launch_features(off, count, sample_offset, spp, seed, pixel_list)
+
+    def _launch_features(self, off, count, sample_offset, spp, seed, pixel_list=None) -> None:
+        if self._features is not None:
+            import pyopencl as cl
+
+            self._features.set(pixel_list=self._no_list if pixel_list is None else pixel_list,
+                               listed=np.uint32(pixel_list is not None), pixel_offset=np.uint32(off),
+                               pixel_count=np.uint32(count), sample_offset=np.uint32(sample_offset),
+                               spp=np.uint32(spp), seed=np.uint32(seed))
+            cl.enqueue_nd_range_kernel(self.queue, self._features.kernel, (self.global_size,), (LOCAL_SIZE,))
+
+    def start_stats(self) -> RenderStats:
+        """The stats of a render about to start; warms the executor first if it is cold: PoCL compiles the
+        work-group function at the first launch of a shape (0.3-2 s), done with a launch that adds no samples, so
+        timings, pass sizes and the ETA are those of the render."""
+        if not self._warm:
+            t0 = time.perf_counter()
+            self.executor.warm()
+            self._launch_features(0, 0, 0, 0, 0)
+            wait_for(self.queue)
+            self._warm = True
+            self.build_seconds += time.perf_counter() - t0
+        return RenderStats(build_seconds=self.build_seconds, upload_seconds=self.upload_seconds)
+
+    def render_adaptive(self, target_error: float = 0.01, min_spp: int | None = None, max_spp: int | None = None,
+                        seed: int = 0, time_limit: float | None = None, progress: bool = False,
+                        partial=None, on_round=None, allocation: str = "error") -> Film:
+        """Adaptive sampling: rounds over the pixels whose estimate's relative error is still above
+        `target_error` (clrender/adaptive.py); `max_spp` defaults to the scene's sample count."""
+        from .adaptive import AdaptiveOptions, render_adaptive
+
+        opts = AdaptiveOptions.make(target_error, min_spp, max_spp, self.scene.sample_count, allocation)
+        return render_adaptive(self, opts, seed=seed, time_limit=time_limit, progress=progress, partial=partial,
+                               on_round=on_round)
 
     def render(self, spp: int | None = None, seed: int = 0, time_limit: float | None = None,
                progress: bool = False, on_pass=None, start_sample: int = 0, pixels=None,
@@ -168,8 +213,6 @@ class Renderer:
         return self._render(band, spp, seed, None, False, None, start_sample, pixels, None)
 
     def _render(self, finish, spp, seed, time_limit, progress, on_pass, start_sample, pixels, partial):
-        import pyopencl as cl
-
         spp = int(spp if spp is not None else self.scene.sample_count)
         if spp < 1:
             raise ValueError("spp must be at least 1")
@@ -181,27 +224,10 @@ class Renderer:
         p0, p1 = (0, n) if pixels is None else (int(pixels[0]), int(pixels[1]))
         if not 0 <= p0 < p1 <= n:
             raise ValueError(f"pixel range {p0}:{p1} is not inside 0:{n}")
-        host, dev = {}, {}
-        mf = cl.mem_flags
-        for name, *_, counting_only in layout.FILM_ACCUMULATORS:
-            dt, shape = layout.film_element(name)
-            # a counting-only buffer (the ray counters) is a one-element dummy the kernel never touches otherwise
-            host[name] = np.zeros((n if self.count_rays or not counting_only else 1, *shape), dt)
-            dev[name] = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=host[name])
-        ex = self.executor
-        ex.bind(dev)
-        stats = RenderStats(build_seconds=self.build_seconds, upload_seconds=self.upload_seconds)
+        host, dev = self.accumulators()
+        stats = self.start_stats()
         done = 0
         per_pass = 1
-        if not self._warm:
-            # PoCL compiles the work-group function at the first launch of a shape (0.3-2 s): do it with a
-            # launch that adds no samples, so timings, pass sizes and the ETA are those of the render.
-            t0 = time.perf_counter()
-            ex.warm()
-            wait_for(self.queue)
-            self._warm = True
-            self.build_seconds += time.perf_counter() - t0
-            stats.build_seconds = self.build_seconds
         bar = None
         if progress:  # after the warm-up launch: the bar says rendering has started (a Ctrl-C now keeps an image)
             from tqdm import tqdm
@@ -218,7 +244,7 @@ class Renderer:
                     t0 = time.perf_counter()
                     for off in range(p0, p1, self.launch_pixels):
                         cnt = min(self.launch_pixels, p1 - off)
-                        ex.launch(off, cnt, start_sample + done, batch, seed & 0xFFFFFFFF)
+                        self.launch(off, cnt, start_sample + done, batch, seed & 0xFFFFFFFF)
                         stats.launches += 1
                     wait_for(self.queue)  # not queue.finish(): a second Ctrl-C must not wait for the pass
                     dt = time.perf_counter() - t0
@@ -264,6 +290,9 @@ class Renderer:
         for name, a in host.items():
             if len(a) == self.n_pixels:   # (not a one-element dummy)
                 cl.enqueue_copy(self.queue, a[p0:p1], dev[name], src_offset=p0 * a[0].nbytes)
+        if self._features is not None:
+            feat, d_feat = self._feature_acc
+            cl.enqueue_copy(self.queue, feat[p0:p1], d_feat, src_offset=p0 * feat[0].nbytes)
         self.queue.finish()
 
     def _film(self, done, seed, start_sample, stats, host, dev, p0, p1, partial=False) -> Film:
@@ -286,6 +315,8 @@ class Renderer:
             meta.update(rays_camera=stats.rays[0], rays_closest=stats.rays[1], rays_shadow=stats.rays[2],
                         rays_total=stats.rays_total)
         film = Film.from_accumulators(self.width, self.height, host, meta)
+        if self._features is not None:
+            film.features = self._feature_acc[0].astype(np.float64).reshape(self.height, self.width, 12)
         stats.dropped = int(film.dropped.sum())  # with the samples of pixels whose sums overflowed
         film.stats = stats
         film.tonemap = getattr(getattr(self.scene.camera, "film", None), "tonemap", None)  # an ldrfilm's 8-bit image

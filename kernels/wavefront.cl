@@ -7,10 +7,19 @@
    summed in the megakernel's order (wf_finish, wf_flush): both drivers give the same image up to float rounding. */
 #include "li.h"
 #include "filter.h"
+#ifdef CLR_FEATURE_AOVS
+#include "feature_aovs.h"
+#endif
 
 #ifndef CLR_PATH_STAGES
 #error "the wavefront driver runs the path integrators only (kernels/integrators/path_loop.h)"
 #endif
+
+/* The pixel of launch index i: i itself over a range of pixels, or pixel_list[i] when the launch runs over a list
+   (adaptive sampling's rounds; `listed` != 0). */
+inline uint listed_pixel(__global const uint* pixel_list, uint listed, uint i) {
+    return listed ? pixel_list[i] : i;
+}
 
 /* The sizes the host allocates per slot: PathState, Sampler, Hit (the kernels' own layout, so nothing on the host
    spells it out). */
@@ -20,17 +29,17 @@ __kernel void wf_sizes(__global uint* out) {
     out[2] = (uint)sizeof(Hit);
 }
 
-/* Camera stage: the camera sample of every slot (sample_offset + slot % k of pixel pixel_offset + slot / k), its
-   filter weight in wt[slot].x (wt[slot].y = 0 for a sample outside the window: it counts, but adds nothing) and
-   the path's first segment queued for tracing (counts[0]). */
+/* Camera stage: the camera sample of every slot (sample_offset + slot % k of pixel pixel_offset + slot / k, or of
+   the list's entry at that index), its filter weight in wt[slot].x (wt[slot].y = 0 for a sample outside the window:
+   it counts, but adds nothing) and the path's first segment queued for tracing (counts[0]). */
 __kernel void wf_camera(SCENE_ARGS, __global const Camera* cam, __global const float* filter_cdf,
                         __global PathState* paths, __global Sampler* samplers, __global float2* wt,
-                        __global uint* queue, __global uint* counts, uint pixel_offset, uint n_slots, uint k,
-                        uint sample_offset, uint seed) {
+                        __global uint* queue, __global uint* counts, __global const uint* pixel_list, uint listed,
+                        uint pixel_offset, uint n_slots, uint k, uint sample_offset, uint seed) {
     uint slot = get_global_id(0);
     if (slot >= n_slots) return;
     SCENE_INIT(sd);
-    uint pix = pixel_offset + slot / k;
+    uint pix = listed_pixel(pixel_list, listed, pixel_offset + slot / k);
     Sampler smp;
     sampler_init(&smp, seed, pix, sample_offset + slot % k);
     float w = 0.0f;
@@ -121,10 +130,10 @@ __kernel void wf_finish(SCENE_ARGS, __global const PathState* paths, __global co
 /* The pass's sums into the film accumulators (FILM_ARGS, clrender/device/layout.py FILM_ACCUMULATORS; rays is not
    counted by this driver), as render_pass adds them; the sums start again from zero. */
 __kernel void wf_flush(__global float4* sum0, __global float4* sum1, __global uint* nbad, FILM_ARGS,
-                       uint pixel_offset, uint n_pixels, uint spp) {
+                       __global const uint* pixel_list, uint listed, uint pixel_offset, uint n_pixels, uint spp) {
     uint gid = get_global_id(0);
     if (gid >= n_pixels) return;
-    uint pix = pixel_offset + gid;
+    uint pix = listed_pixel(pixel_list, listed, pixel_offset + gid);
     float4 s0 = sum0[gid], s1 = sum1[gid];
     uint nb = nbad[gid];
     float4 a0 = acc0[pix], a1 = acc1[pix];

@@ -129,3 +129,27 @@ def test_gpu_and_cpu_never_mean_the_simulator():
         assert "oclgrind" not in p.name.lower(), kind
     p, _ = choose_device("oclgrind")
     assert "oclgrind" in p.name.lower()
+
+
+_RUN_LISTS = textwrap.dedent("""
+    import sys
+    from clrender.bench import load_bench_scene
+    from clrender.renderer import Renderer
+    scene, _, _ = load_bench_scene(sys.argv[1], None, width=12, height=12)
+    for driver in ("megakernel", "wavefront"):
+        r = Renderer(scene, device="Oclgrind", driver=driver, feature_aovs=True)
+        r.launch_pixels = 64   # launches over parts of the pixel list
+        film = r.render_adaptive(target_error=0.3, min_spp=2, max_spp=4, seed=1)
+        print("rendered", driver, int(film.count.min()), int(film.count.max()), float(film.aov("albedo").mean()))
+""")
+
+
+@needs_oclgrind
+@slow
+def test_pixel_lists_and_feature_aovs_are_clean_under_oclgrind(tmp_path):
+    """Adaptive rounds (render_list, the wavefront's listed camera and flush stages) and feature_pass, launched over
+    parts of a pixel list in both drivers: no out-of-bounds access, no race (85 s: with the slow ones)."""
+    proc, report = _run_under_oclgrind(tmp_path, [str(SCENES / "cornell" / "cornell_path_mis.xml")], _RUN_LISTS)
+    assert proc.returncode == 0, proc.stderr
+    assert "rendered megakernel" in proc.stdout and "rendered wavefront" in proc.stdout, proc.stdout
+    assert report == "", report[:4000]

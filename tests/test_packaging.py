@@ -18,7 +18,8 @@ def test_every_package_is_listed():
 # Import name -> distribution name, for the modules whose names differ.
 _DIST = {"PIL": "Pillow", "OpenEXR": "OpenEXR", "pocl_binary_distribution": "pocl-binary-distribution"}
 # Imported only inside a feature that names its extra when the module is missing.
-_OPTIONAL = {"matplotlib": "plot", "dask": "cluster", "distributed": "cluster", "bokeh": "cluster"}
+_OPTIONAL = {"matplotlib": "plot", "dask": "cluster", "distributed": "cluster", "bokeh": "cluster",
+             "pyoidn": "denoise"}
 
 
 def test_every_runtime_import_is_a_dependency():

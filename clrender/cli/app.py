@@ -13,10 +13,14 @@ from .options import add_dialect_option, defines, seconds
 
 
 def cmd_render(args) -> int:
+    from ..adaptive import options_from_args
+    from ..layers import layers_from_args, needs_features, write_denoised
     from ..loader import load_scene
     from ..output import output_paths
     from ..renderer import Interrupted, Renderer
 
+    options_from_args(args, None)   # adaptive sampling's options with the distributed ones: refused
+    layers = layers_from_args(args)
     if args.cluster or args.sample_range:
         if args.emitter_selection != "uniform":   # the workers' scene loading does not take it yet
             print("clrender: error: --emitter-selection power is not supported with --cluster or --sample-range "
@@ -35,12 +39,13 @@ def cmd_render(args) -> int:
             return 2
         scene.emitter_selection = "power"
     args.ctrl_c.check()  # a Ctrl-C that a library swallowed still stops us
+    adaptive = options_from_args(args, scene)
     try:
         choose_driver(args.driver, scene.integrator.kernel)
     except ClrenderError as e:
         print(f"clrender: error: {args.scene}: --driver: {e}", file=sys.stderr)
         return 2
-    renderer = Renderer(scene, device=args.device, driver=args.driver)
+    renderer = Renderer(scene, device=args.device, driver=args.driver, feature_aovs=needs_features(args, layers))
     args.ctrl_c.check()
     st = renderer.buffers.stats
     print(f"clrender: {args.scene}: {st['triangles']} triangles, {st['spheres']} spheres, "
@@ -48,24 +53,37 @@ def cmd_render(args) -> int:
           f"device {renderer.device_name}", file=sys.stderr)
     progress = not args.quiet and (args.progress or sys.stderr.isatty())
 
-    def write_partial(film):   # and the final image
+    def write_film(film):   # partial images, and the final one
+        film.layers = tuple(dict.fromkeys(film.layers + layers))
         film.write(out)
         if png is not None:
             film.write_png(png)
 
-    partial = None if args.partial_every is None else (args.partial_every, write_partial)
+    partial = None if args.partial_every is None else (args.partial_every, write_film)
     try:
-        film = renderer.render(spp=args.spp, seed=args.seed, time_limit=args.time_limit, progress=progress,
-                               partial=partial)
+        if adaptive is not None:
+            film = renderer.render_adaptive(adaptive.target_error, adaptive.min_spp, adaptive.max_spp, seed=args.seed,
+                                            time_limit=args.time_limit, progress=progress, partial=partial,
+                                            allocation=adaptive.allocation)
+        else:
+            film = renderer.render(spp=args.spp, seed=args.seed, time_limit=args.time_limit, progress=progress,
+                                   partial=partial)
     except Interrupted:
         print("clrender: aborted (second Ctrl-C); nothing written", file=sys.stderr)
         _exit_now(args, 130)
         return 130
-    write_partial(film)
+    write_film(film)   # the whole image now
+    if args.denoise:
+        d_exr, _ = write_denoised(film, out)
+        print(f"clrender: wrote {d_exr} and its PNG (denoised in {film.metadata['denoise_seconds']:.2f} s)",
+              file=sys.stderr)
     s = film.stats
     rate = s.samples / s.seconds / 1e6 if s.seconds > 0 else 0.0
     msg = (f"clrender: wrote {out}{f' and {png}' if png is not None else ''}: {film.spp} spp in {s.seconds:.2f} s "
            f"({rate:.2f} M samples/s)")
+    if adaptive is not None:
+        msg += (f"; adaptive: {film.metadata['spp_mean']:.1f} spp on average, {film.metadata['converged']:.1%} of "
+                f"the pixels within {adaptive.target_error:g}")
     if s.interrupted:
         msg += " [interrupted: partial image]"
     if s.dropped:
@@ -158,7 +176,7 @@ def cmd_bench(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .. import __version__
+    from ..version import __version__
 
     ap = argparse.ArgumentParser(prog="clrender", description="OpenCL path tracer for Nori and Mitsuba 3 XML scenes")
     ap.add_argument("--version", action="version", version=f"clrender {__version__}")
@@ -187,9 +205,13 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--progress", action="store_true",
                    help="show the progress bar even when stderr is not a terminal (e.g. a log file)")
     add_dialect_option(r)
+    from ..adaptive import add_render_arguments as add_adaptive_arguments
+    from ..layers import add_render_arguments as add_layer_arguments
     from .distributed import add_merge_parser, add_render_arguments
 
     add_render_arguments(r)
+    add_adaptive_arguments(r)
+    add_layer_arguments(r)
     r.set_defaults(func=cmd_render)
     d = sub.add_parser("devices", help="list OpenCL platforms and devices")
     d.set_defaults(func=cmd_devices)

@@ -64,11 +64,15 @@ def cmd_render_distributed(args, defines: dict) -> int:
                           exr_only="a --sample-range part is an accumulator EXR" if args.sample_range else
                           "--cluster writes an EXR (an accumulator EXR when interrupted)")
     say = lambda msg: print(f"clrender: {msg}", file=sys.stderr, flush=True)  # noqa: E731
+    from ..layers import layers_from_args, needs_features
+
+    layers = layers_from_args(args)   # a part carries the feature AOVs' sums and names its layers; merge adds them
     source = SceneSource(str(Path(args.scene).resolve()), defines, dialect)
 
     def write(film, scene_hash):
         """Write `film` where -o says; a sample range, or an image short of its samples, as a part."""
         incomplete = int(film.count.min()) < spp if film.count.size else False
+        film.layers = layers
         if args.sample_range or incomplete:
             # A partial image keeps its true per-pixel counts (in a cluster render they differ by band): as a
             # part, it also merges with the rest of its samples later.
@@ -98,7 +102,8 @@ def cmd_render_distributed(args, defines: dict) -> int:
 
         t0 = time.perf_counter()
         scene_hash = source.content_hash()
-        renderer = Renderer(source.load(), device=args.device, driver=args.driver)
+        renderer = Renderer(source.load(), device=args.device, driver=args.driver,
+                            feature_aovs=needs_features(args, layers))
         say(f"{args.scene}: load {time.perf_counter() - t0:.2f} s; device {renderer.device_name}")
         try:
             film = renderer.render(spp=spp, seed=args.seed, time_limit=args.time_limit,
@@ -130,6 +135,9 @@ def add_merge_parser(sub) -> None:
     m.add_argument("--png", action="store_true", help="also write OUT.png")
     m.add_argument("--partial", action="store_true",
                    help="merge even if sample ranges are missing or a part was interrupted")
+    m.add_argument("--denoise", action="store_true",
+                   help="also write the merged image denoised (OUT.denoised.exr and .png; guided by the parts' "
+                        "albedo and normal when they were rendered with --aov albedo,normal); needs the denoise extra")
     m.set_defaults(func=cmd_merge)
 
 
@@ -145,11 +153,19 @@ def cmd_merge(args) -> int:
             raise ClrenderError(f"-o {out}: that is one of the parts being merged; name another file")
     for path in [out] + ([out.with_suffix(".png")] if args.png else []):
         check_writable(path, args.output)  # before the parts are read
+    if args.denoise:
+        from ..denoise import available
+
+        available()   # a missing extra is said before any work
     film = merge_parts([read_part(p) for p in args.parts], allow_missing=args.partial)
     film.write_exr(out)
     written = [str(out)]
     if args.png:
         written.append(str(film.write_png(out.with_suffix(".png"))))
+    if args.denoise:
+        from ..layers import write_denoised
+
+        written.append(str(write_denoised(film, out)[0]))
     m = film.metadata
     note = f"; missing samples {m['missing']}" if m["missing"] else ""
     print(f"clrender: merged {m['parts']} part(s), samples {m['sample_ranges']} ({m['spp']} spp){note}: "

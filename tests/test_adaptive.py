@@ -1,0 +1,216 @@
+"""Adaptive sampling (clrender/adaptive.py): rounds over lists of pixels in both executors.
+
+- A pixel's n samples are exactly those a uniform render of n spp gives it (the list launches number samples as the
+  range launches do): per pixel, the adaptive value equals the uniform render's at that pixel's count.
+- The same seed and options give the same image and counts however a round is cut into launches or waves.
+- Unbiased enough to trust: in a closed furnace (every wall diffuse 0.5 and emitting 1: radiance 2 everywhere,
+  exactly) every pixel and the image mean agree with 2 within their errors, and per pixel the adaptive image agrees
+  with a uniform render of the same total samples.
+- The stopping rule: a pixel stops when it meets the target, never before min_spp; a time limit keeps true counts.
+- The command line: the count layer in the EXR; refused combinations exit with status 2 and say why.
+"""
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import clrender
+from clrender.adaptive import AdaptiveOptions, pooled_error
+from clrender.renderer import Renderer
+from clrender.testing.stats import compare_films, compare_mean_to_value
+
+from analytic_scenes import furnace_scene
+
+SCENES = Path(__file__).resolve().parents[1] / "scenes"
+OPTS = dict(target_error=0.1, max_spp=64, seed=5)
+
+
+def small_cornell(size=32):
+    s = clrender.load_scene(SCENES / "cornell" / "cornell_path_mis.xml")
+    s.camera.width = s.camera.height = size
+    return s
+
+
+@pytest.fixture(scope="module")
+def cornell():
+    return small_cornell()
+
+
+@pytest.fixture(scope="module")
+def adaptive_film(cornell):
+    return Renderer(cornell, driver="megakernel").render_adaptive(**OPTS)
+
+
+def test_options_and_rounds():
+    o = AdaptiveOptions.make(0.01, None, 100)
+    assert (o.min_spp, o.max_spp) == (16, 100)
+    assert o.checkpoints() == [16, 32, 48, 64, 80, 100]
+    marks = AdaptiveOptions.make(0.01, 4, 1000).checkpoints()
+    assert marks[-1] == 1000 and all(b - a == max(4, a // 4) for a, b in zip(marks, marks[1:-1]))  # a quarter more
+    assert AdaptiveOptions.make(0.1, None, 8).checkpoints() == [8]
+    for bad, what in [((0, None, 64), "positive"), ((float("nan"), None, 64), "positive"),
+                      ((0.01, 1, 64), "at least 2"), ((0.01, 65, 64), "at most max spp"),
+                      ((0.01, None, 0), "max spp")]:
+        with pytest.raises(ValueError, match=what):
+            AdaptiveOptions.make(*bad)
+
+
+def test_samples_go_where_the_noise_is(cornell, adaptive_film):
+    count = adaptive_film.count
+    marks = AdaptiveOptions.make(OPTS["target_error"], None, OPTS["max_spp"]).checkpoints()
+    assert set(np.unique(count)) <= set(marks)
+    assert count.min() < 64 and count.max() == 64, "the light and the quiet walls stop early, the noisy ones go on"
+    assert adaptive_film.metadata["adaptive"] and adaptive_film.metadata["spp"] == 64
+    assert adaptive_film.metadata["spp_mean"] == pytest.approx(count.mean(), abs=1e-3)
+    # the pixels that stopped after the first round are those whose pooled error met the target after it
+    first = Renderer(cornell).render_adaptive(**{**OPTS, "max_spp": 16})
+    met = pooled_error(first) <= OPTS["target_error"]
+    assert met.any() and not met.all()
+    np.testing.assert_array_equal(count == 16, met)
+
+
+def test_a_pixel_holds_the_samples_of_a_uniform_render(cornell, adaptive_film):
+    """Per pixel, the adaptive value is the uniform render's at that pixel's count: samples 0..n-1, none reused."""
+    count = adaptive_film.count
+    r = Renderer(cornell, driver="megakernel")
+    checked = 0
+    for c in np.unique(count):
+        uniform = r.render(spp=int(c), seed=OPTS["seed"])
+        m = count == c
+        np.testing.assert_allclose(adaptive_film.image[m], uniform.image[m], rtol=2e-5, atol=1e-7)
+        checked += int(m.sum())
+    assert checked == count.size
+
+
+@pytest.mark.parametrize("driver", ["megakernel", "wavefront"])
+def test_the_split_does_not_change_the_image(cornell, adaptive_film, driver):
+    """Launches of 64 pixels (the megakernel) or waves of one sample per path slot (the wavefront) against whole-list
+    launches: the very same image and counts."""
+    whole = adaptive_film if driver == "megakernel" else Renderer(cornell, driver=driver).render_adaptive(**OPTS)
+    split_renderer = Renderer(cornell, driver=driver)
+    split_renderer.launch_pixels = 64
+    if driver == "wavefront":
+        split_renderer.executor.slots = 100
+    split = split_renderer.render_adaptive(**OPTS)
+    assert split.stats.launches > whole.stats.launches
+    np.testing.assert_array_equal(split.count, whole.count)
+    np.testing.assert_array_equal(split.image, whole.image)
+
+
+def test_both_executors_agree(cornell, adaptive_film):
+    wave = Renderer(cornell, driver="wavefront").render_adaptive(**OPTS)
+    same = wave.count == adaptive_film.count
+    assert same.mean() > 0.99   # a decision at the threshold may flip with float rounding
+    np.testing.assert_allclose(wave.image[same], adaptive_film.image[same], rtol=2e-4, atol=2e-6)
+
+
+def test_furnace_is_exact(tmp_path):
+    """The image mean within its error of the exact 2, and per pixel against a uniform render of the same samples.
+    (Per pixel against 2 with the adaptive film's own variances is no fair test: a pixel that stopped early holds
+    a hundred-odd samples of a skewed estimate, whose sample variance is itself noisy.)"""
+    (tmp_path / "f.xml").write_text(furnace_scene(tmp_path, "path_mis").replace('value="4"', 'value="16"'))
+    r = Renderer(clrender.load_scene(tmp_path / "f.xml"))
+    film = r.render_adaptive(target_error=0.02, max_spp=4096, seed=11)
+    assert film.count.min() > 16 and np.median(film.count) < 4096, "the stopping rule decided the pixels"
+    res = compare_mean_to_value(film, 2.0)
+    assert res.passed, res.message
+    uniform = r.render(spp=int(round(film.count.mean())), seed=12)
+    res = compare_films(film, uniform)
+    assert res.passed, res.message
+
+
+def test_agrees_with_a_uniform_render_of_the_same_samples(cornell, adaptive_film):
+    uniform = Renderer(cornell).render(spp=int(round(adaptive_film.count.mean())), seed=99)
+    res = compare_films(adaptive_film, uniform)
+    assert res.passed, res.message
+
+
+def test_time_limit_keeps_true_counts(cornell):
+    r = Renderer(cornell)
+    r.launch_pixels = 64
+    film = r.render_adaptive(target_error=0.001, max_spp=4096, seed=1, time_limit=0.3)
+    assert film.count.max() < 4096
+    assert film.metadata["spp_mean"] == pytest.approx(film.count.mean(), abs=1e-3)
+    assert np.all(film.image[film.count == 0] == 0)
+
+
+def test_command_line(tmp_path, capsys):
+    import OpenEXR
+
+    from clrender.cli import main
+
+    out = tmp_path / "a.exr"
+    text = (SCENES / "cornell" / "cornell_path_mis.xml").read_text().replace('"256"', '"16"')
+    scene = tmp_path / "cornell" / "small.xml"   # beside the original's meshes
+    scene.parent.mkdir()
+    for f in (SCENES / "cornell").iterdir():
+        if f.is_dir():
+            (scene.parent / f.name).symlink_to(f)
+    scene.write_text(text)
+    scene = str(scene)
+    assert main(["render", scene, "-o", str(out), "-q", "--target-error", "0.2", "--max-spp", "20", "--min-spp",
+                 "4"]) == 0
+    with OpenEXR.File(str(out)) as f:
+        count = np.asarray(f.channels()["count"].pixels)
+        assert f.header()["clrender.adaptive"] == "True"
+    assert count.min() >= 4 and count.max() <= 20 and count.min() < count.max()
+    for extra, said in [(["--adaptive", "--sample-range", "0:16"], "--sample-range"),
+                        (["--max-spp", "16"], "add --adaptive"),
+                        (["--allocation", "relmse"], "add --adaptive"),
+                        (["--adaptive", "--spp", "8", "--max-spp", "16"], "give one"),
+                        (["--target-error", "-1"], "positive"),
+                        (["--adaptive", "--min-spp", "1"], "at least 2")]:
+        assert main(["render", scene, "-o", str(tmp_path / "b.exr"), "-q", *extra]) == 2
+        assert said in capsys.readouterr().err
+
+
+def test_ctrl_c_stops_after_the_launch_in_flight(cornell):
+    """A Ctrl-C during the second round: the render stops after the launch in flight, marked interrupted, each pixel
+    with the samples it really got (64-pixel launches, so the round is cut part-way)."""
+    import os
+    import signal
+
+    r = Renderer(cornell)
+    r.launch_pixels = 64
+
+    def press(rnd, mark, active):
+        if rnd == 1:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    film = r.render_adaptive(target_error=0.001, max_spp=64, seed=1, on_round=press)
+    assert film.metadata["interrupted"] and film.stats.interrupted
+    assert set(np.unique(film.count)) == {16, 32}, "first round whole, the second cut after one launch"
+    assert (film.count == 32).sum() == 64
+    uniform = r.render(spp=32, seed=1)
+    m = film.count == 32
+    np.testing.assert_allclose(film.image[m], uniform.image[m], rtol=2e-5, atol=1e-7)
+
+
+def test_relmse_allocation_relaxes_with_the_samples(cornell):
+    """allocation="relmse": after the round ending at n samples a pixel stops when its pooled error is within
+    E * sqrt(n / min_spp). Checked at the first two rounds against renders that stop there (same samples, same
+    decisions); and its noisiest pixels get fewer samples than the "error" allocation gives them."""
+    opts = dict(OPTS, allocation="relmse")
+    full = Renderer(cornell).render_adaptive(**opts)
+    r = Renderer(cornell)
+    first, second = (r.render_adaptive(**{**opts, "max_spp": m}) for m in (16, 32))
+    e = OPTS["target_error"]
+    np.testing.assert_array_equal(full.count == 16, pooled_error(first) <= e)
+    went_on = full.count > 16
+    stopped_at_32 = went_on & (pooled_error(second) <= e * np.sqrt(2))
+    assert stopped_at_32.any()
+    np.testing.assert_array_equal(full.count[went_on] == 32, stopped_at_32[went_on])
+    assert full.metadata["allocation"] == "relmse"
+    plain = Renderer(cornell).render_adaptive(**OPTS)
+    assert full.count.sum() < plain.count.sum()
+
+
+def test_python_api(cornell):
+    film = clrender.render(cornell, target_error=OPTS["target_error"], max_spp=32, seed=OPTS["seed"])
+    same = Renderer(cornell).render_adaptive(target_error=OPTS["target_error"], max_spp=32, seed=OPTS["seed"])
+    np.testing.assert_array_equal(film.count, same.count)
+    assert film.layers == ("count",)
+    with pytest.raises(ValueError, match="one process"):
+        clrender.render(cornell, target_error=0.1, cluster="local:1")
+    with pytest.raises(TypeError, match="target_error"):
+        clrender.render(cornell, max_spp=8)
