@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import clrender
+from clrender import version
 from clrender.cli import main
 from clrender.film import read_exr
 from clrender.parts import read_part, write_part
@@ -83,11 +84,11 @@ def test_parts_that_do_not_belong_together_are_refused(farm, tmp_path, capsys, h
         write_part(small, odd, read_part(parts[0]).meta["scene_hash"], SEED, 12, 1)
     elif how == "version":   # a part written by another clrender version
         p = read_part(parts[0])
-        old, clrender.__version__ = clrender.__version__, "0.0.1"
+        old, version.__version__ = version.__version__, "0.0.1"
         try:
             write_part(p.film, odd, p.meta["scene_hash"], SEED, 12, 3)
         finally:
-            clrender.__version__ = old
+            version.__version__ = old
     elif how == "dialect":
         p = read_part(parts[0])
         write_part(p.film, odd, p.meta["scene_hash"], SEED, 12, 3, dialect="eth")
