@@ -191,7 +191,7 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     info, infinite = _pack_info(scene, ctx, geo, shape_rows, emitter_rows, emitter_objs, emitter_selection)
     camera, filter_cdf = scene.camera.pack()
     filter_cdf = with_guide(filter_cdf)     # + the guide that render.cl's filter_sample_guided reads
-    emitters = np.array(emitter_rows, layout.dtype("Emitter")) if emitter_rows else layout.zeros("Emitter")
+    emitters = _rows_array("Emitter", emitter_rows)
     stats = {
         "triangles": geo.n_tris, "spheres": geo.n_spheres, "shapes": len(shapes),
         "emitters": len(emitter_rows), "bvh_nodes": int(geo.node_count), "bvh_depth": int(geo.depth),
@@ -199,7 +199,7 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
         "bvh_build_seconds": float(geo.seconds), "pack_seconds": float(time.perf_counter() - t0),
     }
     own = dict(nodes=_nonempty(geo.nodes), prims=_nonempty(geo.prims), shapes=_nonempty(shape_rows),
-               bsdfs=np.array(bsdf_rows, layout.dtype("Bsdf")) if bsdf_rows else layout.zeros("Bsdf"),
+               bsdfs=_rows_array("Bsdf", bsdf_rows),
                emitters=emitters, textures=ctx.textures.array(), infinite=_nonempty(infinite), info=info)
     # Per-vertex normals and uvs are read only where a shape's flags say it has them: when none has, their tables
     # are not uploaded (one zero row; 12 + 8 bytes per vertex saved).
@@ -217,6 +217,15 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     return SceneBuffers(tables=tables, camera=camera, filter_cdf=filter_cdf, stats=stats, bvh_width=geo.width,
                         leaf_order=np.asarray(geo.order, np.int64), plugins=used,
                         sampler=getattr(getattr(scene, "sampler", None), "generator", "independent"))
+
+
+def _rows_array(struct: str, rows) -> np.ndarray:
+    """Rows as one array of `struct` (one zero row if none). Assigned into zeros: np.array of records copies them
+    member by member and leaves the bytes no member covers undefined, and packed_hash reads every byte."""
+    out = layout.zeros(struct, max(len(rows), 1))
+    if rows:
+        out[:] = rows
+    return out
 
 
 def _pack_materials(shapes, textures: TextureTable) -> tuple[list, list[int]]:
