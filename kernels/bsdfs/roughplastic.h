@@ -87,9 +87,7 @@ INLINE float3 roughplastic_sample(__global const Bsdf* b, BsdfQuery* q, float2 u
         q->wo = square_to_cosine_hemisphere((float2)((u.x - ps) / (1.0f - ps), u.y));
     }
     if (q->wo.z <= 0.0f) return (float3)(0.0f);
-    float pdf = roughplastic_pdf(b, q);
-    if (!(pdf > 0.0f)) return (float3)(0.0f);
-    return roughplastic_eval(b, q) * (q->wo.z / pdf);
+    return bsdf_sample_weight(roughplastic_eval(b, q), q->wo.z, roughplastic_pdf(b, q));
 }
 
 INLINE float3 roughplastic_albedo(__global const Bsdf* b, const BsdfQuery* q) {
