@@ -23,70 +23,7 @@ CHUNK = 1 << 20
 # CLRENDER_TEST_FAST_MATH=1 builds these programs with -cl-fast-relaxed-math (as a renderer may run).
 FAST_MATH = os.environ.get("CLRENDER_TEST_FAST_MATH", "") not in ("", "0")
 
-BSDF_SRC = r"""
-#include "rng.h"
-#include "bsdf.h"
-
-/* The surface's derivatives where the program carries them (kernels/derivatives.h): geo[4 i .. 4 i + 3] = dp/du,
-   dp/dv, the geometric normal (local frame) and dp/du in world space. */
-INLINE void set_geometry(BsdfQuery* q, __global const float4* geo, uint i) {
-#ifdef CLR_SURFACE_DERIVATIVES
-    q->dpdu = geo[4u * i].xyz;
-    q->dpdv = geo[4u * i + 1u].xyz;
-    q->ng = geo[4u * i + 2u].xyz;
-    q->dpdu_world = geo[4u * i + 3u].xyz;
-#endif
-}
-
-/* One bsdf_sample per work-item. args[i] = (wi.xyz, bitcast row index); uvs[i] = uv. */
-__kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const Texture* textures, __global const float4* args,
-                                __global const float2* uvs, __global const float4* geo, uint n, uint first, uint seed,
-                                __global float4* wo_out, __global float4* w_out, __global float4* f_out,
-                                __global float* pdf_out, __global uint* measure_out) {
-    uint i = get_global_id(0);
-    if (i >= n) return;
-    float4 a = args[i];
-    __global const Bsdf* b = rows + as_uint(a.w);
-    Sampler s;
-    sampler_init(&s, seed, first + i, 0u);
-    BsdfQuery q;
-    q.wi = a.xyz;
-    q.wo = (float3)(0.0f);
-    q.eta = 1.0f;
-    q.measure = MEASURE_SOLID_ANGLE;
-    q.uv = uvs[i];
-    q.textures = textures;
-    set_geometry(&q, geo, i);
-    float3 w = bsdf_sample(b, &q, next2d(&s));
-    wo_out[i] = (float4)(q.wo, q.eta);
-    w_out[i] = (float4)(w, 0.0f);
-    f_out[i] = (float4)(bsdf_eval(b, &q), 0.0f);
-    pdf_out[i] = bsdf_pdf(b, &q);
-    measure_out[i] = q.measure;
-}
-
-/* bsdf_pdf and bsdf_eval for given (wi, wo); wi[i].w = bitcast row index, wo[i].w unused. */
-__kernel void bsdf_pdf_eval_batch(__global const Bsdf* rows, __global const Texture* textures, __global const float4* wi_in,
-                                  __global const float4* wo_in, __global const float2* uvs, __global const float4* geo,
-                                  uint n,
-                                  __global float* pdf_out, __global float4* f_out, __global float4* alb_out) {
-    uint i = get_global_id(0);
-    if (i >= n) return;
-    float4 a = wi_in[i];
-    __global const Bsdf* b = rows + as_uint(a.w);
-    BsdfQuery q;
-    q.wi = a.xyz;
-    q.wo = wo_in[i].xyz;
-    q.eta = 1.0f;
-    q.measure = MEASURE_SOLID_ANGLE;
-    q.uv = uvs[i];
-    q.textures = textures;
-    set_geometry(&q, geo, i);
-    pdf_out[i] = bsdf_pdf(b, &q);
-    f_out[i] = (float4)(bsdf_eval(b, &q), bsdf_is_delta(b) ? 1.0f : 0.0f);
-    alb_out[i] = (float4)(bsdf_albedo(b, &q), 0.0f);
-}
-"""
+BSDF_SRC = '#include "testing/bsdf_batch.cl"\n'  # kernels/testing/bsdf_batch.cl
 
 
 def _cl():
@@ -257,51 +194,7 @@ def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=N
 
 
 # ------------------------------------------------------------------------------------------- warps
-WARP_SRC = r"""
-#include "rng.h"
-#include "warp.h"
-
-/* kind: 0 square, 1 tent, 2 disk, 3 sphere, 4 hemisphere, 5 cosine hemisphere, 6 cone (param = cos_max),
-   7 triangle (barycentrics), 8 Beckmann (param = alpha). 2-D results in .xy, directions in .xyz. */
-INLINE float4 warp_point(uint kind, float param, float2 u) {
-    switch (kind) {
-        case 0: return (float4)(square_to_uniform_square(u), 0.0f, 0.0f);
-        case 1: return (float4)(square_to_tent(u), 0.0f, 0.0f);
-        case 2: return (float4)(square_to_uniform_disk(u), 0.0f, 0.0f);
-        case 3: return (float4)(square_to_uniform_sphere(u), 0.0f);
-        case 4: return (float4)(square_to_uniform_hemisphere(u), 0.0f);
-        case 5: return (float4)(square_to_cosine_hemisphere(u), 0.0f);
-        case 6: return (float4)(square_to_uniform_cone(u, param), 0.0f);
-        case 7: return (float4)(square_to_uniform_triangle(u), 0.0f, 0.0f);
-        default: return (float4)(square_to_beckmann(u, param), 0.0f);
-    }
-}
-INLINE float warp_density(uint kind, float param, float4 p) {
-    switch (kind) {
-        case 0: return square_to_uniform_square_pdf(p.xy);
-        case 1: return square_to_tent_pdf(p.xy);
-        case 2: return square_to_uniform_disk_pdf(p.xy);
-        case 3: return square_to_uniform_sphere_pdf(p.xyz);
-        case 4: return square_to_uniform_hemisphere_pdf(p.xyz);
-        case 5: return square_to_cosine_hemisphere_pdf(p.xyz);
-        case 6: return square_to_uniform_cone_pdf(p.xyz, param);
-        case 7: return square_to_uniform_triangle_pdf(p.xy);
-        default: return square_to_beckmann_pdf(p.xyz, param);
-    }
-}
-__kernel void warp_sample_batch(uint kind, float param, uint n, uint first, uint seed, __global float4* out) {
-    uint i = get_global_id(0);
-    if (i >= n) return;
-    Sampler s;
-    sampler_init(&s, seed, first + i, 0u);
-    out[i] = warp_point(kind, param, next2d(&s));
-}
-__kernel void warp_pdf_batch(uint kind, float param, uint n, __global const float4* pts, __global float* out) {
-    uint i = get_global_id(0);
-    if (i >= n) return;
-    out[i] = warp_density(kind, param, pts[i]);
-}
-"""
+WARP_SRC = '#include "testing/warp_batch.cl"\n'  # kernels/testing/warp_batch.cl
 
 WARPS = {"square": 0, "tent": 1, "disk": 2, "sphere": 3, "hemisphere": 4, "cosine_hemisphere": 5, "cone": 6,
          "triangle": 7, "beckmann": 8}
