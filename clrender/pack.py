@@ -185,6 +185,8 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     ctx = PackContext()
     flags = dispatch.flag_defines()
     bsdf_rows, bsdf_of_shape = _pack_materials(shapes, ctx.textures)
+    if ctx.textures.bsdf_tables:
+        ctx.add_table("bsdf_tables", "BsdfTable", ctx.textures.bsdf_tables_array())
     shape_rows = _pack_shapes(shapes, ctx, bsdf_rows, bsdf_of_shape, flags)
     emitter_rows, emitter_objs = _pack_emitters(scene, ctx, shape_rows)
     geo = _pack_geometry(ctx, shape_rows, bvh_width, bvh_options)

@@ -77,7 +77,7 @@ BSDF = Kind(
     tag="bsdf", struct="Bsdf",
     header=(("type", "uint"), ("flags", "uint"), ("pad", "uint", 2)),
     # UV: a parameter reads a texture that varies over the surface (set at packing; intersection computes uv)
-    param_bytes=352, flags=("DELTA", "DIFFUSE", "GLOSSY", "UV"), dispatch_name="bsdf", row="b",
+    param_bytes=128, flags=("DELTA", "DIFFUSE", "GLOSSY", "UV"), dispatch_name="bsdf", row="b",
     methods=(
         Method("eval", "float3", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return (float3)(0.0f);"),
         Method("pdf", "float", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return 0.0f;"),

@@ -17,9 +17,15 @@ _VECTORS = {"float4": ("<f4", 16, 16), "uint4": ("<u4", 16, 16)}
 
 NONE = 0xFFFFFFFF  # "no index" in uint fields (no emitter, no texture, ...)
 
-# Structs with no plugins behind them (none at present: the shape, BSDF, emitter, texture, integrator and camera rows
-# are the UNION_STRUCTS below).
-STRUCTS: dict[str, list[tuple]] = {}
+BSDF_TABLE_SIZE = 64  # entries of a BsdfTable (kernels: BSDF_TABLE_SIZE)
+
+# Structs with no plugins behind them (the shape, BSDF, emitter, texture, integrator and camera rows are the
+# UNION_STRUCTS below).
+STRUCTS: dict[str, list[tuple]] = {
+    # a BSDF's lookup table on BSDF_TABLE_SIZE uniform nodes (roughplastic's coating transmittance T(mu)); its row
+    # holds the index, so a row stays the size of the other BSDFs' parameters
+    "BsdfTable": [("values", "float", BSDF_TABLE_SIZE)],
+}
 # The scene's tables, in kernel-argument order: (name, element type, what it holds). The kernels' SceneData
 # struct, its SCENE_ARGS argument list (each table is the argument s_<name>) and SCENE_INIT are generated from
 # this list; clrender.pack.SceneBuffers holds one numpy array per entry, and the host sets them by name.
@@ -39,6 +45,7 @@ SCENE_TABLES: list[tuple[str, str, str]] = [
     ("sphere_shape", "uint", "the shape of each sphere"),
     ("shapes", "Shape", "one row per shape"),
     ("bsdfs", "Bsdf", "one row per BSDF"),
+    ("bsdf_tables", "BsdfTable", "BSDFs' lookup tables, each stored once (roughplastic's p.roughplastic.table)"),
     ("emitters", "Emitter", "one row per emitter"),
     ("cdf", "float", "emitting meshes' triangle-area CDFs, back to back (Shape.cdf)"),
     ("textures", "Texture", "one row per texture that a BSDF parameter refers to"),
@@ -54,6 +61,7 @@ UNION_STRUCTS = ("Camera", "Texture", "Shape", "Bsdf", "Emitter", "SceneInfo")
 
 # Type tags and flag bits, shared the same way (emitted as #defines).
 ENUMS: dict[str, int] = {
+    "BSDF_TABLE_SIZE": BSDF_TABLE_SIZE,
     # BVH encodings shared by the builders (clrender/accel) and the traversals (kernels/bvh*.h)
     "BVH_LEAF_BIT": 0x80000000,       # a node reference to a leaf
     "BVH_SPHERE_BIT": 0x80000000,     # a primitive id of an analytic sphere

@@ -51,6 +51,25 @@ def padded(n: int, local: int = LOCAL) -> int:
     return max(local, (n + local - 1) // local * local)
 
 
+class BsdfRows(np.ndarray):
+    """Bsdf rows carrying the texture and bsdf_tables rows they index (made by :func:`pack_rows`); the batch
+    functions use those unless given others."""
+
+    def __array_finalize__(self, obj):
+        self.textures = getattr(obj, "textures", None)
+        self.tables = getattr(obj, "tables", None)
+
+
+def pack_rows(bsdf) -> BsdfRows:
+    """A lone BSDF's rows (its own first, then its children's, Bsdf.pack_rows) with their own side tables."""
+    from ..textures.texture import TextureTable
+
+    table = TextureTable()
+    rows = np.array(bsdf.pack_rows(table), layout.dtype("Bsdf")).view(BsdfRows)
+    rows.textures, rows.tables = table.array(), table.bsdf_tables_array()
+    return rows
+
+
 def _rows(bsdf_rows) -> np.ndarray:
     rows = np.atleast_1d(np.asarray(bsdf_rows))
     if rows.dtype != layout.dtype("Bsdf"):
@@ -94,18 +113,20 @@ def _geometry(geometry, n):
     return out.reshape(n * 4, 4)
 
 
-def _textures(ctx, textures):
-    """The texture table the rows refer to (a plugin's `bsdf.pack()` leaves it in `bsdf.textures_table`)."""
+def _side_table(ctx, struct, rows):
+    """A table the rows refer to: textures (a plugin's `bsdf.pack()` leaves them in `bsdf.textures_table`) or
+    bsdf_tables (`bsdf.bsdf_tables`); one zero row if none."""
     cl = _cl()
-    t = layout.zeros("Texture") if textures is None or len(textures) == 0 else np.asarray(textures, layout.dtype("Texture"))
+    t = layout.zeros(struct) if rows is None or len(rows) == 0 else np.asarray(rows, layout.dtype(struct))
     return cl.Buffer(ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(t))
 
 
 def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 0.5), row_index=None,
-                      first: int = 0, textures=None, defines=None, geometry=None) -> BsdfSamples:
+                      first: int = 0, textures=None, defines=None, geometry=None, tables=None) -> BsdfSamples:
     """n calls of bsdf_sample on the device. `bsdf_row`: one packed row or an array of rows (then
     `row_index` (n,) picks each sample's row); `wi`: (3,) or (n,3) in the local frame (normalised here);
-    `uv`: (2,) or (n,2); `textures`: the table the rows' texture parameters index; `defines`: of the program (a
+    `uv`: (2,) or (n,2); `textures`, `tables`: the texture and bsdf_tables rows the rows index (a lone plugin's
+    `pack()` leaves them in `textures_table` and `bsdf_tables`); `defines`: of the program (a
     plugin set's, say; default: every plugin); `geometry`: (4, 3) or (n, 4, 3), the query's dp/du, dp/dv, geometric
     normal and world dp/du (GEOMETRY by default). Sample i uses the Sampler stream (seed, first + i, 0)."""
     cl = _cl()
@@ -122,7 +143,8 @@ def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 
     k = _kernel(ctx, "bsdf_sample_batch", defines=defines)
     mf = cl.mem_flags
     d_rows = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=rows)
-    d_tex = _textures(ctx, textures)
+    d_tex = _side_table(ctx, "Texture", getattr(bsdf_row, "textures", None) if textures is None else textures)
+    d_tables = _side_table(ctx, "BsdfTable", getattr(bsdf_row, "tables", None) if tables is None else tables)
     out = BsdfSamples(np.empty((n, 3), np.float32), np.empty((n, 3), np.float32), np.empty(n, np.float32),
                       np.empty(n, np.uint32), np.empty(n, np.float32), np.empty((n, 3), np.float32))
     for s in range(0, n, CHUNK):
@@ -137,8 +159,8 @@ def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 
         pdf = np.empty(m, np.float32)
         meas = np.empty(m, np.uint32)
         bufs = [cl.Buffer(ctx, mf.WRITE_ONLY, a.nbytes) for a in (wo, w, f, pdf, meas)]
-        k(queue, (g,), (LOCAL,), d_rows, d_tex, d_args, d_uv, d_geo, np.uint32(m), np.uint32(first + s), np.uint32(seed),
-          *bufs)
+        k(queue, (g,), (LOCAL,), d_rows, d_tex, d_tables, d_args, d_uv, d_geo, np.uint32(m), np.uint32(first + s),
+          np.uint32(seed), *bufs)
         for a, b in zip((wo, w, f, pdf, meas), bufs):
             cl.enqueue_copy(queue, a, b)
         queue.finish()
@@ -152,7 +174,7 @@ def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 
 
 
 def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=None, with_albedo=False,
-                        textures=None, geometry=None):
+                        textures=None, geometry=None, tables=None):
     """bsdf_pdf and bsdf_eval at m direction pairs: wi (3,) or (m,3), wo (m,3). Returns (pdf (m,), f (m,3)),
     plus bsdf_albedo(uv) (m,3) if `with_albedo`."""
     cl = _cl()
@@ -168,7 +190,8 @@ def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=N
     k = _kernel(ctx, "bsdf_pdf_eval_batch")
     mf = cl.mem_flags
     d_rows = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=rows)
-    d_tex = _textures(ctx, textures)
+    d_tex = _side_table(ctx, "Texture", getattr(bsdf_row, "textures", None) if textures is None else textures)
+    d_tables = _side_table(ctx, "BsdfTable", getattr(bsdf_row, "tables", None) if tables is None else tables)
     pdf = np.empty(m, np.float32)
     f = np.empty((m, 3), np.float32)
     alb = np.empty((m, 3), np.float32)
@@ -183,7 +206,7 @@ def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=N
         ff = np.empty((c, 4), np.float32)
         aa = np.empty((c, 4), np.float32)
         bufs = [cl.Buffer(ctx, mf.WRITE_ONLY, a.nbytes) for a in (p, ff, aa)]
-        k(queue, (g,), (LOCAL,), d_rows, d_tex, d_wi, d_wo, d_uv, d_geo, np.uint32(c), *bufs)
+        k(queue, (g,), (LOCAL,), d_rows, d_tex, d_tables, d_wi, d_wo, d_uv, d_geo, np.uint32(c), *bufs)
         for a, b in zip((p, ff, aa), bufs):
             cl.enqueue_copy(queue, a, b)
         queue.finish()

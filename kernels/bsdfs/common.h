@@ -19,6 +19,7 @@ typedef struct {
     uint measure;
     float2 uv;
     __global const Texture* textures;  /* the scene's texture table, for parameters that refer to a texture */
+    __global const BsdfTable* tables;  /* the scene's bsdf_tables, for BSDFs' lookup tables (roughplastic's T) */
 #ifdef CLR_SURFACE_DERIVATIVES
     /* Mitsuba's si.dp_du, si.dp_dv and geometric normal si.n in this (local) frame, and dp_du in world space (what
        bumpmap needs: kernels/bsdfs/perturb.h) */

@@ -15,8 +15,8 @@ INLINE void set_geometry(BsdfQuery* q, __global const float4* geo, uint i) {
 }
 
 /* One bsdf_sample per work-item. args[i] = (wi.xyz, bitcast row index); uvs[i] = uv. */
-__kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const Texture* textures, __global const float4* args,
-                                __global const float2* uvs, __global const float4* geo, uint n, uint first, uint seed,
+__kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const Texture* textures,
+                                __global const BsdfTable* tables, __global const float4* args, __global const float2* uvs, __global const float4* geo, uint n, uint first, uint seed,
                                 __global float4* wo_out, __global float4* w_out, __global float4* f_out,
                                 __global float* pdf_out, __global uint* measure_out) {
     uint i = get_global_id(0);
@@ -32,6 +32,7 @@ __kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const Textur
     q.measure = MEASURE_SOLID_ANGLE;
     q.uv = uvs[i];
     q.textures = textures;
+    q.tables = tables;
     set_geometry(&q, geo, i);
     float3 w = bsdf_sample(b, &q, next2d(&s));
     wo_out[i] = (float4)(q.wo, q.eta);
@@ -42,7 +43,8 @@ __kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const Textur
 }
 
 /* bsdf_pdf and bsdf_eval for given (wi, wo); wi[i].w = bitcast row index, wo[i].w unused. */
-__kernel void bsdf_pdf_eval_batch(__global const Bsdf* rows, __global const Texture* textures, __global const float4* wi_in,
+__kernel void bsdf_pdf_eval_batch(__global const Bsdf* rows, __global const Texture* textures,
+                                  __global const BsdfTable* tables, __global const float4* wi_in,
                                   __global const float4* wo_in, __global const float2* uvs, __global const float4* geo,
                                   uint n,
                                   __global float* pdf_out, __global float4* f_out, __global float4* alb_out) {
@@ -57,6 +59,7 @@ __kernel void bsdf_pdf_eval_batch(__global const Bsdf* rows, __global const Text
     q.measure = MEASURE_SOLID_ANGLE;
     q.uv = uvs[i];
     q.textures = textures;
+    q.tables = tables;
     set_geometry(&q, geo, i);
     pdf_out[i] = bsdf_pdf(b, &q);
     f_out[i] = (float4)(bsdf_eval(b, &q), bsdf_is_delta(b) ? 1.0f : 0.0f);
