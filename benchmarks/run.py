@@ -20,6 +20,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
 from clrender import bench  # noqa: E402
+from clrender.errors import ClrenderError  # noqa: E402
 
 
 def slug(text: str) -> str:
@@ -69,7 +70,7 @@ def main(argv=None) -> int:
     print(f"run.py: wrote {bench.write_json(result, base.with_suffix('.json'))}", file=sys.stderr)
     try:
         print(f"run.py: wrote {bench.plot(result, base.with_suffix('.png'))}", file=sys.stderr)
-    except bench.ClrenderError as exc:
+    except ClrenderError as exc:
         print(f"run.py: no plot: {exc}", file=sys.stderr)
     return 1 if any(r["status"] == "error" for r in result["results"]) else 0
 

@@ -32,7 +32,7 @@ BUILTINS = ("_cl_floor", "_cl_clamp", "_cl_fmod")
 
 def _child(job: dict) -> dict:
     """In the new process: build the program and launch it once (nothing runs: pixel_count 0)."""
-    from clrender.bench import _timed_build
+    from clrender.bench.measure import _timed_build
     from clrender.device.context import get_context
 
     ctx, queue = get_context(None)

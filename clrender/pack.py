@@ -184,24 +184,84 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     shapes = scene.shapes
     ctx = PackContext()
     flags = dispatch.flag_defines()
-    bsdf_index: dict[int, int] = {}
-    bsdf_rows = []
+    bsdf_rows, bsdf_of_shape = _pack_materials(shapes, ctx.textures)
+    if ctx.textures.bsdf_tables:
+        ctx.add_table("bsdf_tables", "BsdfTable", ctx.textures.bsdf_tables_array())
+    shape_rows = _pack_shapes(shapes, ctx, bsdf_rows, bsdf_of_shape, flags)
+    emitter_rows, emitter_objs = _pack_emitters(scene, ctx, shape_rows)
+    geo = _pack_geometry(ctx, shape_rows, bvh_width, bvh_options)
+    info, infinite = _pack_info(scene, ctx, geo, shape_rows, emitter_rows, emitter_objs, emitter_selection)
+    camera, filter_cdf = scene.camera.pack()
+    filter_cdf = with_guide(filter_cdf)     # + the guide that render.cl's filter_sample_guided reads
+    emitters = _rows_array("Emitter", emitter_rows)
+    stats = {
+        "triangles": geo.n_tris, "spheres": geo.n_spheres, "shapes": len(shapes),
+        "emitters": len(emitter_rows), "bvh_nodes": int(geo.node_count), "bvh_depth": int(geo.depth),
+        "bvh_width": geo.width,
+        "bvh_build_seconds": float(geo.seconds), "pack_seconds": float(time.perf_counter() - t0),
+    }
+    own = dict(nodes=_nonempty(geo.nodes), prims=_nonempty(geo.prims), shapes=_nonempty(shape_rows),
+               bsdfs=_rows_array("Bsdf", bsdf_rows),
+               emitters=emitters, textures=ctx.textures.array(), infinite=_nonempty(infinite), info=info)
+    # Per-vertex normals and uvs are read only where a shape's flags say it has them: when none has, their tables
+    # are not uploaded (one zero row; 12 + 8 bytes per vertex saved).
+    for table, flag in (("normals", "SHAPE_HAS_NORMALS"), ("uvs", "SHAPE_HAS_UVS")):
+        if not np.any(shape_rows["flags"] & flags[flag]):
+            own[table] = ctx.array(table)[:1] * 0
+    tables = {name: own[name] if name in own else ctx.array(name) for name, _, _ in layout.SCENE_TABLES}
+    stats["device_bytes"] = int(sum(a.nbytes for a in tables.values()))
+    # Tags from the real rows only (an empty table's zero row and texel rows are not plugins).
+    used = dispatch.PluginSet.from_tags(
+        {"bsdf": {int(r["type"]) for r in bsdf_rows}, "mesh": set(shape_rows["type"].tolist()),
+         "emitter": {int(r["type"]) for r in emitter_rows}, "texture": ctx.textures.tags,
+         "rfilter": {int(camera[0]["filter_type"])}},
+        {"bsdf": max((composite_depth(b) for b in {id(s.bsdf): s.bsdf for s in shapes}.values()), default=0)})
+    return SceneBuffers(tables=tables, camera=camera, filter_cdf=filter_cdf, stats=stats, bvh_width=geo.width,
+                        leaf_order=np.asarray(geo.order, np.int64), plugins=used,
+                        sampler=getattr(getattr(scene, "sampler", None), "generator", "independent"))
+
+
+def _rows_array(struct: str, rows) -> np.ndarray:
+    """Rows as one array of `struct` (one zero row if none). Assigned into zeros: np.array of records copies them
+    member by member and leaves the bytes no member covers undefined, and packed_hash reads every byte."""
+    out = layout.zeros(struct, max(len(rows), 1))
+    if rows:
+        out[:] = rows
+    return out
+
+
+def _pack_materials(shapes, textures: TextureTable) -> tuple[list, list[int]]:
+    """The BSDF rows, each BSDF packed once however many shapes share it (by identity), and each shape's first
+    row. BSDFs add only to the texture table, so they pack before the shapes fill the others."""
+    first: dict[int, int] = {}
+    rows, of_shape = [], []
+    for sh in shapes:
+        key = id(sh.bsdf)
+        if key not in first:
+            first[key] = len(rows)
+            rows.extend(sh.bsdf.pack_rows(textures))
+        of_shape.append(first[key])
+    return rows, of_shape
+
+
+def _pack_shapes(shapes, ctx: PackContext, bsdf_rows, bsdf_of_shape, flags) -> np.ndarray:
+    """The shape rows (each shape packs its own geometry into ctx), numbered in document order."""
     shape_rows = layout.zeros("Shape", len(shapes))
     for i, sh in enumerate(shapes):
-        key = id(sh.bsdf)
-        if key not in bsdf_index:
-            bsdf_index[key] = len(bsdf_rows)
-            bsdf_rows.extend(sh.bsdf.pack_rows(ctx.textures))
         row = shape_rows[i]
-        row["bsdf"] = bsdf_index[key]
+        row["bsdf"] = bsdf_of_shape[i]
         row["emitter"] = NONE
         sh.pack(ctx, i, row)
         if bsdf_rows[row["bsdf"]]["flags"] & flags["BSDF_UV"]:
             row["flags"] |= flags["SHAPE_NEEDS_UV"]
+    return shape_rows
 
-    # Emitters: area emitters in shape order, then the scene-level ones in document order.
+
+def _pack_emitters(scene, ctx: PackContext, shape_rows) -> tuple[list, list]:
+    """Emitter rows: area emitters in shape order (their shape rows point at them), then the scene-level ones in
+    document order; and (emitter, shape index or None) for each."""
     emitter_rows, emitter_objs = [], []
-    for i, sh in enumerate(shapes):
+    for i, sh in enumerate(scene.shapes):
         if sh.emitter is not None:
             shape_rows[i]["emitter"] = len(emitter_rows)
             emitter_rows.append(sh.emitter.pack(ctx, shape_index=i, shape=sh, shape_row=shape_rows[i]))
@@ -209,8 +269,28 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     for em in scene.emitters:
         emitter_rows.append(em.pack(ctx, shape_index=NONE, shape=None, shape_row=None))
         emitter_objs.append((em, None))
+    return emitter_rows, emitter_objs
 
-    # The BVH's primitives: every triangle (numbered as the meshes added them) and every sphere.
+
+@dataclass
+class _Geometry:
+    """The BVH over every primitive and what the other tables need of it."""
+    lo: np.ndarray          # (P, 3) primitive bounds, triangles first
+    hi: np.ndarray
+    n_tris: int
+    n_spheres: int
+    prims: np.ndarray       # the primitive table in leaf order
+    nodes: np.ndarray
+    node_count: int
+    depth: int
+    order: np.ndarray       # the primitive number at each leaf-order position
+    width: int              # the node layout it got (2 where a wide one does not fit)
+    seconds: float          # the BVH's build time
+
+
+def _pack_geometry(ctx: PackContext, shape_rows, bvh_width: int, bvh_options: dict | None) -> _Geometry:
+    """The BVH over every triangle (numbered as the meshes added them) and every sphere; the primitive table, and
+    the tri_index, mesh_vertices and tri_refs tables in its leaf order."""
     tris = ctx.triangles()
     sph = ctx.array("spheres")[:ctx.size("spheres")]
 
@@ -249,19 +329,26 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
         except Bvh4Unsupported as exc:
             log.warning("using the 2-wide BVH: %s", exc)
             bvh_width = 2
-    t_bvh = time.perf_counter() - t_bvh
+    return _Geometry(lo=lo, hi=hi, n_tris=int(len(tris)), n_spheres=int(len(sph)), prims=prims, nodes=nodes,
+                     node_count=node_count, depth=bvh.depth, order=bvh.order, width=bvh_width,
+                     seconds=time.perf_counter() - t_bvh)
 
+
+def _pack_info(scene, ctx: PackContext, geo: _Geometry, shape_rows, emitter_rows, emitter_objs,
+               emitter_selection: str) -> tuple[np.ndarray, np.ndarray]:
+    """The SceneInfo row (counts, bounding sphere, light-selection CDF, the integrator's parameters) and the
+    table of infinite emitters."""
     info = layout.zeros("SceneInfo")
-    info["n_prims"] = len(lo)
-    info["n_tris"] = len(tris)
-    info["n_spheres"] = len(sph)
+    info["n_prims"] = len(geo.lo)
+    info["n_tris"] = geo.n_tris
+    info["n_spheres"] = geo.n_spheres
     info["n_meshes"] = len(ctx.meshes())
     info["n_emitters"] = len(emitter_rows)
     flag_infinite = 1 << dispatch.EMITTER.flags.index("INFINITE")
     infinite = np.array([i for i, r in enumerate(emitter_rows) if r["flags"] & flag_infinite], np.uint32)
     info["n_infinite"] = len(infinite)
-    if len(lo):
-        bmin, bmax = lo.min(axis=0), hi.max(axis=0)
+    if len(geo.lo):
+        bmin, bmax = geo.lo.min(axis=0), geo.hi.max(axis=0)
         c = (bmin + bmax) / 2
         info["bounds_center"][0] = [*c, max(float(np.linalg.norm(bmax - c)), 1e-6)]
     else:
@@ -273,31 +360,4 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
                   for em, i in emitter_objs]
         info["emitter_cdf"] = ctx.add_table("cdf", "float", selection_cdf(powers))
     scene.integrator.pack(info[0])
-    camera, filter_cdf = scene.camera.pack()
-    filter_cdf = with_guide(filter_cdf)     # + the guide that render.cl's filter_sample_guided reads
-    emitters = np.array(emitter_rows, layout.dtype("Emitter")) if emitter_rows else layout.zeros("Emitter")
-    stats = {
-        "triangles": int(len(tris)), "spheres": int(len(sph)), "shapes": len(shapes),
-        "emitters": len(emitter_rows), "bvh_nodes": int(node_count), "bvh_depth": int(bvh.depth),
-        "bvh_width": bvh_width,
-        "bvh_build_seconds": float(t_bvh), "pack_seconds": float(time.perf_counter() - t0),
-    }
-    own = dict(nodes=_nonempty(nodes), prims=_nonempty(prims), shapes=_nonempty(shape_rows),
-               bsdfs=np.array(bsdf_rows, layout.dtype("Bsdf")) if bsdf_rows else layout.zeros("Bsdf"),
-               emitters=emitters, textures=ctx.textures.array(), infinite=_nonempty(infinite), info=info)
-    # Per-vertex normals and uvs are read only where a shape's flags say it has them: when none has, their tables
-    # are not uploaded (one zero row; 12 + 8 bytes per vertex saved).
-    for table, flag in (("normals", "SHAPE_HAS_NORMALS"), ("uvs", "SHAPE_HAS_UVS")):
-        if not np.any(shape_rows["flags"] & flags[flag]):
-            own[table] = ctx.array(table)[:1] * 0
-    tables = {name: own[name] if name in own else ctx.array(name) for name, _, _ in layout.SCENE_TABLES}
-    stats["device_bytes"] = int(sum(a.nbytes for a in tables.values()))
-    # Tags from the real rows only (an empty table's zero row and texel rows are not plugins).
-    used = dispatch.PluginSet.from_tags(
-        {"bsdf": {int(r["type"]) for r in bsdf_rows}, "mesh": set(shape_rows["type"].tolist()),
-         "emitter": {int(r["type"]) for r in emitter_rows}, "texture": ctx.textures.tags,
-         "rfilter": {int(camera[0]["filter_type"])}},
-        {"bsdf": max((composite_depth(b) for b in {id(s.bsdf): s.bsdf for s in shapes}.values()), default=0)})
-    return SceneBuffers(tables=tables, camera=camera, filter_cdf=filter_cdf, stats=stats, bvh_width=bvh_width,
-                        leaf_order=np.asarray(bvh.order, np.int64), plugins=used,
-                        sampler=getattr(getattr(scene, "sampler", None), "generator", "independent"))
+    return info, infinite

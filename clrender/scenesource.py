@@ -43,7 +43,7 @@ class SceneSource:
             if where and where != self.path and not where.startswith("<") and where not in out:
                 out.append(where)
             if "filename" in s.props and s.props.tag("filename") == "string":
-                out.append(s.props._entry("filename").value)
+                out.append(s.props.peek("filename"))
         return out
 
     def content_hash(self) -> str:

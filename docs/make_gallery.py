@@ -35,7 +35,7 @@ def main():
     ap.add_argument("--only", nargs="*", help="subset of scene paths")
     args = ap.parse_args()
     out = Path(args.out)
-    from clrender.bench import _generate_large_meshes
+    from clrender.bench.discovery import _generate_large_meshes
 
     _generate_large_meshes(HERE)  # the 1 M-triangle PLY is generated on demand, not kept in git
     rows = []

@@ -68,19 +68,13 @@ BVH_INLINE bool bvh_traverse(__global const float4* nodes, __global const float4
         if (ha && hb) {
             uint near = ta <= tb ? aref : bref, far = ta <= tb ? bref : aref;
             float tfar = ta <= tb ? tb : ta;
-            if (sp < BVH_STACK_SIZE) { stack[sp] = far; stack_t[sp] = tfar; ++sp; }
+            if (sp < BVH_STACK_SIZE) bvh_push(stack, stack_t, &sp, far, tfar);
             node = near;
             continue;
         }
         if (ha) { node = aref; continue; }
         if (hb) { node = bref; continue; }
-        /* Pop, skipping entries that a later hit has moved behind t. */
-        for (;;) {
-            if (sp == 0) return found;
-            --sp;
-            if (stack_t[sp] <= hit->t) break;
-        }
-        node = stack[sp];
+        if (!bvh_pop(stack, stack_t, &sp, hit->t, &node)) return found;
     }
 }
 

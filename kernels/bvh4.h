@@ -16,8 +16,6 @@
 
 #include "bvh_common.h"
 
-#define BVH4_FIRST_MASK ((1u << BVH4_COUNT_SHIFT) - 1u)
-
 BVH_INLINE float4 bvh4_min(float4 a, float4 b) { return a < b ? a : b; }
 BVH_INLINE float4 bvh4_max(float4 a, float4 b) { return a > b ? a : b; }
 
@@ -56,25 +54,12 @@ BVH_INLINE bool bvh4_traverse(__global const float4* nodes, __global const float
                 continue;
             }
             int base = sp;
-            if (m.s0) { stack[sp] = ref.s0; stack_t[sp] = tn.s0; ++sp; }
-            if (m.s1) { stack[sp] = ref.s1; stack_t[sp] = tn.s1; ++sp; }
-            if (m.s2) { stack[sp] = ref.s2; stack_t[sp] = tn.s2; ++sp; }
-            if (m.s3) { stack[sp] = ref.s3; stack_t[sp] = tn.s3; ++sp; }
+            if (m.s0) bvh_push(stack, stack_t, &sp, ref.s0, tn.s0);
+            if (m.s1) bvh_push(stack, stack_t, &sp, ref.s1, tn.s1);
+            if (m.s2) bvh_push(stack, stack_t, &sp, ref.s2, tn.s2);
+            if (m.s3) bvh_push(stack, stack_t, &sp, ref.s3, tn.s3);
             if (sp > base) {
-                if (!any_hit) {
-                    for (int i = base + 1; i < sp; ++i) {
-                        uint r = stack[i];
-                        float t = stack_t[i];
-                        int j = i - 1;
-                        while (j >= base && stack_t[j] < t) {
-                            stack[j + 1] = stack[j];
-                            stack_t[j + 1] = stack_t[j];
-                            --j;
-                        }
-                        stack[j + 1] = r;
-                        stack_t[j + 1] = t;
-                    }
-                }
+                if (!any_hit) bvh_sort_pushed(stack, stack_t, base, sp);
                 --sp;
                 cur = stack[sp];
                 continue;
@@ -86,12 +71,8 @@ BVH_INLINE bool bvh4_traverse(__global const float4* nodes, __global const float
                 if (any_hit) return true;
             }
         }
-        for (;;) {
-            if (sp == 0) return found;
-            --sp;
-            if (stack_t[sp] <= hit->t) break;
-        }
-        cur = stack[sp];
+        /* Pop, skipping entries that a later hit has moved behind t. */
+        if (!bvh_pop(stack, stack_t, &sp, hit->t, &cur)) return found;
     }
 }
 

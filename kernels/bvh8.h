@@ -12,8 +12,6 @@
 
 #include "bvh_common.h"
 
-#define BVH4_FIRST_MASK ((1u << BVH4_COUNT_SHIFT) - 1u)
-
 /* The hit children as a bit mask, and its lowest set bit. On PoCL for x86 (CLRENDER_INLINE_BUILTINS, AVX), one
    vmovmskps and tzcnt; the portable forms elsewhere, and with -DBVH_PORTABLE_BITS (tests/test_bvh.py traces with both).
    Against the sum of the lanes and a branchless push of all eight children: x1.06 on the Cornell twin. */
@@ -80,35 +78,20 @@ BVH_INLINE bool bvh8_traverse(__global const float4* nodes, __global const float
                 if (bits == 0u) {           /* two: the nearer next, the farther onto the stack */
                     bool first = any_hit || tl.a[i0] <= tl.a[i1];
                     uint near = first ? i0 : i1, far = first ? i1 : i0;
-                    stack[sp] = refs[far];
-                    stack_t[sp] = tl.a[far];
-                    ++sp;
+                    bvh_push(stack, stack_t, &sp, refs[far], tl.a[far]);
                     cur = refs[near];
                     continue;
                 }
                 /* three or more: push them all, sort the new entries farthest first, go to the nearest */
                 int base = sp;
-                stack[sp] = refs[i0]; stack_t[sp] = tl.a[i0]; ++sp;
-                stack[sp] = refs[i1]; stack_t[sp] = tl.a[i1]; ++sp;
+                bvh_push(stack, stack_t, &sp, refs[i0], tl.a[i0]);
+                bvh_push(stack, stack_t, &sp, refs[i1], tl.a[i1]);
                 do {
                     uint i = bvh_ctz(bits);
                     bits &= bits - 1u;
-                    stack[sp] = refs[i]; stack_t[sp] = tl.a[i]; ++sp;
+                    bvh_push(stack, stack_t, &sp, refs[i], tl.a[i]);
                 } while (bits != 0u);
-                if (!any_hit) {
-                    for (int i = base + 1; i < sp; ++i) {
-                        uint r = stack[i];
-                        float t = stack_t[i];
-                        int j = i - 1;
-                        while (j >= base && stack_t[j] < t) {
-                            stack[j + 1] = stack[j];
-                            stack_t[j + 1] = stack_t[j];
-                            --j;
-                        }
-                        stack[j + 1] = r;
-                        stack_t[j + 1] = t;
-                    }
-                }
+                if (!any_hit) bvh_sort_pushed(stack, stack_t, base, sp);
                 --sp;
                 cur = stack[sp];
                 continue;
@@ -122,12 +105,7 @@ BVH_INLINE bool bvh8_traverse(__global const float4* nodes, __global const float
             }
         }
         /* Pop, skipping entries that a later hit has moved behind t. */
-        for (;;) {
-            if (sp == 0) return found;
-            --sp;
-            if (stack_t[sp] <= hit->t) break;
-        }
-        cur = stack[sp];
+        if (!bvh_pop(stack, stack_t, &sp, hit->t, &cur)) return found;
     }
 }
 

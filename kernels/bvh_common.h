@@ -1,5 +1,5 @@
-/* What the 2-wide (bvh.h) and 4-wide (bvh4.h) traversals share: the Hit record, the primitive table and its
-   intersection routines (OpenCL C 1.2).
+/* What the 2-, 4- and 8-wide traversals (bvh.h, bvh4.h, bvh8.h) share: the Hit record, the traversal stack's
+   push, sort and pop, the primitive table and its intersection routines (OpenCL C 1.2).
 
    Primitive table: 10 words per primitive in leaf order, each leaf cut into blocks of up to 4 primitives
    stored structure of arrays (clrender/accel/primitives.py pack_leaf_blocks; bvh_isect_leaf reads it):
@@ -16,6 +16,8 @@
 /* BVH_LEAF_BIT, BVH_SPHERE_BIT, BVH_STACK_SIZE, BVH4_STACK_SIZE, BVH4_COUNT_SHIFT, BVH4_MAX_LEAF_COUNT: generated
    from clrender/device/layout.py ENUMS, which the host's builders read too. */
 #define BVH_INLINE static inline __attribute__((always_inline))
+/* a wide leaf reference's first primitive (bvh4.h, bvh8.h) */
+#define BVH4_FIRST_MASK ((1u << BVH4_COUNT_SHIFT) - 1u)
 
 typedef struct {
     float t;
@@ -40,6 +42,42 @@ BVH_INLINE float bvh_min(float a, float b) { return a < b ? a : b; }
 BVH_INLINE float4 bvh_load4(__global const float* p) { return (float4)(p[0], p[1], p[2], p[3]); }
 BVH_INLINE bool bvh_any4(int4 m) { return (m.s0 | m.s1 | m.s2 | m.s3) != 0; }
 BVH_INLINE float bvh_max(float a, float b) { return a > b ? a : b; }
+
+/* The traversal stack (a node reference and its entry distance per entry; in private arrays of the caller's
+   size). The wide traversals push every hit child of a node, sort what they pushed, then take the top. */
+BVH_INLINE void bvh_push(uint* stack, float* stack_t, int* sp, uint ref, float t) {
+    stack[*sp] = ref;
+    stack_t[*sp] = t;
+    ++*sp;
+}
+
+/* Insertion sort of the entries pushed since `base`, farthest first, so that the nearest is on top. */
+BVH_INLINE void bvh_sort_pushed(uint* stack, float* stack_t, int base, int sp) {
+    for (int i = base + 1; i < sp; ++i) {
+        uint r = stack[i];
+        float t = stack_t[i];
+        int j = i - 1;
+        while (j >= base && stack_t[j] < t) {
+            stack[j + 1] = stack[j];
+            stack_t[j + 1] = stack_t[j];
+            --j;
+        }
+        stack[j + 1] = r;
+        stack_t[j + 1] = t;
+    }
+}
+
+/* Pop into *node, skipping entries that a later hit has moved behind t; false when the stack is empty. */
+BVH_INLINE bool bvh_pop(const uint* stack, const float* stack_t, int* sp, float t, uint* node) {
+    while (*sp > 0) {
+        --*sp;
+        if (stack_t[*sp] <= t) {
+            *node = stack[*sp];
+            return true;
+        }
+    }
+    return false;
+}
 
 /* 1/x, with zero components mapped to a huge value of the same sign so slab tests never produce 0*inf. */
 BVH_INLINE float bvh_safe_rcp(float x) {

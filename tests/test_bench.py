@@ -90,7 +90,7 @@ def test_bench_writes_json_with_all_figures(bench_run, capsys):
     (row,) = res["results"]
     assert row["status"] == "ok" and row["integrator"] == "path_mis"
     assert (row["width"], row["height"], row["spp"]) == (24, 20, 4)
-    assert len(row["scene_hash"]) == 64
+    assert len(row["scene_hash"]) == 32  # the package's one content hash (scenesource.SceneSource)
     assert row["scene_hash"] == bench.scene_hash(CORNELL)
     sps, rps = row["samples_per_second"], row["rays_per_second"]
     assert len(sps["values"]) == 2 and sps["min"] <= sps["median"] <= sps["max"]
@@ -130,6 +130,20 @@ def test_compare_prints_ratios(bench_run, capsys, tmp_path):
     assert line.count("2.000x") == 2 and "0.500x" in line and "1.000x" in line
 
 
+def test_compare_notes_what_differs():
+    def result(scene_hash, spp=4):
+        row = {"status": "ok", "scene": "s", "integrator": "path_mis", "device": "d", "scene_hash": scene_hash,
+               "width": 8, "height": 8, "spp": spp, "samples_per_second": {"median": 1.0}}
+        return {"results": [row]}
+
+    new, other = "0" * 32, "1" * 32
+    assert bench.compare(result(new), result(new))[0]["note"] == ""
+    assert bench.compare(result(new), result(other))[0]["note"] == "scene files differ"
+    # a result from before the one content hash (sha256, 64 digits) says nothing about the files
+    old = bench.compare(result("2" * 64), result(new, spp=8))[0]["note"]
+    assert old == "scene hashes of different clrender versions; resolution/spp differ"
+
+
 def test_compare_rejects_other_json(tmp_path, capsys):
     a = tmp_path / "x.json"
     a.write_text("{}")
@@ -146,7 +160,7 @@ def test_skipped_device_is_reported_not_a_crash(monkeypatch):
                       reason="error: unknown target CPU 'generic'")
         return devs + [broken]
 
-    monkeypatch.setattr(bench, "resolve_devices", fake)
+    monkeypatch.setattr(bench.measure, "resolve_devices", fake)
     res = bench.run_benchmark([CORNELL], devices="all", integrator="normals", width=16, height=8, spp=1,
                               repeat=1, cold=False)
     status = {r["device"]: r["status"] for r in res["results"]}
@@ -188,7 +202,7 @@ def test_plot_without_matplotlib_names_the_extra(monkeypatch, tmp_path):
 
 def test_default_set_needs_the_scenes_folder(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(bench, "__file__", str(tmp_path / "pkg" / "clrender" / "bench.py"))
+    monkeypatch.setattr(bench.discovery, "__file__", str(tmp_path / "pkg" / "clrender" / "bench" / "discovery.py"))
     with pytest.raises(ClrenderError, match="--scenes-dir"):
         bench.default_scenes()
     assert main(["bench", "--scenes-dir", str(tmp_path), "-q"]) == 2

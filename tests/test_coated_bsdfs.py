@@ -10,7 +10,6 @@ import pytest
 from scipy import stats
 
 from clrender import plugins  # noqa: F401
-from clrender.device import layout
 from clrender.errors import SceneError
 from clrender.scene.properties import PropertyList
 from clrender.scene.registry import create
@@ -18,8 +17,7 @@ from clrender.scene.spec import PluginSpec
 from clrender.testing.chi2 import (bin_directions, chi2_test, expected_from_grid, refined_direction_grid,
                                    sidak)
 from clrender.testing.mitsuba_dict import spec_from_dict
-from clrender.testing.kernels import bsdf_pdf_eval_batch, bsdf_sample_batch
-from clrender.textures.texture import TextureTable
+from clrender.testing.kernels import bsdf_pdf_eval_batch, bsdf_sample_batch, pack_rows
 
 ALPHA = 0.01
 RES = 10
@@ -33,8 +31,7 @@ def rgb(*v):
 
 
 def rows_of(d):
-    table = TextureTable()
-    return np.array(create(spec_from_dict(d)).pack_rows(table), layout.dtype("Bsdf"))
+    return pack_rows(create(spec_from_dict(d)))
 
 
 def wi_at(theta_deg, below=False):
@@ -212,6 +209,30 @@ def test_mask_and_blend_with_delta_children(ctx, queue):
     assert abs(d_blend.mean() - p) < 6 * np.sqrt(p * (1 - p) / n)
 
 
+def test_roughplastic_tables_are_scene_rows(ctx, queue):
+    """A roughplastic's T(mu) is a row of the scene's bsdf_tables, stored once for equal parameters; a blend of two
+    roughplastics evaluates each with its own row (the weighted sum of the two alone)."""
+    from clrender.textures.texture import TextureTable
+
+    table = TextureTable()
+    made = [create(spec_from_dict({"type": "roughplastic", "alpha": a})) for a in (0.3, 0.3, 0.6)]
+    rows = [b.pack(table) for b in made]
+    assert [int(r["roughplastic"]["table"]) for r in rows] == [0, 0, 1]
+    np.testing.assert_array_equal(table.bsdf_tables_array()["values"], np.float32([made[0].trans, made[2].trans]))
+
+    wi = wi_at(70.0)   # a grazing wi, where the two T(mu) differ most
+    wo = np.array([[0.3, 0.2, 0.9], [-0.5, 0.1, 0.6], [0.8, -0.1, 0.2]])
+    wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+    a, b = {"type": "roughplastic", "alpha": 0.3}, {"type": "roughplastic", "alpha": 0.6, "int_ior": 1.8}
+    blend = rows_of({"type": "blendbsdf", "weight": 0.25, "a": a, "b": b})
+    assert len(blend.tables) == 2
+    pa, fa = bsdf_pdf_eval_batch(ctx, queue, rows_of(a), wi, wo)
+    pb, fb = bsdf_pdf_eval_batch(ctx, queue, rows_of(b), wi, wo)
+    pm, fm = bsdf_pdf_eval_batch(ctx, queue, blend, wi, wo)
+    np.testing.assert_allclose(fm, 0.75 * fa + 0.25 * fb, rtol=1e-5)
+    np.testing.assert_allclose(pm, 0.75 * pa + 0.25 * pb, rtol=1e-5)
+
+
 # --------------------------------------------------------------------------------------------- energy
 def albedo_quadrature(ctx, queue, rows, wi):
     """∫ f |cos| dwo over the sphere by quadrature of bsdf_eval (the smooth lobes only)."""
@@ -355,11 +376,10 @@ def test_textured_parameters(ctx, queue):
     for spec, name, v1, v2, const in cases:
         spec.children.append(checker_spec(name, v1, v2))
         bsdf = create(spec)
-        table = TextureTable()
-        rows = np.array(bsdf.pack_rows(table), layout.dtype("Bsdf"))
+        rows = pack_rows(bsdf)
         assert rows[0]["flags"] & flag_defines()["BSDF_UV"]
         for uv, v in (((0.1, 0.1), v1), ((0.6, 0.1), v2)):
-            p, f = bsdf_pdf_eval_batch(ctx, queue, rows, wi, wo, uv=uv, textures=table.array())
+            p, f = bsdf_pdf_eval_batch(ctx, queue, rows, wi, wo, uv=uv)
             p0, f0 = bsdf_pdf_eval_batch(ctx, queue, rows_of(const(v)), wi, wo)
             np.testing.assert_allclose(f, f0, rtol=1e-5, err_msg=f"{spec.type} {name} at uv {uv}")
             if spec.type != "plastic":   # its lobe choice uses the texture's mean colour (as Mitsuba's)

@@ -11,11 +11,9 @@ import numpy as np
 import pytest
 
 from clrender import plugins  # noqa: F401  (registers the plugins)
-from clrender.device import layout
 from clrender.scene.registry import create
 from clrender.testing.mitsuba_dict import spec_from_dict
-from clrender.testing.kernels import bsdf_pdf_eval_batch
-from clrender.textures.texture import TextureTable
+from clrender.testing.kernels import bsdf_pdf_eval_batch, pack_rows
 
 VALUES = Path(__file__).resolve().parent / "mitsuba" / "bsdf_values"
 FILES = ("plastic.json", "roughplastic.json", "composites.json")
@@ -24,10 +22,8 @@ FILES = ("plastic.json", "roughplastic.json", "composites.json")
 
 def rows_of(d):
     """(Bsdf rows, texture table) of the clrender BSDF built from a Mitsuba dict: its own row first."""
-    bsdf = create(spec_from_dict(d))
-    table = TextureTable()
-    rows = np.array(bsdf.pack_rows(table), layout.dtype("Bsdf"))
-    return rows, table.array()
+    rows = pack_rows(create(spec_from_dict(d)))
+    return rows, rows.textures
 
 
 def _cases():

@@ -16,13 +16,12 @@ import numpy as np
 import pytest
 
 from clrender import plugins  # noqa: F401  (registers the plugins)
-from clrender.device import layout
 from clrender.errors import SceneError
 from clrender.scene.registry import create
 from clrender.scene.spec import PluginSpec
 from clrender.scene.transform import Transform
 from clrender.testing.chi2 import bin_directions, chi2_test, expected_from_grid, refined_direction_grid
-from clrender.testing.kernels import bsdf_pdf_eval_batch, bsdf_sample_batch
+from clrender.testing.kernels import bsdf_pdf_eval_batch, bsdf_sample_batch, pack_rows
 from clrender.testing.mitsuba_dict import spec_from_dict
 from clrender.textures.texture import TextureTable
 
@@ -46,9 +45,8 @@ def spec(d: dict, tag: str = "bsdf") -> PluginSpec:
 
 
 def rows_of(d):
-    bsdf = create(spec(d))
-    table = TextureTable()
-    return np.array(bsdf.pack_rows(table), layout.dtype("Bsdf")), table.array()
+    rows = pack_rows(create(spec(d)))
+    return rows, rows.textures
 
 
 def beckmann_visible(d):

@@ -15,6 +15,21 @@ def test_every_package_is_listed():
     assert "clrender.kernels" in listed
 
 
+def test_every_kernel_file_is_package_data():
+    """An OpenCL file under kernels/ that no package_data pattern names is missing from the installed package,
+    and the program that includes it fails to build there (not in a checkout)."""
+    import glob
+
+    cfg = configparser.ConfigParser()
+    cfg.read(ROOT / "setup.cfg")
+    kernels = ROOT / "kernels"
+    shipped = set()
+    for pattern in cfg["options.package_data"]["clrender.kernels"].split(","):
+        shipped |= set(glob.glob(pattern.strip(), root_dir=kernels))
+    files = {p.relative_to(kernels).as_posix() for p in kernels.rglob("*") if p.suffix in (".cl", ".h")}
+    assert files - shipped == set(), f"kernel files setup.cfg does not ship: {sorted(files - shipped)}"
+
+
 # Import name -> distribution name, for the modules whose names differ.
 _DIST = {"PIL": "Pillow", "OpenEXR": "OpenEXR", "pocl_binary_distribution": "pocl-binary-distribution"}
 # Imported only inside a feature that names its extra when the module is missing.

@@ -162,7 +162,7 @@ def test_every_plugin_builds_alone(ctx):
 #include "filter.h"
 __kernel void k(SCENE_ARGS, __global const Camera* cam, __global float4* out) {
     SCENE_INIT(sd);
-    BsdfQuery q; q.wi = (float3)(0.0f, 0.0f, 1.0f); q.wo = q.wi; q.uv = (float2)(0.5f); q.textures = sd.textures;
+    BsdfQuery q; q.wi = (float3)(0.0f, 0.0f, 1.0f); q.wo = q.wi; q.uv = (float2)(0.5f); q.textures = sd.textures; q.tables = sd.bsdf_tables;
     q.eta = 1.0f; q.measure = MEASURE_SOLID_ANGLE;
     float3 r = bsdf_sample(sd.bsdfs, &q, (float2)(0.5f)) + bsdf_eval(sd.bsdfs, &q) + bsdf_albedo(sd.bsdfs, &q);
     EmitterQuery e; e.ref = (float3)(0.0f);

@@ -43,8 +43,9 @@ class Bsdf:
         return [self.pack(textures)]
 
     def pack(self, textures=None) -> np.void:
-        """The Bsdf row; texture parameters go to `textures` (a TextureTable; by default the plugin's own, left
-        in `self.textures_table` as an array for tests that run a lone BSDF)."""
+        """The Bsdf row; texture parameters (and lookup tables) go to `textures` (a TextureTable; by default the
+        plugin's own, left in `self.textures_table` and `self.bsdf_tables` as arrays for tests that run a lone
+        BSDF)."""
         from ..textures.texture import TextureTable
 
         cls = type(self)
@@ -57,6 +58,7 @@ class Bsdf:
             (dispatch.flag_defines()["BSDF_UV"] if uses_uv else 0)
         if own:
             self.textures_table = table.array()
+            self.bsdf_tables = table.bsdf_tables_array()
         return row
 
     def fill(self, p, row, textures) -> bool:

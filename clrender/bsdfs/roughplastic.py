@@ -27,11 +27,12 @@ import functools
 
 import numpy as np
 
+from ..device import layout
 from ..errors import SceneError
 from ..scene.registry import register
 from .plastic import CoatedBase
 
-TABLE_RES = 64
+TABLE_RES = layout.BSDF_TABLE_SIZE  # T(mu) is one row of the scene's bsdf_tables
 DISTRIBUTIONS = ("beckmann", "ggx")
 
 
@@ -114,7 +115,7 @@ class RoughPlastic(CoatedBase):
     kernel = "bsdfs/roughplastic.h"
     PARAMS = [("diffuse", "texture"), ("specular", "texture"), ("eta", "float"), ("spec_weight", "float"),
               ("nonlinear", "uint"), ("alpha", "float"), ("ggx", "uint"), ("sample_visible", "uint"),
-              ("int_refl", "float"), ("trans", "float", TABLE_RES)]
+              ("int_refl", "float"), ("table", "uint")]
     FLAGS = ("GLOSSY", "DIFFUSE")
     METHODS = ("eval", "pdf", "sample", "albedo")
     owner = '<bsdf type="roughplastic">'
@@ -140,5 +141,5 @@ class RoughPlastic(CoatedBase):
     def fill(self, p, row, textures):
         p["alpha"], p["ggx"], p["sample_visible"] = self.alpha, int(self.ggx), int(self.sample_visible)
         p["int_refl"] = self.int_refl
-        p["trans"][:] = self.trans
+        p["table"] = textures.add_bsdf_table(self.trans)   # T(mu), a row of the scene's bsdf_tables
         return self.fill_common(p, textures)

@@ -73,7 +73,8 @@ class PerspectiveCamera:
 
     def pack(self) -> tuple[np.ndarray, np.ndarray]:
         """The Camera row and the filter's sampling table."""
-        row = layout.zeros("Camera")[0]
+        rows = layout.zeros("Camera")
+        row = rows[0]   # a view: filled in place (np.array([row]) would leave the bytes no member covers undefined)
         m = self.to_world.matrix
         for i in range(4):
             row["to_world"][i, :3] = m[:3, i]
@@ -89,7 +90,7 @@ class PerspectiveCamera:
         self.pack_film(row)
         table = self.filter.sampling_table()
         self.filter.pack(row, table)
-        return np.array([row]), table
+        return rows, table
 
     def pack_film(self, row) -> None:
         """Crop window, border clipping and lens (Nori's camera: the whole film, no clipping, a pinhole)."""

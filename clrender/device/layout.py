@@ -23,9 +23,15 @@ _VECTORS = {"float4": ("<f4", 16, 16), "uint4": ("<u4", 16, 16)}
 
 NONE = 0xFFFFFFFF  # "no index" in uint fields (no emitter, no texture, ...)
 
-# Structs with no plugins behind them (none at present: the shape, BSDF, emitter, texture, integrator and camera rows
-# are the ROWS below).
-STRUCTS: dict[str, list[tuple]] = {}
+BSDF_TABLE_SIZE = 64  # entries of a BsdfTable (kernels: BSDF_TABLE_SIZE)
+
+# Structs with no plugins behind them (the shape, BSDF, emitter, texture, integrator and camera rows are the ROWS
+# below).
+STRUCTS: dict[str, list[tuple]] = {
+    # a BSDF's lookup table on BSDF_TABLE_SIZE uniform nodes (roughplastic's coating transmittance T(mu)); its row
+    # holds the index, so a row stays the size of the other BSDFs' parameters
+    "BsdfTable": [("values", "float", BSDF_TABLE_SIZE)],
+}
 
 
 @dataclass(frozen=True)
@@ -66,7 +72,7 @@ ROWS: dict[str, Row] = {
         ("cdf", "uint"),         # emitting meshes: offset of their triangle-area CDF in the `cdf` table
         ("area", "float")),      # emitting shapes: total surface area
         union_bytes=16),
-    "Bsdf": Row(header=(("type", "uint"), ("flags", "uint"), ("pad", "uint", 2)), union_bytes=352),
+    "Bsdf": Row(header=(("type", "uint"), ("flags", "uint"), ("pad", "uint", 2)), union_bytes=128),
     "Emitter": Row(header=(
         ("type", "uint"), ("flags", "uint"),
         ("shape", "uint"),        # surface emitters: the emitting shape (which samples its own surface)
@@ -102,6 +108,7 @@ SCENE_TABLES: list[tuple[str, str, str]] = [
     ("sphere_shape", "uint", "the shape of each sphere"),
     ("shapes", "Shape", "one row per shape"),
     ("bsdfs", "Bsdf", "one row per BSDF"),
+    ("bsdf_tables", "BsdfTable", "BSDFs' lookup tables, each stored once (roughplastic's p.roughplastic.table)"),
     ("emitters", "Emitter", "one row per emitter"),
     ("cdf", "float", "emitting meshes' triangle-area CDFs, back to back (Shape.cdf)"),
     ("textures", "Texture", "one row per texture that a BSDF parameter refers to"),
@@ -124,6 +131,7 @@ FILM_ACCUMULATORS: list[tuple[str, str, str, bool]] = [
 
 # Type tags and flag bits, shared the same way (emitted as #defines).
 ENUMS: dict[str, int] = {
+    "BSDF_TABLE_SIZE": BSDF_TABLE_SIZE,
     # BVH encodings shared by the builders (clrender/accel) and the traversals (kernels/bvh*.h)
     "BVH_LEAF_BIT": 0x80000000,       # a node reference to a leaf
     "BVH_SPHERE_BIT": 0x80000000,     # a primitive id of an analytic sphere

@@ -126,6 +126,11 @@ class PropertyList:
         except KeyError:
             raise KeyError(f"no property {name!r} in {self.owner}") from None
 
+    def peek(self, name: str) -> Any:
+        """The stored value, without marking the property used (for tools that look
+        at a scene without being its plugin: the content hash)."""
+        return self._entry(name).value
+
     def location(self, name: str) -> SourceLocation | None:
         return self._entry(name).location
 

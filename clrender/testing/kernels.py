@@ -24,70 +24,7 @@ CHUNK = 1 << 20
 # CLRENDER_TEST_FAST_MATH=1 builds these programs with -cl-fast-relaxed-math (as a renderer may run).
 FAST_MATH = os.environ.get("CLRENDER_TEST_FAST_MATH", "") not in ("", "0")
 
-BSDF_SRC = r"""
-#include "rng.h"
-#include "bsdf.h"
-
-/* The surface's derivatives where the program carries them (kernels/derivatives.h): geo[4 i .. 4 i + 3] = dp/du,
-   dp/dv, the geometric normal (local frame) and dp/du in world space. */
-INLINE void set_geometry(BsdfQuery* q, __global const float4* geo, uint i) {
-#ifdef CLR_SURFACE_DERIVATIVES
-    q->dpdu = geo[4u * i].xyz;
-    q->dpdv = geo[4u * i + 1u].xyz;
-    q->ng = geo[4u * i + 2u].xyz;
-    q->dpdu_world = geo[4u * i + 3u].xyz;
-#endif
-}
-
-/* One bsdf_sample per work-item. args[i] = (wi.xyz, bitcast row index); uvs[i] = uv. */
-__kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const Texture* textures, __global const float4* args,
-                                __global const float2* uvs, __global const float4* geo, uint n, uint first, uint seed,
-                                __global float4* wo_out, __global float4* w_out, __global float4* f_out,
-                                __global float* pdf_out, __global uint* measure_out) {
-    uint i = get_global_id(0);
-    if (i >= n) return;
-    float4 a = args[i];
-    __global const Bsdf* b = rows + as_uint(a.w);
-    Sampler s;
-    sampler_init(&s, seed, first + i, 0u);
-    BsdfQuery q;
-    q.wi = a.xyz;
-    q.wo = (float3)(0.0f);
-    q.eta = 1.0f;
-    q.measure = MEASURE_SOLID_ANGLE;
-    q.uv = uvs[i];
-    q.textures = textures;
-    set_geometry(&q, geo, i);
-    float3 w = bsdf_sample(b, &q, next2d(&s));
-    wo_out[i] = (float4)(q.wo, q.eta);
-    w_out[i] = (float4)(w, 0.0f);
-    f_out[i] = (float4)(bsdf_eval(b, &q), 0.0f);
-    pdf_out[i] = bsdf_pdf(b, &q);
-    measure_out[i] = q.measure;
-}
-
-/* bsdf_pdf and bsdf_eval for given (wi, wo); wi[i].w = bitcast row index, wo[i].w unused. */
-__kernel void bsdf_pdf_eval_batch(__global const Bsdf* rows, __global const Texture* textures, __global const float4* wi_in,
-                                  __global const float4* wo_in, __global const float2* uvs, __global const float4* geo,
-                                  uint n,
-                                  __global float* pdf_out, __global float4* f_out, __global float4* alb_out) {
-    uint i = get_global_id(0);
-    if (i >= n) return;
-    float4 a = wi_in[i];
-    __global const Bsdf* b = rows + as_uint(a.w);
-    BsdfQuery q;
-    q.wi = a.xyz;
-    q.wo = wo_in[i].xyz;
-    q.eta = 1.0f;
-    q.measure = MEASURE_SOLID_ANGLE;
-    q.uv = uvs[i];
-    q.textures = textures;
-    set_geometry(&q, geo, i);
-    pdf_out[i] = bsdf_pdf(b, &q);
-    f_out[i] = (float4)(bsdf_eval(b, &q), bsdf_is_delta(b) ? 1.0f : 0.0f);
-    alb_out[i] = (float4)(bsdf_albedo(b, &q), 0.0f);
-}
-"""
+BSDF_SRC = '#include "testing/bsdf_batch.cl"\n'  # kernels/testing/bsdf_batch.cl
 
 
 def _cl():
@@ -113,6 +50,25 @@ def _kernel(ctx, name, source=BSDF_SRC, defines=None):
 
 def padded(n: int, local: int = LOCAL) -> int:
     return max(local, (n + local - 1) // local * local)
+
+
+class BsdfRows(np.ndarray):
+    """Bsdf rows carrying the texture and bsdf_tables rows they index (made by :func:`pack_rows`); the batch
+    functions use those unless given others."""
+
+    def __array_finalize__(self, obj):
+        self.textures = getattr(obj, "textures", None)
+        self.tables = getattr(obj, "tables", None)
+
+
+def pack_rows(bsdf) -> BsdfRows:
+    """A lone BSDF's rows (its own first, then its children's, Bsdf.pack_rows) with their own side tables."""
+    from ..textures.texture import TextureTable
+
+    table = TextureTable()
+    rows = np.array(bsdf.pack_rows(table), layout.dtype("Bsdf")).view(BsdfRows)
+    rows.textures, rows.tables = table.array(), table.bsdf_tables_array()
+    return rows
 
 
 def _rows(bsdf_rows) -> np.ndarray:
@@ -158,18 +114,20 @@ def _geometry(geometry, n):
     return out.reshape(n * 4, 4)
 
 
-def _textures(ctx, textures):
-    """The texture table the rows refer to (a plugin's `bsdf.pack()` leaves it in `bsdf.textures_table`)."""
+def _side_table(ctx, struct, rows):
+    """A table the rows refer to: textures (a plugin's `bsdf.pack()` leaves them in `bsdf.textures_table`) or
+    bsdf_tables (`bsdf.bsdf_tables`); one zero row if none."""
     cl = _cl()
-    t = layout.zeros("Texture") if textures is None or len(textures) == 0 else np.asarray(textures, layout.dtype("Texture"))
+    t = layout.zeros(struct) if rows is None or len(rows) == 0 else np.asarray(rows, layout.dtype(struct))
     return cl.Buffer(ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR, hostbuf=np.ascontiguousarray(t))
 
 
 def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 0.5), row_index=None,
-                      first: int = 0, textures=None, defines=None, geometry=None) -> BsdfSamples:
+                      first: int = 0, textures=None, defines=None, geometry=None, tables=None) -> BsdfSamples:
     """n calls of bsdf_sample on the device. `bsdf_row`: one packed row or an array of rows (then
     `row_index` (n,) picks each sample's row); `wi`: (3,) or (n,3) in the local frame (normalised here);
-    `uv`: (2,) or (n,2); `textures`: the table the rows' texture parameters index; `defines`: of the program (a
+    `uv`: (2,) or (n,2); `textures`, `tables`: the texture and bsdf_tables rows the rows index (a lone plugin's
+    `pack()` leaves them in `textures_table` and `bsdf_tables`); `defines`: of the program (a
     plugin set's, say; default: every plugin); `geometry`: (4, 3) or (n, 4, 3), the query's dp/du, dp/dv, geometric
     normal and world dp/du (GEOMETRY by default). Sample i uses the Sampler stream (seed, first + i, 0)."""
     cl = _cl()
@@ -186,7 +144,8 @@ def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 
     k = _kernel(ctx, "bsdf_sample_batch", defines=defines)
     mf = cl.mem_flags
     d_rows = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=rows)
-    d_tex = _textures(ctx, textures)
+    d_tex = _side_table(ctx, "Texture", getattr(bsdf_row, "textures", None) if textures is None else textures)
+    d_tables = _side_table(ctx, "BsdfTable", getattr(bsdf_row, "tables", None) if tables is None else tables)
     out = BsdfSamples(np.empty((n, 3), np.float32), np.empty((n, 3), np.float32), np.empty(n, np.float32),
                       np.empty(n, np.uint32), np.empty(n, np.float32), np.empty((n, 3), np.float32))
     for s in range(0, n, CHUNK):
@@ -201,8 +160,8 @@ def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 
         pdf = np.empty(m, np.float32)
         meas = np.empty(m, np.uint32)
         bufs = [cl.Buffer(ctx, mf.WRITE_ONLY, a.nbytes) for a in (wo, w, f, pdf, meas)]
-        k(queue, (g,), (LOCAL,), d_rows, d_tex, d_args, d_uv, d_geo, np.uint32(m), np.uint32(first + s), np.uint32(seed),
-          *bufs)
+        k(queue, (g,), (LOCAL,), d_rows, d_tex, d_tables, d_args, d_uv, d_geo, np.uint32(m), np.uint32(first + s),
+          np.uint32(seed), *bufs)
         for a, b in zip((wo, w, f, pdf, meas), bufs):
             cl.enqueue_copy(queue, a, b)
         queue.finish()
@@ -216,7 +175,7 @@ def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 
 
 
 def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=None, with_albedo=False,
-                        textures=None, geometry=None):
+                        textures=None, geometry=None, tables=None):
     """bsdf_pdf and bsdf_eval at m direction pairs: wi (3,) or (m,3), wo (m,3). Returns (pdf (m,), f (m,3)),
     plus bsdf_albedo(uv) (m,3) if `with_albedo`."""
     cl = _cl()
@@ -232,7 +191,8 @@ def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=N
     k = _kernel(ctx, "bsdf_pdf_eval_batch")
     mf = cl.mem_flags
     d_rows = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=rows)
-    d_tex = _textures(ctx, textures)
+    d_tex = _side_table(ctx, "Texture", getattr(bsdf_row, "textures", None) if textures is None else textures)
+    d_tables = _side_table(ctx, "BsdfTable", getattr(bsdf_row, "tables", None) if tables is None else tables)
     pdf = np.empty(m, np.float32)
     f = np.empty((m, 3), np.float32)
     alb = np.empty((m, 3), np.float32)
@@ -247,7 +207,7 @@ def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=N
         ff = np.empty((c, 4), np.float32)
         aa = np.empty((c, 4), np.float32)
         bufs = [cl.Buffer(ctx, mf.WRITE_ONLY, a.nbytes) for a in (p, ff, aa)]
-        k(queue, (g,), (LOCAL,), d_rows, d_tex, d_wi, d_wo, d_uv, d_geo, np.uint32(c), *bufs)
+        k(queue, (g,), (LOCAL,), d_rows, d_tex, d_tables, d_wi, d_wo, d_uv, d_geo, np.uint32(c), *bufs)
         for a, b in zip((p, ff, aa), bufs):
             cl.enqueue_copy(queue, a, b)
         queue.finish()
@@ -258,51 +218,7 @@ def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=N
 
 
 # ------------------------------------------------------------------------------------------- warps
-WARP_SRC = r"""
-#include "rng.h"
-#include "warp.h"
-
-/* kind: 0 square, 1 tent, 2 disk, 3 sphere, 4 hemisphere, 5 cosine hemisphere, 6 cone (param = cos_max),
-   7 triangle (barycentrics), 8 Beckmann (param = alpha). 2-D results in .xy, directions in .xyz. */
-INLINE float4 warp_point(uint kind, float param, float2 u) {
-    switch (kind) {
-        case 0: return (float4)(square_to_uniform_square(u), 0.0f, 0.0f);
-        case 1: return (float4)(square_to_tent(u), 0.0f, 0.0f);
-        case 2: return (float4)(square_to_uniform_disk(u), 0.0f, 0.0f);
-        case 3: return (float4)(square_to_uniform_sphere(u), 0.0f);
-        case 4: return (float4)(square_to_uniform_hemisphere(u), 0.0f);
-        case 5: return (float4)(square_to_cosine_hemisphere(u), 0.0f);
-        case 6: return (float4)(square_to_uniform_cone(u, param), 0.0f);
-        case 7: return (float4)(square_to_uniform_triangle(u), 0.0f, 0.0f);
-        default: return (float4)(square_to_beckmann(u, param), 0.0f);
-    }
-}
-INLINE float warp_density(uint kind, float param, float4 p) {
-    switch (kind) {
-        case 0: return square_to_uniform_square_pdf(p.xy);
-        case 1: return square_to_tent_pdf(p.xy);
-        case 2: return square_to_uniform_disk_pdf(p.xy);
-        case 3: return square_to_uniform_sphere_pdf(p.xyz);
-        case 4: return square_to_uniform_hemisphere_pdf(p.xyz);
-        case 5: return square_to_cosine_hemisphere_pdf(p.xyz);
-        case 6: return square_to_uniform_cone_pdf(p.xyz, param);
-        case 7: return square_to_uniform_triangle_pdf(p.xy);
-        default: return square_to_beckmann_pdf(p.xyz, param);
-    }
-}
-__kernel void warp_sample_batch(uint kind, float param, uint n, uint first, uint seed, __global float4* out) {
-    uint i = get_global_id(0);
-    if (i >= n) return;
-    Sampler s;
-    sampler_init(&s, seed, first + i, 0u);
-    out[i] = warp_point(kind, param, next2d(&s));
-}
-__kernel void warp_pdf_batch(uint kind, float param, uint n, __global const float4* pts, __global float* out) {
-    uint i = get_global_id(0);
-    if (i >= n) return;
-    out[i] = warp_density(kind, param, pts[i]);
-}
-"""
+WARP_SRC = '#include "testing/warp_batch.cl"\n'  # kernels/testing/warp_batch.cl
 
 WARPS = {"square": 0, "tent": 1, "disk": 2, "sphere": 3, "hemisphere": 4, "cosine_hemisphere": 5, "cone": 6,
          "triangle": 7, "beckmann": 8}

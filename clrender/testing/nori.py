@@ -183,23 +183,7 @@ class _DummyCamera:
         return row, np.array([0.0, 1.0], np.float32)
 
 
-EMITTER_SRC = r"""
-#include "rng.h"
-#include "scene.h"
-#include "emitter.h"
-__kernel void emitter_sample_batch(SCENE_ARGS, uint e, float4 ref, uint n, uint first, uint seed,
-                                   __global float4* out) {
-    uint i = get_global_id(0);
-    if (i >= n) return;
-    SCENE_INIT(sd);
-    Sampler s;
-    sampler_init(&s, seed, first + i, 0u);
-    EmitterQuery q;
-    q.ref = ref.xyz;
-    float3 w = emitter_sample(&sd, e, &q, next2d(&s));
-    out[i] = (float4)(w, q.pdf);
-}
-"""
+EMITTER_SRC = '#include "testing/emitter_batch.cl"\n'  # kernels/testing/emitter_batch.cl
 
 
 class Runner:
@@ -247,7 +231,7 @@ class Runner:
                     th = math.radians(ang)
                     wi = np.array([math.sin(th), 0.0, math.cos(th)])
                     s = bsdf_sample_batch(self.ctx, self.queue, row, wi, n, seed=self.seed,
-                                          textures=item.textures_table)
+                                          textures=item.textures_table, tables=item.bsdf_tables)
                     lum = s.weight.astype(np.float64) @ LUM
                     out.append(self._tcase(path, "bsdf", f"{_describe_plugin(item)}, angle {ang:g}°", lum,
                                            next(refs), a))
@@ -351,7 +335,7 @@ class Runner:
                 r, phi = math.sqrt(u[0]), 2 * math.pi * u[1]
                 wi = np.array([r * math.cos(phi), r * math.sin(phi), math.sqrt(max(0.0, 1 - u[0]))])
                 s = bsdf_sample_batch(self.ctx, self.queue, row, wi, test.sample_count, seed=self.seed + 7919 * t,
-                                      textures=item.textures_table)
+                                      textures=item.textures_table, tables=item.bsdf_tables)
                 ok_w = np.any(s.weight != 0, axis=1) & np.all(np.isfinite(s.weight), axis=1)
                 observed = bin_directions(s.wo[ok_w], res)
                 peaks = []
@@ -360,7 +344,7 @@ class Runner:
                     peaks = [(refl, min(math.pi, 12 * alpha)), (refl, min(math.pi, 3 * alpha))]
                 dirs, weights, cell = refined_direction_grid(res, sub=8, peaks=peaks, n_fine=200 if peaks else 0)
                 pdf, _ = bsdf_pdf_eval_batch(self.ctx, self.queue, row, np.broadcast_to(wi, dirs.shape), dirs,
-                                             textures=item.textures_table)
+                                             textures=item.textures_table, tables=item.bsdf_tables)
                 expected = expected_from_grid(pdf, weights, cell, (res, 2 * res), test.sample_count)
                 r_ = chi2_test(observed, expected, test.min_exp, test.alpha, n_tests)
                 what = f"{_describe_plugin(item)}, wi = ({wi[0]:.3f}, {wi[1]:.3f}, {wi[2]:.3f})"

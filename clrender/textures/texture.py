@@ -63,6 +63,9 @@ class TextureTable:
         self.rows: list = []
         self._index: dict[int, int] = {}
         self.tags: set[int] = set()     # the texture plugins' tags (texel rows hold no tag)
+        # The scene's bsdf_tables rows, which travel with the textures since a BSDF packs with this table alone.
+        self.bsdf_tables: list[np.ndarray] = []
+        self._table_index: dict[bytes, int] = {}
 
     def add(self, texture) -> int:
         key = id(texture)
@@ -89,6 +92,21 @@ class TextureTable:
 
     def array(self) -> np.ndarray:
         return np.array(self.rows, layout.dtype("Texture")) if self.rows else layout.zeros("Texture")
+
+    def add_bsdf_table(self, values) -> int:
+        """A BSDF's lookup table (a BsdfTable row of the scene's bsdf_tables); returns its index. Equal tables
+        (BSDFs with the same parameters) are stored once."""
+        row = layout.zeros("BsdfTable")
+        row["values"][0] = values
+        key = row.tobytes()
+        if key not in self._table_index:
+            self._table_index[key] = len(self.bsdf_tables)
+            self.bsdf_tables.append(row)
+        return self._table_index[key]
+
+    def bsdf_tables_array(self) -> np.ndarray:
+        """The bsdf_tables added so far (one zero row if none: OpenCL has no empty buffers)."""
+        return np.concatenate(self.bsdf_tables) if self.bsdf_tables else layout.zeros("BsdfTable")
 
 
 def param(p, name: str, value, texture, table: TextureTable) -> bool:

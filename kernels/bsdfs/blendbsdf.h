@@ -36,9 +36,7 @@ INLINE float3 COMPOSITE_FN(blendbsdf_sample)(__global const Bsdf* b, BsdfQuery* 
     /* A black weight is a failed sample, or a direction from a child that reflects nothing there (a black diffuse):
        that direction is still a sample of the mixture, and the other child's share of it counts. */
     if (is_black(r) && !(CHILD_FN(pdf)(child, q) > 0.0f)) return r;
-    float pdf = COMPOSITE_FN(blendbsdf_pdf)(b, q);
-    if (!(pdf > 0.0f)) return (float3)(0.0f);
-    return COMPOSITE_FN(blendbsdf_eval)(b, q) * (fabs(q->wo.z) / pdf);
+    return bsdf_sample_weight(COMPOSITE_FN(blendbsdf_eval)(b, q), q->wo.z, COMPOSITE_FN(blendbsdf_pdf)(b, q));
 }
 
 INLINE float3 COMPOSITE_FN(blendbsdf_albedo)(__global const Bsdf* b, const BsdfQuery* q) {

@@ -19,6 +19,7 @@ typedef struct {
     uint measure;
     float2 uv;
     __global const Texture* textures;  /* the scene's texture table, for parameters that refer to a texture */
+    __global const BsdfTable* tables;  /* the scene's bsdf_tables, for BSDFs' lookup tables (roughplastic's T) */
 #ifdef CLR_SURFACE_DERIVATIVES
     /* Mitsuba's si.dp_du, si.dp_dv and geometric normal si.n in this (local) frame, and dp_du in world space (what
        bumpmap needs: kernels/bsdfs/perturb.h) */
@@ -43,5 +44,11 @@ INLINE float fresnel_dielectric(float cos_i, float eta_ext, float eta_int, float
 }
 
 INLINE float3 reflect_local(float3 w) { return (float3)(-w.x, -w.y, w.z); }
+
+/* The weight f |cos| / pdf of a direction sampled from a BSDF's non-delta part, given eval (f) and pdf there;
+   0 where the pdf is 0 or NaN: no sample lands there, and f may be infinite or NaN. */
+INLINE float3 bsdf_sample_weight(float3 f, float cos_o, float pdf) {
+    return pdf > 0.0f ? f * (fabs(cos_o) / pdf) : (float3)(0.0f);
+}
 
 #endif

@@ -57,9 +57,7 @@ INLINE float3 microfacet_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) 
         q->wo = square_to_cosine_hemisphere(u);
     }
     if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return (float3)(0.0f);
-    float pdf = microfacet_pdf(b, q);
-    if (!(pdf > 0.0f)) return (float3)(0.0f);
-    return microfacet_eval(b, q) * (q->wo.z / pdf);
+    return bsdf_sample_weight(microfacet_eval(b, q), q->wo.z, microfacet_pdf(b, q));
 }
 
 INLINE float3 microfacet_albedo(__global const Bsdf* b, const BsdfQuery* q) {

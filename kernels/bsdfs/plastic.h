@@ -52,9 +52,8 @@ INLINE float3 plastic_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
         return param_color(q, b->p.plastic.specular, b->p.plastic.specular_tex) * (f_i / ps);
     }
     q->wo = square_to_cosine_hemisphere((float2)((u.x - ps) / (1.0f - ps), u.y));
-    float pdf = plastic_pdf(b, q);
-    if (!(pdf > 0.0f) || q->wo.z <= 0.0f) return (float3)(0.0f);
-    return plastic_eval(b, q) * (q->wo.z / pdf);
+    if (q->wo.z <= 0.0f) return (float3)(0.0f);
+    return bsdf_sample_weight(plastic_eval(b, q), q->wo.z, plastic_pdf(b, q));
 }
 
 INLINE float3 plastic_albedo(__global const Bsdf* b, const BsdfQuery* q) {

@@ -227,9 +227,7 @@ INLINE float3 principled_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) 
     }
     if (!(wo.z * ci != 0.0f)) return (float3)(0.0f);
     q->wo = wo;
-    float pdf = principled_pdf(b, q);
-    if (!(pdf > 0.0f)) return (float3)(0.0f);
-    return principled_eval(b, q) * (fabs(wo.z) / pdf);
+    return bsdf_sample_weight(principled_eval(b, q), wo.z, principled_pdf(b, q));
 }
 
 INLINE float3 principled_albedo(__global const Bsdf* b, const BsdfQuery* q) {

@@ -145,9 +145,7 @@ INLINE float3 principledthin_sample(__global const Bsdf* b, BsdfQuery* q, float2
         if (wo.z == 0.0f) return (float3)(0.0f);
     }
     q->wo = wo * side;
-    float pdf = principledthin_pdf(b, q);
-    if (!(pdf > 0.0f)) return (float3)(0.0f);
-    return principledthin_eval(b, q) * (fabs(wo.z) / pdf);
+    return bsdf_sample_weight(principledthin_eval(b, q), wo.z, principledthin_pdf(b, q));
 }
 
 INLINE float3 principledthin_albedo(__global const Bsdf* b, const BsdfQuery* q) {

@@ -47,9 +47,7 @@ INLINE float3 roughconductor_sample(__global const Bsdf* b, BsdfQuery* q, float2
     float3 h = mf_sample(d, q->wi, u);
     q->wo = 2.0f * dot3(q->wi, h) * h - q->wi;
     if (q->wo.z <= 0.0f) return (float3)(0.0f);
-    float pdf = roughconductor_pdf(b, q);
-    if (!(pdf > 0.0f)) return (float3)(0.0f);
-    return roughconductor_eval(b, q) * (q->wo.z / pdf);
+    return bsdf_sample_weight(roughconductor_eval(b, q), q->wo.z, roughconductor_pdf(b, q));
 }
 
 #endif

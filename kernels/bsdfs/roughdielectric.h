@@ -100,9 +100,7 @@ INLINE float3 roughdielectric_sample(__global const Bsdf* b, BsdfQuery* q, float
     /* an event that ends on the wrong side of the macro-surface is lost (as in Mitsuba): the pdf below is the
        density of the samples that survive, so it integrates to less than 1 at grazing angles */
     if (reflect ? !(q->wo.z * wi.z > 0.0f) : !(q->wo.z * wi.z < 0.0f)) return (float3)(0.0f);
-    float pdf = roughdielectric_pdf(b, q);
-    if (!(pdf > 0.0f)) return (float3)(0.0f);
-    return roughdielectric_eval(b, q) * (fabs(q->wo.z) / pdf);
+    return bsdf_sample_weight(roughdielectric_eval(b, q), q->wo.z, roughdielectric_pdf(b, q));
 }
 
 #endif

@@ -1,7 +1,7 @@
 /* Mitsuba 3's rough plastic: a microfacet specular lobe (Beckmann or GGX, dielectric Fresnel) over a diffuse base
    seen through the rough coating. Row: p.roughplastic = diffuse(_tex), specular(_tex), eta = int/ext, spec_weight,
-   nonlinear, alpha, ggx, sample_visible, int_refl (R_int), trans[64] (T(mu) on uniform mu nodes; see
-   clrender/bsdfs/roughplastic.py, which precomputes both).
+   nonlinear, alpha, ggx, sample_visible, int_refl (R_int), table (T(mu) on BSDF_TABLE_SIZE uniform mu nodes: a
+   row of the scene's bsdf_tables, q->tables; clrender/bsdfs/roughplastic.py precomputes both).
      f = specular D F(wi.h) G1(wi,h) G1(wo,h) / (4 cos_i cos_o) + d' T(cos_i) T(cos_o) / (pi eta^2)
    Sampling: the specular lobe with probability (1-T(cos_i)) s / ((1-T) s + T (1-s)), else cosine-weighted. The
    specular normals are GGX visible normals (Heitz 2018) when sample_visible and ggx, otherwise D(m) cos(m). */
@@ -36,11 +36,12 @@ INLINE float3 rp_sample_normal(MfDist d, float3 wi, float2 u) {
 }
 
 /* T(mu): linear interpolation of the precomputed table on uniform nodes of mu in [0, 1]. */
-INLINE float rp_trans(__global const Bsdf* b, float mu) {
-    float x = clamp(mu, 0.0f, 1.0f) * 63.0f;
-    uint i = min((uint)x, 62u);
+INLINE float rp_trans(__global const Bsdf* b, const BsdfQuery* q, float mu) {
+    __global const float* trans = q->tables[b->p.roughplastic.table].values;
+    float x = clamp(mu, 0.0f, 1.0f) * (float)(BSDF_TABLE_SIZE - 1u);
+    uint i = min((uint)x, BSDF_TABLE_SIZE - 2u);
     float t = x - (float)i;
-    return (1.0f - t) * b->p.roughplastic.trans[i] + t * b->p.roughplastic.trans[i + 1u];
+    return (1.0f - t) * trans[i] + t * trans[i + 1u];
 }
 
 INLINE float rp_prob_specular(__global const Bsdf* b, float t_i) {
@@ -61,14 +62,14 @@ INLINE float3 roughplastic_eval(__global const Bsdf* b, const BsdfQuery* q) {
     float3 d = param_color(q, b->p.roughplastic.diffuse, b->p.roughplastic.diffuse_tex);
     float r = b->p.roughplastic.int_refl;
     d = b->p.roughplastic.nonlinear ? d / ((float3)(1.0f) - d * r) : d / (1.0f - r);
-    float diff = rp_trans(b, wi.z) * rp_trans(b, wo.z) * INV_PI / (eta * eta);
+    float diff = rp_trans(b, q, wi.z) * rp_trans(b, q, wo.z) * INV_PI / (eta * eta);
     return param_color(q, b->p.roughplastic.specular, b->p.roughplastic.specular_tex) * spec + d * diff;
 }
 
 INLINE float roughplastic_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     float3 wi = q->wi, wo = q->wo;
     if (wi.z <= 0.0f || wo.z <= 0.0f) return 0.0f;
-    float ps = rp_prob_specular(b, rp_trans(b, wi.z));
+    float ps = rp_prob_specular(b, rp_trans(b, q, wi.z));
     float3 h = normalize3(wi + wo);
     /* dwo = 4 (wo.h) dh: the Jacobian of reflecting wi about h */
     float spec = mf_pdf(rp_dist(b), wi, h) / (4.0f * dot3(wo, h));
@@ -79,7 +80,7 @@ INLINE float3 roughplastic_sample(__global const Bsdf* b, BsdfQuery* q, float2 u
     q->eta = 1.0f;
     q->measure = MEASURE_SOLID_ANGLE;
     if (q->wi.z <= 0.0f) { q->wo = reflect_local(q->wi); return (float3)(0.0f); }
-    float ps = rp_prob_specular(b, rp_trans(b, q->wi.z));
+    float ps = rp_prob_specular(b, rp_trans(b, q, q->wi.z));
     if (u.x < ps) {
         float3 m = rp_sample_normal(rp_dist(b), q->wi, (float2)(u.x / ps, u.y));
         q->wo = 2.0f * dot3(q->wi, m) * m - q->wi;
@@ -87,9 +88,7 @@ INLINE float3 roughplastic_sample(__global const Bsdf* b, BsdfQuery* q, float2 u
         q->wo = square_to_cosine_hemisphere((float2)((u.x - ps) / (1.0f - ps), u.y));
     }
     if (q->wo.z <= 0.0f) return (float3)(0.0f);
-    float pdf = roughplastic_pdf(b, q);
-    if (!(pdf > 0.0f)) return (float3)(0.0f);
-    return roughplastic_eval(b, q) * (q->wo.z / pdf);
+    return bsdf_sample_weight(roughplastic_eval(b, q), q->wo.z, roughplastic_pdf(b, q));
 }
 
 INLINE float3 roughplastic_albedo(__global const Bsdf* b, const BsdfQuery* q) {

@@ -33,6 +33,7 @@ INLINE bool bsdf_is_smooth(__global const Bsdf* b) {
 INLINE BsdfQuery bsdf_query(const SceneData* sd, const Intersection* its, float3 wi_world) {
     BsdfQuery q;
     q.textures = sd->textures;
+    q.tables = sd->bsdf_tables;
     q.wi = to_local(&its->sh, wi_world);
     q.wo = (float3)(0.0f);
     q.eta = 1.0f;

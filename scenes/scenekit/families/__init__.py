@@ -1,0 +1,1 @@
+"""One module per scene family: its constants, ``build_<family>(out)`` and ``check(out)`` (sanity checks)."""
