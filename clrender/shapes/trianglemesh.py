@@ -87,8 +87,19 @@ class TriangleMesh(Shape):
         mesh, dropped = mesh.drop_degenerate()
         if dropped:
             log.warning("%s: dropped %d degenerate triangle(s) of %s", spec.location, dropped, filename or name)
+        #: a Mitsuba mesh with no triangle of non-zero area, left out of the scene (Scene's flatten)
+        self.empty = False
         if len(mesh.faces) == 0:
-            raise SceneError(f"mesh '{filename or name}' has no non-degenerate triangles", spec.location)
+            emitting = any(c.spec.tag == "emitter" for c in children)
+            if getattr(spec, "format", "nori") != "mitsuba" or emitting:
+                # Mitsuba 3.9.1 refuses an emitting one too: its area distribution has no mass to sample
+                raise SceneError(f"mesh '{filename or name}' has no non-degenerate triangles"
+                                 + (" (an area light must have some area)" if emitting else ""), spec.location)
+            # Mitsuba 3.9.1 loads it (warning only where it computes normals) and renders the scene around it,
+            # since a triangle of zero area is never hit (Bitterli's staircase has one, Mesh432.obj)
+            log.warning("%s: mesh '%s' has no triangle of non-zero area (%d degenerate): left out of the scene, "
+                        "which renders as in Mitsuba", spec.location, filename or name, dropped)
+            self.empty = True
         self.mesh = mesh
         self.filename = filename
         self.dropped = dropped
