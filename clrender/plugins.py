@@ -12,4 +12,4 @@ from .bsdfs import null, plastic, principled, principledthin  # noqa: F401
 from .bsdfs import roughconductor, roughdielectric, roughplastic, thindielectric, twosided  # noqa: F401
 from .emitters import area, constant, distant, distantdisk, envmap, point, spot  # noqa: F401
 from .integrators import (ao, aov, av, direct, direct_ems, direct_mats, direct_mis, material,  # noqa: F401
-                          normals, path, path_ems, path_mats, path_mis, simple, whitted)
+                          moment, normals, path, path_ems, path_mats, path_mis, simple, whitted)

@@ -276,6 +276,7 @@ class Renderer:
         stats.dropped = int(film.dropped.sum())  # with the samples of pixels whose sums overflowed
         film.stats = stats
         film.tonemap = getattr(getattr(self.scene.camera, "film", None), "tonemap", None)  # an ldrfilm's 8-bit image
+        film.moment = getattr(self.scene, "moment_channels", None)   # a `moment` integrator's m2 channels
         return film
 
 

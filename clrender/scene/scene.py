@@ -102,6 +102,12 @@ class MitsubaScene(Scene):
                              'type="hdrfilm"> (Mitsuba 3 cannot render a scene without one either)', spec.location)
         if self.integrator is None:
             self.integrator = _default_integrator(spec)
+        #: the EXR's second-moment channels' prefix (a `moment` integrator's; integrators/moment.py), or None
+        self.moment_channels = None
+        nested = getattr(self.integrator, "nested", None)
+        if nested is not None:   # `moment`: its nested integrator renders
+            self.moment_channels = self.integrator.channels(self.camera.filter)
+            self.integrator = nested
         self.sampler = self.camera.sampler
 
 
