@@ -129,6 +129,25 @@ def test_checkerboard_pattern(ctx, queue, tex_kernel):
     np.testing.assert_allclose(dflt.eval([[0.2, 0.2], [0.7, 0.2]]), [[0.4] * 3, [0.2] * 3])
 
 
+def test_rawconstant_is_its_value_everywhere(ctx, queue, tex_kernel):
+    """Mitsuba 3.9.1's rawconstant: a <vector> as written (no colour conversion, no range check: negative and above
+    1 stay), a <float> in every channel; a 3-D one read as a float and a value of another kind are errors."""
+    vec = registry.instantiate("texture", "rawconstant", {"value": ("vector", [0.5, -2.0, 1.3])}, fmt="mitsuba")
+    one = registry.instantiate("texture", "rawconstant", {"value": ("float", 0.25)}, fmt="mitsuba")
+    uv = np.random.default_rng(3).uniform(-4, 4, size=(256, 2))
+    dev_vec, dev_one = device_eval(ctx, queue, tex_kernel, [vec, one], uv)
+    np.testing.assert_array_equal(dev_vec, np.tile(np.float32([0.5, -2.0, 1.3]), (256, 1)))
+    np.testing.assert_array_equal(dev_one, np.full((256, 3), 0.25, np.float32))
+    np.testing.assert_array_equal(vec.eval(uv), np.tile([0.5, -2.0, 1.3], (256, 1)))
+    assert one.float_view() is one
+    with pytest.raises(SceneError, match="3-D value cannot fill a float parameter"):
+        vec.float_view()
+    with pytest.raises(SceneError, match="expected a <float> or a 3-D <vector>"):
+        registry.instantiate("texture", "rawconstant", {"value": ("string", "x")}, fmt="mitsuba")
+    with pytest.raises(SceneError, match="needs a \"value\""):
+        registry.instantiate("texture", "rawconstant", {}, fmt="mitsuba")
+
+
 def test_texture_errors(tmp_path, png):
     path, _ = png
     with pytest.raises(SceneError, match="wrap_mode must be one of repeat, mirror, clamp"):
@@ -238,7 +257,7 @@ BLACK, WHITE = ('<bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
     (f'<bsdf type="blendbsdf">{{tex}}{BLACK}{WHITE}</bsdf>', lambda w: w),
     (f'<bsdf type="mask">{{tex}}{BLACK}</bsdf>', lambda w: 1 - w),
 ], ids=["blendbsdf weight", "mask opacity"])
-@pytest.mark.parametrize("given", ["float", "bitmap", "rgb"])
+@pytest.mark.parametrize("given", ["float", "bitmap", "rgb", "rawconstant"])
 def test_float_parameter_in_a_furnace(tmp_path, bsdf, expect, given):
     """A coloured texture (or colour) where a float is read renders as Mitsuba reads it: the bitmap's luminance, the
     colour's channel mean (a red-channel reading gives 0.9 or 0.1 here). The blend's black child reflects nothing,
@@ -255,6 +274,8 @@ def test_float_parameter_in_a_furnace(tmp_path, bsdf, expect, given):
         tex = (f'<texture type="bitmap" name="{name}"><string name="filename" value="c.png"/>'
                f'<boolean name="raw" value="true"/></texture>')
         w = float(rgb / 255.0 @ LUM)
+    elif given == "rawconstant":
+        tex, w = f'<texture type="rawconstant" name="{name}"><float name="value" value="0.4"/></texture>', 0.4
     else:
         tex = f'<rgb name="{name}" value="{", ".join(str(c / 255) for c in rgb)}"/>'
         w = float((rgb / 255.0).mean())
