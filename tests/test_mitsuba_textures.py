@@ -367,6 +367,66 @@ def test_16_bit_pngs_match_mitsuba(tmp_path):
                                        err_msg=f"{name} raw={raw}")
 
 
+def format_images(tmp_path):
+    """A float EXR (values around byte and half steps, below 0 and above 1) and a 16-bit PNG."""
+    import OpenEXR
+
+    rng = np.random.default_rng(21)
+    f = rng.uniform(-0.2, 1.3, size=(6, 5, 3)).astype(np.float32)
+    f[0, :3, 0] = [0.002, 0.0025, 0.70001]
+    OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage},
+                 {"RGB": f}).write(str(tmp_path / "f.exr"))
+    p = rng.integers(0, 65536, size=(6, 5, 3)).astype(np.uint16)
+    write_png16(tmp_path / "p.png", p)
+    return f, p
+
+
+@pytest.mark.parametrize("raw", [False, True])
+def test_bitmap_format_sets_the_texels_precision(tmp_path, raw):
+    """Mitsuba 3.9.1's bitmap `format`: variant keeps float32 (a 16-bit image unrounded), float16 rounds every value
+    to half, uint8 every channel to a byte (a 16-bit image's encoded values, decoded after; a float image's
+    clamped to [0, 1]); auto is the default's half-rounded 16 bits. Values derived from each definition."""
+    from clrender.textures.imagefile import srgb_to_linear
+
+    f, p = format_images(tmp_path)
+    decode = (lambda x: x) if raw else srgb_to_linear
+    v = p / 65535.0
+    half = lambda x: np.asarray(x, np.float32).astype(np.float16).astype(np.float32)   # noqa: E731
+    byte = lambda x: np.round(np.clip(x, 0, 1) * 255) / 255                             # noqa: E731
+    want = {("f.exr", "auto"): f, ("f.exr", "variant"): f, ("f.exr", "float16"): half(f),
+            ("f.exr", "fp16"): half(f), ("f.exr", "uint8"): byte(f),
+            ("p.png", "auto"): half(decode(v)), ("p.png", "variant"): decode(v),
+            ("p.png", "float16"): half(decode(v)), ("p.png", "uint8"): decode(byte(v))}
+    for (name, fmt), expect in want.items():
+        got = bitmap(tmp_path / name, raw=raw, format=fmt).image
+        np.testing.assert_allclose(got, np.asarray(expect, np.float32), rtol=0, atol=1e-7, err_msg=f"{name} {fmt}")
+    with pytest.raises(SceneError, match="format must be one of auto, variant, float16, uint8"):
+        bitmap(tmp_path / "p.png", format="half")
+
+
+def test_bitmap_format_matches_mitsuba(tmp_path):
+    """The same lookups by Mitsuba 3.9.1 itself: equal for auto, variant and float16; for uint8 within one byte step
+    (Mitsuba dithers when it turns 16-bit or float values into bytes)."""
+    mi = real_mitsuba("Mitsuba 3 is not installed (pip install mitsuba==3.9.1): it checks bitmap formats")
+    mi.set_variant("scalar_rgb")
+    format_images(tmp_path)
+    si = mi.SurfaceInteraction3f()
+    uv = (np.stack(np.meshgrid(np.arange(5), np.arange(6)), -1).reshape(-1, 2) + 0.5) / [5, 6]
+    for name in ("f.exr", "p.png"):
+        for fmt in ("auto", "variant", "float16", "uint8"):
+            theirs = mi.load_dict({"type": "bitmap", "filename": str(tmp_path / name), "format": fmt,
+                                   "filter_type": "nearest"})
+            want = []
+            for u in uv:
+                si.uv = mi.Point2f(*u)
+                want.append(np.array(theirs.eval(si)))
+            ours = bitmap(tmp_path / name, format=fmt, filter_type="nearest").eval(uv)
+            if fmt == "uint8":   # one byte step: 1/255 of a linear value, at most 0.009 once an encoded one is decoded
+                np.testing.assert_allclose(ours, want, rtol=0, atol=1 / 255 + 1e-6 if name == "f.exr" else 0.009)
+            else:
+                np.testing.assert_allclose(ours, want, rtol=0, atol=1e-6, err_msg=f"{name} {fmt}")   # float32 decoding
+
+
 def test_16_bit_grey_png_is_read(tmp_path):
     # It used to be refused ("only 8-bit ... images"); Mitsuba reads it, sRGB-decoded unless raw like 8-bit ones,
     # and keeps the values as half floats (hence the tolerance).
