@@ -91,7 +91,12 @@ class MitsubaScene(Scene):
         self.location = spec.location
         self.nori_dialect = "upstream"   # Mitsuba's camera convention is upstream Nori's
         self.camera = self.integrator = None
-        # bsdfs and textures at the top level are only declared for references: _take_children passes them over
+        # bsdfs and textures at the top level are only declared for references: _take_children passes them over.
+        # So is an area emitter that a shape holds by a <ref> (Mitsuba's own Cornell boxes declare the light at the
+        # top level, after the shape): Mitsuba 3.9.1's scene lists area emitters only through their shapes. One that
+        # no shape holds stays an error (Mitsuba ignores it silently: the light the file meant is missing).
+        attached = {id(c.emitter) for c in children if c.spec.tag == "shape" and getattr(c, "emitter", None)}
+        children = [c for c in children if id(c) not in attached]
         self._take_children(children, "shape", {"sensor": "camera", "integrator": "integrator"},
                             "clrender renders one <{tag}> per scene; this is a second one")
         from ..shapes.instance import flatten
