@@ -405,3 +405,29 @@ def test_moment_names_and_filters(tmp_path, caplog):
     with pytest.raises(SceneError, match="needs a nested <integrator>") as e:
         clrender.load_scene(moment_scene(tmp_path, nested=""))
     assert e.value.location.file.endswith("moment.xml")
+
+
+def test_aov_with_a_nested_integrator_renders_that_one(tmp_path, caplog):
+    """Mitsuba 3.9.1's aov with a nested integrator: the image is the nested integrator's (the emitter edge scene's
+    0, 0, 1, 2, 2 columns, z-tested), and the AOVs are channels beside it, which clrender does not write (a warning
+    naming them); a malformed AOV is still an error, and a second nested integrator too."""
+    import logging
+
+    def aov_scene(aovs, nested='<integrator type="path"/>'):
+        p = moment_scene(tmp_path, nested=nested)
+        p.write_text(p.read_text().replace('<integrator type="moment">',
+                                           f'<integrator type="aov"><string name="aovs" value="{aovs}"/>'))
+        return p
+
+    with caplog.at_level(logging.WARNING, logger="clrender"):
+        scene = clrender.load_scene(aov_scene("nn:sh_normal, dd.y:depth, a:albedo"))
+    assert scene.integrator.kernel == "path_mitsuba" and scene.moment_channels is None
+    assert any("writes none of the AOVs (nn:sh_normal, dd.y:depth, a:albedo)" in r.getMessage()
+               for r in caplog.records)
+    film = clrender.render(scene, spp=256, seed=5)
+    assert compare_to_value(film, np.broadcast_to(np.array([0.0, 0.0, 1.0, 2.0, 2.0])[None, :, None], (5, 5, 3)),
+                            ALPHA).passed
+    with pytest.raises(SceneError, match="'nn:normal' is not a <name>:<type> pair"):
+        clrender.load_scene(aov_scene("nn:normal"))
+    with pytest.raises(SceneError, match="takes one nested integrator, got 2"):
+        clrender.load_scene(aov_scene("dd.y:depth", '<integrator type="path"/><integrator type="direct"/>'))

@@ -8,13 +8,26 @@
 Types: `depth` (distance along the ray from the near clip plane, where Mitsuba's camera rays start: Mitsuba's
 value, not quite the distance from the pinhole; written to all three channels), `position` (world
 x, y, z), `geo_normal` and `sh_normal` (the geometric and the shading normal, signed, as Mitsuba writes them);
-0 where the ray escapes. Our film holds one RGB image, so one AOV only: a list of several, a nested integrator
-(whose image Mitsuba writes beside the AOVs) or Mitsuba's other types (albedo, uv, dp_du, ...) are errors.
-Kernel: kernels/integrators/aov.h.
+0 where the ray escapes. Our film holds one RGB image, so one AOV only: a list of several or Mitsuba's other types
+(albedo, uv, dp_du, ...) are errors. With a nested integrator Mitsuba's image is the nested integrator's, and the
+AOVs are channels beside it:
+
+```xml
+<integrator type="aov">
+    <string name="aovs" value="nn:sh_normal, dd.y:depth"/>   <!-- any of Mitsuba's types -->
+    <integrator type="path" name="image"/>
+</integrator>
+```
+clrender then renders the nested integrator as the image (Mitsuba's R, G, B) and writes no AOV channels, with a
+warning (render the aov integrator without one for each AOV). Kernel: kernels/integrators/aov.h.
 """
+import logging
+
 from ..errors import SceneError
 from ..scene.registry import register
 from .integrator import Integrator
+
+log = logging.getLogger("clrender")
 
 KINDS = {"depth": 0, "position": 1, "geo_normal": 2, "sh_normal": 3}
 MITSUBA_ONLY = ("albedo", "uv", "dp_du", "dp_dv", "duv_dx", "duv_dy", "prim_index", "shape_index")
@@ -24,19 +37,29 @@ MITSUBA_ONLY = ("albedo", "uv", "dp_du", "dp_dv", "duv_dx", "duv_dy", "prim_inde
 class Aov(Integrator):
     kernel = "aov"
     PARAMS = [("kind", "uint")]
-    children = ("integrator",)   # accepted so that the error below can say why it is not supported
+    children = ("integrator",)
+    nested = None
 
     def __init__(self, props, children, spec):
         where = '<integrator type="aov">'
-        if children:
-            raise SceneError(f"{where}: a nested integrator is not supported: our film holds one RGB image, so "
-                             "the aov integrator renders one AOV and nothing beside it", spec.location)
+        #: the nested integrator that renders the image (MitsubaScene renders it in this one's place), or None
+        self.nested = children[0] if children else None
+        if len(children) > 1:
+            raise SceneError(f"{where} takes one nested integrator, got {len(children)}", children[1].spec.location)
         text = props.get_string("aovs")
         loc = props.location("aovs")
         items = [t.strip() for t in text.split(",") if t.strip()]
         if not items:
             raise SceneError(f"{where}: aovs is empty; give one <name>:<type> pair, type one of "
                              f"{', '.join(KINDS)}", loc)
+        if self.nested is not None:   # the AOVs are channels we do not write: their names and types only checked
+            for item in items:
+                name, sep, kind = item.partition(":")
+                if not sep or not name.strip() or kind.strip() not in (*KINDS, *MITSUBA_ONLY):
+                    raise SceneError(f"{where}: {item!r} is not a <name>:<type> pair with type one of "
+                                     f"{', '.join((*KINDS, *MITSUBA_ONLY))}", loc)
+            self.aovs, self.location = text, spec.location
+            return
         if len(items) > 1:
             raise SceneError(f"{where}: aovs lists {len(items)} AOVs ({text!r}) but our film holds one RGB image: "
                              f"give one <name>:<type> pair (render again for the others)", loc)
@@ -51,6 +74,14 @@ class Aov(Integrator):
 
     def fill(self, p):
         p["kind"] = KINDS[self.kind]
+
+    def channels(self, rfilter) -> None:
+        """With a nested integrator (which renders the image): no channels beside the image, with a warning."""
+        log.warning("%s: <integrator type=\"aov\"> with a nested <integrator type=\"%s\">: clrender renders the "
+                    "nested integrator as the image, as Mitsuba does, but writes none of the AOVs (%s) beside it: its "
+                    "film holds one image; render the aov integrator without a nested one for each AOV",
+                    self.location, self.nested.spec.type, self.aovs)
+        return None
 
 
 @register("integrator", "depth", fmt="mitsuba")

@@ -110,7 +110,7 @@ class MitsubaScene(Scene):
         #: the EXR's second-moment channels' prefix (a `moment` integrator's; integrators/moment.py), or None
         self.moment_channels = None
         nested = getattr(self.integrator, "nested", None)
-        if nested is not None:   # `moment`: its nested integrator renders
+        if nested is not None:   # `moment`, `aov` with a nested integrator: that one renders the image
             self.moment_channels = self.integrator.channels(self.camera.filter)
             self.integrator = nested
         self.sampler = self.camera.sampler
