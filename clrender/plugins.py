@@ -6,7 +6,7 @@ from .cameras import perspective  # noqa: F401
 from .filters import box, gaussian, lanczos, mitchell, tent  # noqa: F401
 from .films import hdrfilm, ldrfilm  # noqa: F401
 from .samplers import independent  # noqa: F401
-from .textures import bitmap, checkerboard, checkerboard_color, rawconstant, uvtexture  # noqa: F401
+from .textures import bitmap, checkerboard, checkerboard_color, mesh_attribute, rawconstant, uvtexture  # noqa: F401
 from .bsdfs import blendbsdf, bumpmap, conductor, dielectric, diffuse, mask, microfacet, mirror, normalmap  # noqa: F401
 from .bsdfs import null, plastic, principled, principledthin  # noqa: F401
 from .bsdfs import roughconductor, roughdielectric, roughplastic, thindielectric, twosided  # noqa: F401

@@ -104,6 +104,10 @@ class TriangleMesh(Shape):
         self.filename = filename
         self.dropped = dropped
         self._attach(children, spec)
+        if not self.empty:   # a mesh_attribute texture in the BSDF: the mesh's attribute, baked into a bitmap
+            from ..textures.mesh_attribute import bake
+
+            self.mesh, self.bsdf = bake(self, self.mesh, self.bsdf, filename or name)
 
 
 def half_normals(normals) -> np.ndarray:
@@ -184,8 +188,10 @@ def crease_normals(mesh, max_angle: float):
     normals = np.zeros((first.size, 3))
     np.add.at(normals, new_index, np.repeat(n, 3, axis=0) * angles.reshape(-1, 1))
     old = f.reshape(-1)[first]
+    attributes = {k: v[old] if k.startswith("vertex_") else v for k, v in mesh.attributes.items()}
     return MeshData(positions=mesh.positions[old], normals=_normalize_rows(normals),
-                    uvs=None if mesh.uvs is None else mesh.uvs[old], faces=new_index.reshape(-1, 3))
+                    uvs=None if mesh.uvs is None else mesh.uvs[old], faces=new_index.reshape(-1, 3),
+                    attributes=attributes)
 
 
 class MitsubaMeshOptions:
@@ -214,7 +220,8 @@ class MitsubaMeshOptions:
             if flip:
                 faces = faces[:, [0, 2, 1]]
                 normals = None if normals is None else -normals
-            return MeshData(positions=mesh.positions, normals=normals, uvs=mesh.uvs, faces=faces)
+            return MeshData(positions=mesh.positions, normals=normals, uvs=mesh.uvs, faces=faces,
+                            attributes=mesh.attributes)
 
         self._load(props, children, spec, loader, "to_world", prepare, generate, name)
 
