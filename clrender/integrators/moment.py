@@ -58,8 +58,9 @@ class Moment:
 
         if isinstance(rfilter, BoxFilter) and rfilter.radius == 0.5:
             return f"m2_{self.name}"
-        log.warning("%s: <integrator type=\"moment\">: the film's filter is <rfilter type=\"%s\">, so only the first "
-                    "moment (the image) is written: the film's sum of squared weighted samples equals Mitsuba's "
-                    "second moment only with a box filter", self.location,
-                    getattr(getattr(rfilter, "spec", None), "type", type(rfilter).__name__))
+        kind = getattr(getattr(rfilter, "spec", None), "type", None)
+        what = f'<rfilter type="{kind}">' if kind else "the default gaussian"
+        log.warning("%s: <integrator type=\"moment\">: the film's filter is %s, so only the first moment (the image) "
+                    "is written: the film's sum of squared weighted samples equals Mitsuba's second moment only with "
+                    "a box filter", self.location, what)
         return None
