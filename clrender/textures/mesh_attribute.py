@@ -20,12 +20,14 @@ The kernels look textures up by uv only, so each mesh whose BSDF holds one is gi
 mesh is loaded (``bake``): every triangle gets its own 2 x 2 block of texels, its corners the uvs of three of the
 block's texel centres, and the fourth texel c11 = c10 + c01 - c00, so that the bitmap's bilinear lookup over the
 block is exactly the barycentric interpolation (constant for a face attribute); the mesh's vertices are unshared
-for this. Hence the limits: the BSDF must read no other texture through uv (an error says so), and the texture
-cannot fill a float parameter or light an emitter.
+for this. Where a float is read (a blend weight), a one-value attribute is that value and a three-value one 0, as
+Mitsuba's eval_1 gives (with a warning). Hence the limits: the BSDF must read no other texture through uv (an error
+says so), and the texture cannot light an emitter.
 """
 from __future__ import annotations
 
 import copy
+import logging
 import math
 
 import numpy as np
@@ -35,6 +37,7 @@ from ..scene.registry import register
 from .bitmap import Bitmap
 from .texture import Texture
 
+log = logging.getLogger("clrender")
 WHERE = '<texture type="mesh_attribute">'
 
 
@@ -53,9 +56,14 @@ class MeshAttribute(Texture):
     def max_value(self) -> float:
         return 0.0   # unknown until a mesh bakes it
 
-    def make_float_view(self):
-        raise SceneError(f"{WHERE} cannot fill a float parameter in clrender (only a colour, e.g. a reflectance)",
-                         self.location)
+    #: read where a float belongs (a blend weight, a roughness): Mitsuba's eval_1
+    as_float = False
+
+    def make_float_view(self) -> "MeshAttribute":
+        view = copy.copy(self)
+        view.as_float = True
+        view.__dict__["_float_view"] = view
+        return view
 
     def eval(self, uv):
         raise SceneError(f"{WHERE} has a value only on a mesh", self.location)
@@ -124,32 +132,35 @@ def bake(shape, mesh, bsdf, filename: str):
     found, others = _holders(bsdf)
     if not found:
         return mesh, bsdf
-    attr = found[0]
-    if any(f is not attr for f in found) or others:
+    if others:
         raise SceneError(f"{WHERE}: the BSDF of mesh '{filename}' reads another texture beside it, which clrender "
-                         f"cannot do (the attribute takes over the mesh's uvs)", attr.location)
-    values = mesh.attributes.get(attr.name)
-    if values is None:
-        have = ", ".join(sorted(mesh.attributes)) or "none"
-        raise SceneError(f"{WHERE}: mesh '{filename}' has no attribute \"{attr.name}\" (it has: {have})",
-                         attr.location)
-    values = np.asarray(values, np.float64) * attr.scale
-    if values.shape[1] == 1:
-        values = np.repeat(values, 3, axis=1)
-    values = values[:, :3]
+                         f"cannot do (the attribute takes over the mesh's uvs)", found[0].location)
     f = mesh.faces
     n = len(f)
-    if attr.name.startswith("vertex_"):
-        c00, c10, c01 = values[f[:, 0]], values[f[:, 1]], values[f[:, 2]]
-    else:
-        c00 = c10 = c01 = values
-    c11 = c10 + c01 - c00
     side = max(1, math.ceil(math.sqrt(n)))
     k = np.arange(n)
     bx, by = 2 * (k % side), 2 * (k // side)
     size = 2 * side
-    image = np.zeros((size, size, 3))
-    image[by, bx], image[by, bx + 1], image[by + 1, bx], image[by + 1, bx + 1] = c00, c10, c01, c11
+    for attr in dict.fromkeys(found):   # each texture (a colour and its float view are two) on the same blocks
+        values = mesh.attributes.get(attr.name)
+        if values is None:
+            have = ", ".join(sorted(mesh.attributes)) or "none"
+            raise SceneError(f"{WHERE}: mesh '{filename}' has no attribute \"{attr.name}\" (it has: {have})",
+                             attr.location)
+        values = np.asarray(values, np.float64) * attr.scale
+        if attr.as_float and values.shape[1] != 1:   # Mitsuba's eval_1 of a 3-value attribute is 0
+            log.warning("%s: %s \"%s\" has %d values where a float is read: 0, as in Mitsuba 3.9.1",
+                        attr.location, WHERE, attr.name, values.shape[1])
+            values = np.zeros((len(values), 1))
+        values = np.repeat(values, 3, axis=1) if values.shape[1] == 1 else values[:, :3]
+        if attr.name.startswith("vertex_"):
+            c00, c10, c01 = values[f[:, 0]], values[f[:, 1]], values[f[:, 2]]
+        else:
+            c00 = c10 = c01 = values
+        image = np.zeros((size, size, 3))
+        image[by, bx], image[by, bx + 1], image[by + 1, bx] = c00, c10, c01
+        image[by + 1, bx + 1] = c10 + c01 - c00
+        bsdf = _replaced(bsdf, attr, baked_bitmap(image, attr), {})
     corner = lambda x, y: np.stack([(x + 0.5) / size, (y + 0.5) / size], axis=1)   # noqa: E731
     uvs = np.stack([corner(bx, by), corner(bx + 1, by), corner(bx, by + 1)], axis=1).reshape(-1, 2)
     from ..shapes.meshdata import MeshData
@@ -157,4 +168,4 @@ def bake(shape, mesh, bsdf, filename: str):
     flat = f.reshape(-1)
     baked = MeshData(positions=mesh.positions[flat], normals=None if mesh.normals is None else mesh.normals[flat],
                      uvs=uvs, faces=np.arange(3 * n).reshape(n, 3), attributes={})
-    return baked, _replaced(bsdf, attr, baked_bitmap(image, attr), {})
+    return baked, bsdf
