@@ -102,6 +102,8 @@ class Film:
             m2 = self.second_moment()
             for i, c in enumerate("RGB"):
                 channels[f"{prefix}.{c}"] = np.ascontiguousarray(m2[..., i])
+        for name, values in (getattr(self, "aovs", None) or {}).items():   # renderer.aov_channels
+            channels[name] = np.ascontiguousarray(values, np.float32)
         return _atomic_write(Path(path), lambda tmp: OpenEXR.File(header, channels).write(str(tmp)))
 
     def second_moment(self) -> np.ndarray:

@@ -409,9 +409,15 @@ def test_moment_names_and_filters(tmp_path, caplog):
 
 def test_aov_with_a_nested_integrator_renders_that_one(tmp_path, caplog):
     """Mitsuba 3.9.1's aov with a nested integrator: the image is the nested integrator's (the emitter edge scene's
-    0, 0, 1, 2, 2 columns, z-tested), and the AOVs are channels beside it, which clrender does not write (a warning
-    naming them); a malformed AOV is still an error, and a second nested integrator too."""
+    0, 0, 1, 2, 2 columns, z-tested), and `clrender render` writes each AOV clrender renders beside it under
+    Mitsuba 3.9.1's names (`dd.y.T` for a depth, `nn.X/Y/Z`), each exactly the aov integrator's own render with the same
+    samples; a type clrender does not render is left out with a warning; a malformed AOV is an error, and a second
+    nested integrator too."""
     import logging
+
+    import OpenEXR
+
+    from clrender.cli import main
 
     def aov_scene(aovs, nested='<integrator type="path"/>'):
         p = moment_scene(tmp_path, nested=nested)
@@ -422,11 +428,24 @@ def test_aov_with_a_nested_integrator_renders_that_one(tmp_path, caplog):
     with caplog.at_level(logging.WARNING, logger="clrender"):
         scene = clrender.load_scene(aov_scene("nn:sh_normal, dd.y:depth, a:albedo"))
     assert scene.integrator.kernel == "path_mitsuba" and scene.moment_channels is None
-    assert any("writes none of the AOVs (nn:sh_normal, dd.y:depth, a:albedo)" in r.getMessage()
-               for r in caplog.records)
+    assert scene.aovs == [("nn", "sh_normal"), ("dd.y", "depth")]
+    assert any("does not render the AOVs a:albedo" in r.getMessage() for r in caplog.records)
     film = clrender.render(scene, spp=256, seed=5)
     assert compare_to_value(film, np.broadcast_to(np.array([0.0, 0.0, 1.0, 2.0, 2.0])[None, :, None], (5, 5, 3)),
                             ALPHA).passed
+    assert main(["render", str(aov_scene("nn:sh_normal, dd.y:depth")), "-q", "-o", str(tmp_path / "a.exr"),
+                 "--spp", "16", "--seed", "7"]) == 0
+    with OpenEXR.File(str(tmp_path / "a.exr")) as f:
+        names = sorted(c.name for c in f.header()["channels"])
+        ch = {k: np.asarray(c.pixels) for k, c in f.channels().items()}
+    assert names == ["B", "G", "R", "dd.y.T", "nn.X", "nn.Y", "nn.Z"]
+    for name, kind in (("dd.y", "depth"), ("nn", "sh_normal")):
+        one = clrender.load_scene(aov_scene(f"{name}:{kind}"))
+        one.integrator = mitsuba_integrator("aov", aovs=f"{name}:{kind}")
+        want = clrender.render(one, spp=16, seed=7).image
+        got = ch[f"{name}.T"] if kind == "depth" else np.stack([ch[f"{name}.{c}"] for c in "XYZ"], axis=-1)
+        np.testing.assert_array_equal(got, want[..., 0] if kind == "depth" else want)
+    assert ch["nn.Z"].max() == 1.0 and ch["dd.y.T"].max() > 0
     with pytest.raises(SceneError, match="'nn:normal' is not a <name>:<type> pair"):
         clrender.load_scene(aov_scene("nn:normal"))
     with pytest.raises(SceneError, match="takes one nested integrator, got 2"):

@@ -18,8 +18,12 @@ AOVs are channels beside it:
     <integrator type="path" name="image"/>
 </integrator>
 ```
-clrender then renders the nested integrator as the image (Mitsuba's R, G, B) and writes no AOV channels, with a
-warning (render the aov integrator without one for each AOV). Kernel: kernels/integrators/aov.h.
+clrender then renders the nested integrator as the image (Mitsuba's R, G, B) and, with `clrender render`, each AOV
+of the four types above by a pass of its own (same samples per pixel and seed), written beside it under Mitsuba
+3.9.1's channel names: `<name>.T` for depth, `<name>.X/.Y/.Z` for the others; Mitsuba's other types are left out
+with a warning (renderer.aov_channels). Mitsuba also writes the nested integrator's own channels, `<its name>.R/G/B`
+(the image again) and `.A` (the fraction of its rays that hit something): those are not written. Kernel:
+kernels/integrators/aov.h.
 """
 import logging
 
@@ -52,12 +56,15 @@ class Aov(Integrator):
         if not items:
             raise SceneError(f"{where}: aovs is empty; give one <name>:<type> pair, type one of "
                              f"{', '.join(KINDS)}", loc)
-        if self.nested is not None:   # the AOVs are channels we do not write: their names and types only checked
+        if self.nested is not None:   # channels beside the nested integrator's image, each a pass of its own
+            #: the (name, type) pairs as written
+            self.items = []
             for item in items:
                 name, sep, kind = item.partition(":")
                 if not sep or not name.strip() or kind.strip() not in (*KINDS, *MITSUBA_ONLY):
                     raise SceneError(f"{where}: {item!r} is not a <name>:<type> pair with type one of "
                                      f"{', '.join((*KINDS, *MITSUBA_ONLY))}", loc)
+                self.items.append((name.strip(), kind.strip()))
             self.aovs, self.location = text, spec.location
             return
         if len(items) > 1:
@@ -76,12 +83,16 @@ class Aov(Integrator):
         p["kind"] = KINDS[self.kind]
 
     def channels(self, rfilter) -> None:
-        """With a nested integrator (which renders the image): no channels beside the image, with a warning."""
-        log.warning("%s: <integrator type=\"aov\"> with a nested <integrator type=\"%s\">: clrender renders the "
-                    "nested integrator as the image, as Mitsuba does, but writes none of the AOVs (%s) beside it: its "
-                    "film holds one image; render the aov integrator without a nested one for each AOV",
-                    self.location, self.nested.spec.type, self.aovs)
+        """With a nested integrator (which renders the image): no second-moment channels (see ``renderable``)."""
         return None
+
+    def renderable(self) -> list[tuple[str, str]]:
+        """The (name, type) AOVs that a pass of this integrator can render; the others are named in a warning."""
+        skipped = [f"{n}:{k}" for n, k in self.items if k not in KINDS]
+        if skipped:
+            log.warning("%s: <integrator type=\"aov\">: clrender does not render the AOVs %s (it renders %s); "
+                        "they are left out", self.location, ", ".join(skipped), ", ".join(KINDS))
+        return [(n, k) for n, k in self.items if k in KINDS]
 
 
 @register("integrator", "depth", fmt="mitsuba")

@@ -110,8 +110,11 @@ class MitsubaScene(Scene):
         #: the EXR's second-moment channels' prefix (a `moment` integrator's; integrators/moment.py), or None
         self.moment_channels = None
         nested = getattr(self.integrator, "nested", None)
+        #: the (name, type) AOVs an `aov` with a nested integrator asks for beside the image (renderer.aov_channels)
+        self.aovs = []
         if nested is not None:   # `moment`, `aov` with a nested integrator: that one renders the image
             self.moment_channels = self.integrator.channels(self.camera.filter)
+            self.aovs = self.integrator.renderable() if hasattr(self.integrator, "renderable") else []
             self.integrator = nested
         self.sampler = self.camera.sampler
 
