@@ -107,7 +107,7 @@ class TriangleMesh(Shape):
         if not self.empty:   # a mesh_attribute texture in the BSDF: the mesh's attribute, baked into a bitmap
             from ..textures.mesh_attribute import bake
 
-            self.mesh, self.bsdf = bake(self, self.mesh, self.bsdf, filename or name)
+            self.mesh, self.bsdf = bake(self.mesh, self.bsdf, filename or name)
 
 
 def half_normals(normals) -> np.ndarray:

@@ -20,7 +20,7 @@ The kernels look textures up by uv only, so each mesh whose BSDF holds one is gi
 mesh is loaded (``bake``): every triangle gets its own 2 x 2 block of texels, its corners the uvs of three of the
 block's texel centres, and the fourth texel c11 = c10 + c01 - c00, so that the bitmap's bilinear lookup over the
 block is exactly the barycentric interpolation (constant for a face attribute); the mesh's vertices are unshared
-for this. Where a float is read (a blend weight), a one-value attribute is that value and a three-value one 0, as
+for this (64 bytes of texels a triangle, and three vertices of its own). Where a float is read (a blend weight), a one-value attribute is that value and a three-value one 0, as
 Mitsuba's eval_1 gives (with a warning). Hence the limits: the BSDF must read no other texture through uv (an error
 says so), and the texture cannot light an emitter.
 """
@@ -126,7 +126,7 @@ def _replaced(obj, old, new, memo):
     return out
 
 
-def bake(shape, mesh, bsdf, filename: str):
+def bake(mesh, bsdf, filename: str):
     """(mesh, bsdf) for a mesh whose BSDF reads a mesh attribute: unshared vertices with the blocks' uvs, and a copy
     of the BSDF reading the baked texture; unchanged where it reads none."""
     found, others = _holders(bsdf)
@@ -163,9 +163,7 @@ def bake(shape, mesh, bsdf, filename: str):
         bsdf = _replaced(bsdf, attr, baked_bitmap(image, attr), {})
     corner = lambda x, y: np.stack([(x + 0.5) / size, (y + 0.5) / size], axis=1)   # noqa: E731
     uvs = np.stack([corner(bx, by), corner(bx + 1, by), corner(bx, by + 1)], axis=1).reshape(-1, 2)
-    from ..shapes.meshdata import MeshData
-
     flat = f.reshape(-1)
-    baked = MeshData(positions=mesh.positions[flat], normals=None if mesh.normals is None else mesh.normals[flat],
+    baked = type(mesh)(positions=mesh.positions[flat], normals=None if mesh.normals is None else mesh.normals[flat],
                      uvs=uvs, faces=np.arange(3 * n).reshape(n, 3), attributes={})
     return baked, bsdf
