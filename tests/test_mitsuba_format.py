@@ -236,6 +236,17 @@ def test_missing_include_is_located(tmp_path):
     assert "cannot include 'nowhere.xml'" in str(e.value) and "looked in" in str(e.value)
 
 
+def test_included_default_for_a_name_already_given_is_ignored(tmp_path):
+    """Mitsuba 3.9.1 keeps the first <default> of a name and passes over later ones (its own participating-media test
+    scenes give `spp` in the file and again in the preamble they include); in one file a second one stays an error."""
+    write(tmp_path / "pre.xml", f'{HEAD}<default name="r" value="0.9"/><default name="g" value="0.3"/></scene>')
+    write(tmp_path / "main.xml", f'{HEAD}<default name="r" value="0.2"/><include filename="pre.xml"/>{SENSOR}'
+                                 '<shape type="cube"><bsdf type="diffuse"><rgb name="reflectance" value="$r, $g, 0"/>'
+                                 '</bsdf></shape></scene>')
+    scene = create(parse_file(tmp_path / "main.xml"))
+    assert scene.shapes[0].bsdf.albedo.tolist() == [0.2, 0.3, 0.0]
+
+
 def test_include_cycle_is_an_error(tmp_path):
     write(tmp_path / "main.xml", f'{HEAD}<include filename="a.xml"/></scene>')
     write(tmp_path / "a.xml", f'{HEAD}\n<include filename="a.xml"/></scene>')

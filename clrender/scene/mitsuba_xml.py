@@ -158,9 +158,11 @@ class MitsubaBuilder(_x._Builder):
                 raise self.err(f"<default> name '{a['name']}' is not a valid variable name",
                                self.attr_loc(c, "name"))
             first = self.state.file_defaults.get(a["name"])
-            if first is not None:
+            if first is not None and first.file == c.loc.file:
                 raise self.err(f"<default> '{a['name']}' given twice (first at {first})", c.loc)
             self.no_children(c)
+            if first is not None:   # an included file's default for a name already given: the first wins, as in
+                continue            # Mitsuba 3.9.1 (mitsuba-data's participating_media tests and their preamble)
             self.state.file_defaults[a["name"]] = c.loc
             if a["name"] not in self.state.user_defines:  # -D wins over the file's default
                 self.defines[a["name"]] = a["value"]
