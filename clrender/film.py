@@ -144,7 +144,23 @@ class Film:
         channels = {"RGB": np.ascontiguousarray(self.image if image is None else image, dtype=np.float32)}
         for name in self.layers:   # (H, W, 3) layers become channels NAME.R, NAME.G, NAME.B
             channels[name] = np.ascontiguousarray(self.aov(name), dtype=np.float32)
+        prefix = getattr(self, "moment", None)
+        if prefix:   # a `moment` integrator's (integrators/moment.py; box filter: every w is 1)
+            m2 = self.second_moment()
+            for i, c in enumerate("RGB"):
+                channels[f"{prefix}.{c}"] = np.ascontiguousarray(m2[..., i])
+        for name, values in (getattr(self, "aovs", None) or {}).items():   # renderer.aov_channels
+            channels[name] = np.ascontiguousarray(values, np.float32)
         return _atomic_write(Path(path), lambda tmp: OpenEXR.File(header, channels).write(str(tmp)))
+
+    def second_moment(self) -> np.ndarray:
+        """(H, W, 3) float32 sum((w L)^2) / sum(w): with weights of 1 (a box filter) each pixel's mean of its
+        samples' squares, Mitsuba's `moment` m2; 0 where no weight arrived."""
+        w = self.sum_w[..., None]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            m2 = np.where(w != 0, self.sum_wl2 / np.where(w != 0, w, 1), 0.0)
+        big = float(np.finfo(np.float32).max)
+        return np.clip(m2, -big, big).astype(np.float32)
 
     def write_png(self, path, image: np.ndarray | None = None) -> Path:
         """The sRGB 8-bit image (or `image` in its place), or the scene's own tone map where its film has one

@@ -320,7 +320,26 @@ class Renderer:
         stats.dropped = int(film.dropped.sum())  # with the samples of pixels whose sums overflowed
         film.stats = stats
         film.tonemap = getattr(getattr(self.scene.camera, "film", None), "tonemap", None)  # an ldrfilm's 8-bit image
+        film.moment = getattr(self.scene, "moment_channels", None)   # a `moment` integrator's m2 channels
         return film
+
+
+def aov_channels(scene, spp: int | None = None, seed: int = 0, device=None, driver: str = "auto") -> dict:
+    """The channels of the AOVs a Mitsuba `aov` with a nested integrator asks for (``scene.aovs``), each rendered by
+    a pass of the aov integrator alone with the same samples per pixel and seed, named as Mitsuba 3.9.1 names them:
+    ``<name>.T`` for depth (one channel), ``<name>.X/.Y/.Z`` for the others. {} where there are none."""
+    from .scene.registry import instantiate
+
+    out = {}
+    for name, kind in getattr(scene, "aovs", ()):
+        view = copy.copy(scene)
+        view.integrator = instantiate("integrator", "aov", {"aovs": ("string", f"{name}:{kind}")}, fmt="mitsuba")
+        img = Renderer(view, device=device, driver=driver).render(spp=spp, seed=seed).image
+        if kind == "depth":
+            out[f"{name}.T"] = img[..., 0]
+        else:
+            out.update({f"{name}.{c}": img[..., i] for i, c in enumerate("XYZ")})
+    return out
 
 
 def render(scene, spp: int | None = None, seed: int = 0, device=None, time_limit: float | None = None,

@@ -110,7 +110,30 @@ def test_alias_names_the_same_object():
 
 def test_reference_to_unknown_id_is_located():
     err(f'{HEAD}<bsdf type="diffuse" id="w"/>\n<shape type="cube">  <ref id="white"/></shape></scene>',
-        2, 31, "unknown id 'white'", "declared so far: w")
+        2, 31, "unknown id 'white'", "no object in the scene", "declared: w")
+
+
+def test_reference_to_an_object_declared_later():
+    """Mitsuba 3.9.1 resolves refs once the whole file is read (its own Cornell boxes refer to BSDFs declared after
+    the shapes): the later object, shared, and a named ref renames a texture as a ref before it does."""
+    scene = load('<shape type="cube"><ref id="w"/></shape><shape type="cube"><ref name="bsdf" id="w"/></shape>'
+                 '<shape type="cube"><bsdf type="diffuse"><ref name="reflectance" id="t"/></bsdf></shape>'
+                 '<bsdf type="diffuse" id="w"><rgb name="reflectance" value="0.1, 0.2, 0.3"/></bsdf>'
+                 '<texture type="checkerboard" id="t"><rgb name="color0" value="0.25"/></texture>')
+    a, b, c = (s.bsdf for s in scene.shapes)
+    assert a is b and a.albedo.tolist() == [0.1, 0.2, 0.3]
+    assert c.texture is not None and c.texture.spec.type == "checkerboard" and c.texture.spec.name == "reflectance"
+
+
+def test_alias_of_a_later_id_is_refused_as_in_mitsuba():
+    err(f'{HEAD}\n<alias id="w" as="x"/><bsdf type="diffuse" id="w"/></scene>', 2, 12, "<alias> of unknown id 'w'")
+
+
+def test_circular_reference_is_located_at_the_ref_closing_it():
+    """Only a ref to a later id can close a cycle; Mitsuba 3.9.1 refuses it ("circular reference detected")."""
+    err(f'{HEAD}{SENSOR}<bsdf type="twosided" id="a"><ref id="b"/></bsdf>\n<bsdf type="twosided" id="b">'
+        f'<ref id="a"/></bsdf><shape type="cube"><ref id="a"/></shape></scene>', 2, 30, "circular reference",
+        "a -> b -> a")
 
 
 def test_reference_to_a_bsdf_where_a_texture_belongs_is_located_at_the_ref():
@@ -211,6 +234,17 @@ def test_missing_include_is_located(tmp_path):
         parse_file(tmp_path / "main.xml")
     at(e.value, 2, 22, file=str(tmp_path / "main.xml"))
     assert "cannot include 'nowhere.xml'" in str(e.value) and "looked in" in str(e.value)
+
+
+def test_included_default_for_a_name_already_given_is_ignored(tmp_path):
+    """Mitsuba 3.9.1 keeps the first <default> of a name and passes over later ones (its own participating-media test
+    scenes give `spp` in the file and again in the preamble they include); in one file a second one stays an error."""
+    write(tmp_path / "pre.xml", f'{HEAD}<default name="r" value="0.9"/><default name="g" value="0.3"/></scene>')
+    write(tmp_path / "main.xml", f'{HEAD}<default name="r" value="0.2"/><include filename="pre.xml"/>{SENSOR}'
+                                 '<shape type="cube"><bsdf type="diffuse"><rgb name="reflectance" value="$r, $g, 0"/>'
+                                 '</bsdf></shape></scene>')
+    scene = create(parse_file(tmp_path / "main.xml"))
+    assert scene.shapes[0].bsdf.albedo.tolist() == [0.2, 0.3, 0.0]
 
 
 def test_include_cycle_is_an_error(tmp_path):

@@ -11,7 +11,7 @@ import clrender
 import clrender.plugins  # noqa: F401  (registers the plugins: a test run alone must not depend on others)
 from clrender.errors import SceneError
 from clrender.scene.registry import instantiate
-from clrender.testing.stats import compare_mean_to_value, compare_to_value, mean_and_error
+from clrender.testing.stats import _ztest, compare_mean_to_value, compare_to_value, mean_and_error
 import analytic_scenes as A
 
 ALPHA = 0.01
@@ -340,3 +340,113 @@ def test_nori_names_stay_nori():
     with pytest.raises(SceneError, match="unknown integrator type 'path'"):
         instantiate("integrator", "path")
     assert type(instantiate("integrator", "direct")).__name__ == "Direct"
+
+
+# --- moment: the nested integrator's image and its second moment as EXR channels --------------------------------
+
+def moment_scene(tmp_path, rfilter='<rfilter type="box"/>', nested='<integrator type="path"/>'):
+    """A 5 x 5 pinhole view, 90 degrees wide, of an emitting rectangle (radiance 2) on black whose edge projects onto
+    the middle of the centre column: there a box-filtered pixel's samples are 2 or 0 with probability 1/2 each, so
+    its first moment is 1 and its second 2 (not 1, the first squared); the columns on either side are exactly 2 and
+    0 (second moments 4 and 0)."""
+    p = tmp_path / "moment.xml"
+    p.write_text(f'<scene version="3.0.0"><integrator type="moment">{nested}</integrator>'
+                 '<sensor type="perspective"><float name="fov" value="90"/><transform name="to_world"><lookat '
+                 'origin="0, 0, 1" target="0, 0, 0" up="0, 1, 0"/></transform><film type="hdrfilm">'
+                 f'<integer name="width" value="5"/><integer name="height" value="5"/>{rfilter}</film></sensor>'
+                 '<shape type="rectangle"><transform name="to_world"><scale value="5, 5, 1"/><translate value="5, 0, 0"/>'
+                 '</transform><emitter type="area"><rgb name="radiance" value="2"/></emitter></shape></scene>')
+    return p
+
+
+def test_moment_writes_the_second_moment_beside_the_image(tmp_path):
+    """Mitsuba 3.9.1's m2 with a box filter is each pixel's mean of its samples' squares (of X, Y, Z; ours of R, G,
+    B: the same numbers for this grey scene), which the film's sum((w L)^2) / sum(w) is when every w is 1. Checked
+    per pixel against the closed form (z-test; exact where the pixel is), and the channels' names as Mitsuba's
+    (`m2_` + the nested integrator's name, `_arg_0` when it has none)."""
+    import OpenEXR
+
+    scene = clrender.load_scene(moment_scene(tmp_path))
+    assert scene.integrator.kernel == "path_mitsuba" and scene.moment_channels == "m2__arg_0"
+    spp = 256
+    film = clrender.render(scene, spp=spp, seed=3)
+    column = np.array([0.0, 0.0, 1.0, 2.0, 2.0])   # Mitsuba's +x is the image's left: the rectangle (x > 0) is right
+    m1 = np.broadcast_to(column[None, :, None], (5, 5, 3))
+    assert compare_to_value(film, m1, ALPHA).passed
+    film.write(tmp_path / "out.exr")
+    with OpenEXR.File(str(tmp_path / "out.exr")) as f:
+        ch = f.channels()
+        names = sorted(c.name for c in f.header()["channels"])
+        m2 = np.array(ch["m2__arg_0"].pixels, np.float64)
+        np.testing.assert_array_equal(np.array(ch["RGB"].pixels), film.image)
+    assert names == ["B", "G", "R", "m2__arg_0.B", "m2__arg_0.G", "m2__arg_0.R"]
+    expected = m1 ** 2 + np.where(m1 == 1.0, 1.0, 0.0)          # E[L^2] = mean^2 + variance (1 at the edge)
+    var = np.where(m1 == 1.0, 4.0 / spp, 0.0)                   # L^2 is 0 or 4, each with probability 1/2
+    result = _ztest(m2 - expected, var, ALPHA, "m2 vs closed form")
+    assert result.passed, result.message
+
+
+def test_moment_names_and_filters(tmp_path, caplog):
+    """A named nested integrator names the channels; a filter other than box leaves them out with a warning (the
+    film's sum((w L)^2) is Mitsuba's sum(w L^2) only where every w is 1) and the image is still rendered."""
+    import logging
+
+    import OpenEXR
+
+    named = clrender.load_scene(moment_scene(tmp_path, nested='<integrator type="direct" name="d"/>'))
+    assert named.moment_channels == "m2_d" and named.integrator.kernel == "direct_mitsuba"
+    with caplog.at_level(logging.WARNING, logger="clrender"):
+        scene = clrender.load_scene(moment_scene(tmp_path, rfilter='<rfilter type="gaussian"/>'))
+    assert scene.moment_channels is None
+    assert any("only the first moment" in r.getMessage() and "gaussian" in r.getMessage() for r in caplog.records)
+    clrender.render(scene, spp=4, seed=1).write(tmp_path / "g.exr")
+    with OpenEXR.File(str(tmp_path / "g.exr")) as f:
+        assert sorted(f.channels()) == ["RGB"]
+    with pytest.raises(SceneError, match="needs a nested <integrator>") as e:
+        clrender.load_scene(moment_scene(tmp_path, nested=""))
+    assert e.value.location.file.endswith("moment.xml")
+
+
+def test_aov_with_a_nested_integrator_renders_that_one(tmp_path, caplog):
+    """Mitsuba 3.9.1's aov with a nested integrator: the image is the nested integrator's (the emitter edge scene's
+    0, 0, 1, 2, 2 columns, z-tested), and `clrender render` writes each AOV clrender renders beside it under
+    Mitsuba 3.9.1's names (`dd.y.T` for a depth, `nn.X/Y/Z`), each exactly the aov integrator's own render with the same
+    samples; a type clrender does not render is left out with a warning; a malformed AOV is an error, and a second
+    nested integrator too."""
+    import logging
+
+    import OpenEXR
+
+    from clrender.cli import main
+
+    def aov_scene(aovs, nested='<integrator type="path"/>'):
+        p = moment_scene(tmp_path, nested=nested)
+        p.write_text(p.read_text().replace('<integrator type="moment">',
+                                           f'<integrator type="aov"><string name="aovs" value="{aovs}"/>'))
+        return p
+
+    with caplog.at_level(logging.WARNING, logger="clrender"):
+        scene = clrender.load_scene(aov_scene("nn:sh_normal, dd.y:depth, a:albedo"))
+    assert scene.integrator.kernel == "path_mitsuba" and scene.moment_channels is None
+    assert scene.aovs == [("nn", "sh_normal"), ("dd.y", "depth")]
+    assert any("does not render the AOVs a:albedo" in r.getMessage() for r in caplog.records)
+    film = clrender.render(scene, spp=256, seed=5)
+    assert compare_to_value(film, np.broadcast_to(np.array([0.0, 0.0, 1.0, 2.0, 2.0])[None, :, None], (5, 5, 3)),
+                            ALPHA).passed
+    assert main(["render", str(aov_scene("nn:sh_normal, dd.y:depth")), "-q", "-o", str(tmp_path / "a.exr"),
+                 "--spp", "16", "--seed", "7"]) == 0
+    with OpenEXR.File(str(tmp_path / "a.exr")) as f:
+        names = sorted(c.name for c in f.header()["channels"])
+        ch = {k: np.asarray(c.pixels) for k, c in f.channels().items()}
+    assert names == ["B", "G", "R", "dd.y.T", "nn.X", "nn.Y", "nn.Z"]
+    for name, kind in (("dd.y", "depth"), ("nn", "sh_normal")):
+        one = clrender.load_scene(aov_scene(f"{name}:{kind}"))
+        one.integrator = mitsuba_integrator("aov", aovs=f"{name}:{kind}")
+        want = clrender.render(one, spp=16, seed=7).image
+        got = ch[f"{name}.T"] if kind == "depth" else np.stack([ch[f"{name}.{c}"] for c in "XYZ"], axis=-1)
+        np.testing.assert_array_equal(got, want[..., 0] if kind == "depth" else want)
+    assert ch["nn.Z"].max() == 1.0 and ch["dd.y.T"].max() > 0
+    with pytest.raises(SceneError, match="'nn:normal' is not a <name>:<type> pair"):
+        clrender.load_scene(aov_scene("nn:normal"))
+    with pytest.raises(SceneError, match="takes one nested integrator, got 2"):
+        clrender.load_scene(aov_scene("dd.y:depth", '<integrator type="path"/><integrator type="direct"/>'))

@@ -330,3 +330,35 @@ def test_instancing_errors_are_located(body, message):
     with pytest.raises(SceneError, match=message) as e:
         _mitsuba_scene(body)
     assert e.value.location is not None and e.value.location.file == "i.xml"
+
+
+# --- a mesh without a triangle of non-zero area (Bitterli's staircase has one) ------------------------------------
+
+def test_mesh_of_degenerate_triangles_is_left_out_with_a_warning(tmp_path, caplog):
+    """Mitsuba 3.9.1 loads such a mesh (no warning where the file has normals) and renders the scene around it, since
+    a zero-area triangle is never hit; clrender leaves it out, saying so with the file's name. The scene then renders
+    exactly as without it (same samples). An emitting one is refused, as Mitsuba's area distribution refuses it; a
+    Nori file keeps its error (tests/test_corpus.py)."""
+    import logging
+
+    import clrender
+
+    (tmp_path / "flat.obj").write_text("v 0 0 0\nv 1 0 0\nv 2 0 0\nv 1 0 0\nf 1 2 3\nf 4 1 2\n")
+    head = ('<scene version="3.0.0"><sensor type="perspective"><transform name="to_world"><lookat origin="0, 0, 4" '
+            'target="0, 0, 0" up="0, 1, 0"/></transform><film type="hdrfilm"><integer name="width" value="8"/>'
+            '<integer name="height" value="6"/></film></sensor><shape type="sphere"/><emitter type="constant"/>')
+    flat = '<shape type="obj"><string name="filename" value="flat.obj"/>'
+    (tmp_path / "with.xml").write_text(f"{head}{flat}</shape></scene>")
+    (tmp_path / "without.xml").write_text(f"{head}</scene>")
+    with caplog.at_level(logging.WARNING, logger="clrender"):
+        scene = clrender.load_scene(tmp_path / "with.xml")
+    assert [s.spec.type for s in scene.shapes] == ["sphere"]
+    assert any("flat.obj" in r.getMessage() and "left out" in r.getMessage() for r in caplog.records)
+    a = clrender.render(scene, spp=4, seed=1).image
+    b = clrender.render(clrender.load_scene(tmp_path / "without.xml"), spp=4, seed=1).image
+    assert a.mean() > 0
+    np.testing.assert_array_equal(a, b)
+    (tmp_path / "lit.xml").write_text(f'{head}{flat}<emitter type="area"/></shape></scene>')
+    with pytest.raises(SceneError, match="no non-degenerate triangles.*some area") as e:
+        clrender.load_scene(tmp_path / "lit.xml")
+    assert e.value.location.file.endswith("lit.xml")

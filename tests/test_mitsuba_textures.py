@@ -129,6 +129,25 @@ def test_checkerboard_pattern(ctx, queue, tex_kernel):
     np.testing.assert_allclose(dflt.eval([[0.2, 0.2], [0.7, 0.2]]), [[0.4] * 3, [0.2] * 3])
 
 
+def test_rawconstant_is_its_value_everywhere(ctx, queue, tex_kernel):
+    """Mitsuba 3.9.1's rawconstant: a <vector> as written (no colour conversion, no range check: negative and above
+    1 stay), a <float> in every channel; a 3-D one read as a float and a value of another kind are errors."""
+    vec = registry.instantiate("texture", "rawconstant", {"value": ("vector", [0.5, -2.0, 1.3])}, fmt="mitsuba")
+    one = registry.instantiate("texture", "rawconstant", {"value": ("float", 0.25)}, fmt="mitsuba")
+    uv = np.random.default_rng(3).uniform(-4, 4, size=(256, 2))
+    dev_vec, dev_one = device_eval(ctx, queue, tex_kernel, [vec, one], uv)
+    np.testing.assert_array_equal(dev_vec, np.tile(np.float32([0.5, -2.0, 1.3]), (256, 1)))
+    np.testing.assert_array_equal(dev_one, np.full((256, 3), 0.25, np.float32))
+    np.testing.assert_array_equal(vec.eval(uv), np.tile([0.5, -2.0, 1.3], (256, 1)))
+    assert one.float_view() is one
+    with pytest.raises(SceneError, match="3-D value cannot fill a float parameter"):
+        vec.float_view()
+    with pytest.raises(SceneError, match="expected a <float> or a 3-D <vector>"):
+        registry.instantiate("texture", "rawconstant", {"value": ("string", "x")}, fmt="mitsuba")
+    with pytest.raises(SceneError, match="needs a \"value\""):
+        registry.instantiate("texture", "rawconstant", {}, fmt="mitsuba")
+
+
 def test_texture_errors(tmp_path, png):
     path, _ = png
     with pytest.raises(SceneError, match="wrap_mode must be one of repeat, mirror, clamp"):
@@ -238,7 +257,7 @@ BLACK, WHITE = ('<bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
     (f'<bsdf type="blendbsdf">{{tex}}{BLACK}{WHITE}</bsdf>', lambda w: w),
     (f'<bsdf type="mask">{{tex}}{BLACK}</bsdf>', lambda w: 1 - w),
 ], ids=["blendbsdf weight", "mask opacity"])
-@pytest.mark.parametrize("given", ["float", "bitmap", "rgb"])
+@pytest.mark.parametrize("given", ["float", "bitmap", "rgb", "rawconstant"])
 def test_float_parameter_in_a_furnace(tmp_path, bsdf, expect, given):
     """A coloured texture (or colour) where a float is read renders as Mitsuba reads it: the bitmap's luminance, the
     colour's channel mean (a red-channel reading gives 0.9 or 0.1 here). The blend's black child reflects nothing,
@@ -255,6 +274,8 @@ def test_float_parameter_in_a_furnace(tmp_path, bsdf, expect, given):
         tex = (f'<texture type="bitmap" name="{name}"><string name="filename" value="c.png"/>'
                f'<boolean name="raw" value="true"/></texture>')
         w = float(rgb / 255.0 @ LUM)
+    elif given == "rawconstant":
+        tex, w = f'<texture type="rawconstant" name="{name}"><float name="value" value="0.4"/></texture>', 0.4
     else:
         tex = f'<rgb name="{name}" value="{", ".join(str(c / 255) for c in rgb)}"/>'
         w = float((rgb / 255.0).mean())
@@ -344,6 +365,66 @@ def test_16_bit_pngs_match_mitsuba(tmp_path):
                 want.append(np.array(theirs.eval(si)))
             np.testing.assert_allclose(bitmap(tmp_path / name, raw=raw).eval(uv), want, atol=1e-6,
                                        err_msg=f"{name} raw={raw}")
+
+
+def format_images(tmp_path):
+    """A float EXR (values around byte and half steps, below 0 and above 1) and a 16-bit PNG."""
+    import OpenEXR
+
+    rng = np.random.default_rng(21)
+    f = rng.uniform(-0.2, 1.3, size=(6, 5, 3)).astype(np.float32)
+    f[0, :3, 0] = [0.002, 0.0025, 0.70001]
+    OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage},
+                 {"RGB": f}).write(str(tmp_path / "f.exr"))
+    p = rng.integers(0, 65536, size=(6, 5, 3)).astype(np.uint16)
+    write_png16(tmp_path / "p.png", p)
+    return f, p
+
+
+@pytest.mark.parametrize("raw", [False, True])
+def test_bitmap_format_sets_the_texels_precision(tmp_path, raw):
+    """Mitsuba 3.9.1's bitmap `format`: variant keeps float32 (a 16-bit image unrounded), float16 rounds every value
+    to half, uint8 every channel to a byte (a 16-bit image's encoded values, decoded after; a float image's
+    clamped to [0, 1]); auto is the default's half-rounded 16 bits. Values derived from each definition."""
+    from clrender.textures.imagefile import srgb_to_linear
+
+    f, p = format_images(tmp_path)
+    decode = (lambda x: x) if raw else srgb_to_linear
+    v = p / 65535.0
+    half = lambda x: np.asarray(x, np.float32).astype(np.float16).astype(np.float32)   # noqa: E731
+    byte = lambda x: np.round(np.clip(x, 0, 1) * 255) / 255                             # noqa: E731
+    want = {("f.exr", "auto"): f, ("f.exr", "variant"): f, ("f.exr", "float16"): half(f),
+            ("f.exr", "fp16"): half(f), ("f.exr", "uint8"): byte(f),
+            ("p.png", "auto"): half(decode(v)), ("p.png", "variant"): decode(v),
+            ("p.png", "float16"): half(decode(v)), ("p.png", "uint8"): decode(byte(v))}
+    for (name, fmt), expect in want.items():
+        got = bitmap(tmp_path / name, raw=raw, format=fmt).image
+        np.testing.assert_allclose(got, np.asarray(expect, np.float32), rtol=0, atol=1e-7, err_msg=f"{name} {fmt}")
+    with pytest.raises(SceneError, match="format must be one of auto, variant, float16, uint8"):
+        bitmap(tmp_path / "p.png", format="half")
+
+
+def test_bitmap_format_matches_mitsuba(tmp_path):
+    """The same lookups by Mitsuba 3.9.1 itself: equal for auto, variant and float16; for uint8 within one byte step
+    (Mitsuba dithers when it turns 16-bit or float values into bytes)."""
+    mi = real_mitsuba("Mitsuba 3 is not installed (pip install mitsuba==3.9.1): it checks bitmap formats")
+    mi.set_variant("scalar_rgb")
+    format_images(tmp_path)
+    si = mi.SurfaceInteraction3f()
+    uv = (np.stack(np.meshgrid(np.arange(5), np.arange(6)), -1).reshape(-1, 2) + 0.5) / [5, 6]
+    for name in ("f.exr", "p.png"):
+        for fmt in ("auto", "variant", "float16", "uint8"):
+            theirs = mi.load_dict({"type": "bitmap", "filename": str(tmp_path / name), "format": fmt,
+                                   "filter_type": "nearest"})
+            want = []
+            for u in uv:
+                si.uv = mi.Point2f(*u)
+                want.append(np.array(theirs.eval(si)))
+            ours = bitmap(tmp_path / name, format=fmt, filter_type="nearest").eval(uv)
+            if fmt == "uint8":   # one byte step: 1/255 of a linear value, at most 0.009 once an encoded one is decoded
+                np.testing.assert_allclose(ours, want, rtol=0, atol=1 / 255 + 1e-6 if name == "f.exr" else 0.009)
+            else:
+                np.testing.assert_allclose(ours, want, rtol=0, atol=1e-6, err_msg=f"{name} {fmt}")   # float32 decoding
 
 
 def test_16_bit_grey_png_is_read(tmp_path):
@@ -489,3 +570,109 @@ def test_unsupported_images(tmp_path):
     (tmp_path / "short.ppm").write_bytes(b"P6\n4 4\n65535\n" + bytes(20))
     with pytest.raises(SceneError, match="ends before its 48 samples"):
         bitmap(tmp_path / "short.ppm")
+
+
+# ------------------------------------------------------------------------------------------------- mesh_attribute
+def write_attribute_ply(path):
+    """A 4 x 4 square at z = 1 facing +z, two triangles: vertex colours `color_0..2` (floats) affine in x and y,
+    face colours `color_0..2`, and face bytes `w_r w_g w_b` (Mitsuba normalises and sRGB-decodes integer fields)."""
+    import struct
+
+    xy = np.array([[-2, -2], [2, -2], [2, 2], [-2, 2]], np.float64)
+    colors = np.stack([vertex_color_at(x, y) for x, y in xy])
+    faces = [(0, 1, 2), (0, 2, 3)]
+    face_colors = np.array([[0.9, 0.2, 0.1], [0.1, 0.5, 0.8]])
+    head = ("ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+            "property float z\nproperty float color_0\nproperty float color_1\nproperty float color_2\n"
+            "element face 2\nproperty list uchar int vertex_indices\nproperty float color_0\nproperty float color_1\n"
+            "property float color_2\nproperty uchar w_r\nproperty uchar w_g\nproperty uchar w_b\n"
+            "property float weight_0\nend_header\n")
+    body = b"".join(struct.pack("<6f", x, y, 1.0, *c) for (x, y), c in zip(xy, colors))
+    body += b"".join(struct.pack("<B3i3f3Bf", 3, *f, *c, 255, 128, 0, w)
+                     for f, c, w in zip(faces, face_colors, FACE_WEIGHTS))
+    path.write_bytes(head.encode() + body)
+    return face_colors
+
+
+FACE_WEIGHTS = (0.25, 0.7)
+
+
+def vertex_color_at(x, y):
+    return np.array([0.5 + 0.1 * x + 0.05 * y, 0.4 - 0.05 * x + 0.1 * y, 0.6 + 0.05 * x - 0.05 * y])
+
+
+def test_ply_attributes_are_named_as_mitsuba_names_them(tmp_path):
+    from clrender.shapes.plyfile import load_ply
+    from clrender.textures.imagefile import srgb_to_linear
+
+    face_colors = write_attribute_ply(tmp_path / "a.ply")
+    m = load_ply(tmp_path / "a.ply")
+    assert sorted(m.attributes) == ["face_color", "face_w_color", "face_weight", "vertex_color"]
+    np.testing.assert_allclose(m.attributes["face_color"], face_colors, atol=1e-7)
+    np.testing.assert_allclose(m.attributes["face_w_color"][0], [1.0, srgb_to_linear(128 / 255), 0.0])
+    np.testing.assert_allclose(m.attributes["vertex_color"][2], vertex_color_at(2, 2), atol=1e-7)
+
+
+@pytest.mark.parametrize("attribute", ["vertex_color", "face_color", "face_weight"])
+def test_mesh_attribute_renders_the_attribute(tmp_path, attribute):
+    """A diffuse square under a unit sky, seen by `direct`: each pixel is the reflectance where it looks, here the
+    vertex colours interpolated barycentrically (an affine function over the square, so a box-filtered pixel is its
+    value at the hit of the pixel's centre) or the face's colour (pixels off the diagonal); a one-value face
+    attribute as a blendbsdf's weight between black and white gives that weight. Where each pixel looks is the aov
+    integrator's `position`; z-tested per pixel. Mitsuba 3.9.1 renders Mitsuba's own attribute sphere
+    (tests/scenes/mesh_attributes) within the noise of both (checked by hand)."""
+    import clrender
+    from clrender.testing.stats import compare_to_value
+
+    face_colors = write_attribute_ply(tmp_path / "a.ply")
+    scene = ('<scene version="3.0.0">{integrator}<sensor type="perspective">'
+             '<transform name="to_world"><lookat origin="0, 0, 4" target="0, 0, 1" up="0, 1, 0"/></transform>'
+             '<film type="hdrfilm"><integer name="width" value="12"/><integer name="height" value="12"/>'
+             '<rfilter type="box"/></film></sensor><emitter type="constant"/><shape type="ply">'
+             '<string name="filename" value="a.ply"/>{bsdf}</shape></scene>')
+    texture = f'<string name="name" value="{attribute}"/></texture>'
+    if attribute == "face_weight":
+        bsdf = (f'<bsdf type="blendbsdf"><texture type="mesh_attribute" name="weight">{texture}{BLACK}{WHITE}'
+                '</bsdf>')
+    else:
+        bsdf = f'<bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance">{texture}</bsdf>'
+    scene = scene.replace("{bsdf}", bsdf)
+    (tmp_path / "s.xml").write_text(scene.format(integrator='<integrator type="direct"/>'))
+    (tmp_path / "p.xml").write_text(scene.format(
+        integrator='<integrator type="aov"><string name="aovs" value="p:position"/></integrator>'))
+    p = clrender.render(clrender.load_scene(tmp_path / "p.xml"), spp=16, seed=1).image.astype(np.float64)
+    assert np.allclose(p[..., 2], 1.0, atol=1e-4)   # every pixel sees the square
+    x, y = p[..., 0], p[..., 1]
+    if attribute == "vertex_color":
+        expected, mask = np.moveaxis(vertex_color_at(x, y), 0, -1), np.ones(x.shape, bool)
+    else:
+        pitch = np.abs(np.diff(x, axis=1)).max()
+        per_face = face_colors if attribute == "face_color" else np.repeat(np.array(FACE_WEIGHTS)[:, None], 3, 1)
+        expected = np.where((y < x)[..., None], per_face[0], per_face[1])
+        mask = np.abs(y - x) / np.sqrt(2) > pitch
+    film = clrender.render(clrender.load_scene(tmp_path / "s.xml"), spp=256, seed=2)
+    result = compare_to_value(film, expected, mask=mask)
+    assert result.passed, result.message
+
+
+def test_mesh_attribute_errors(tmp_path):
+    import clrender
+
+    write_attribute_ply(tmp_path / "a.ply")
+    base = ('<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/>'
+            '<integer name="height" value="4"/></film></sensor><shape type="{shape}"><string name="filename" '
+            'value="a.ply"/><bsdf type="{bsdf}">{extra}<texture type="mesh_attribute" name="{param}"><string '
+            'name="name" value="{name}"/></texture></bsdf></shape></scene>')
+    cases = [(dict(name="color"), 'must start with "vertex_" or "face_"'),
+             (dict(name="vertex_nope"), 'has no attribute "vertex_nope" (it has: face_color, face_w_color, face_weight, '
+                                        'vertex_color)'),
+             (dict(bsdf="blendbsdf", param="weight", name="face_weight",
+                   extra='<bsdf type="diffuse"><texture type="checkerboard" name="reflectance"/></bsdf>'
+                         '<bsdf type="diffuse"/>'), "reads another texture beside it")]
+    for kw, message in cases:
+        fields = dict(shape="ply", bsdf="diffuse", extra="", param="reflectance", name="vertex_color")
+        fields.update(kw)
+        (tmp_path / "e.xml").write_text(base.format(**fields))
+        with pytest.raises(SceneError) as e:
+            clrender.load_scene(tmp_path / "e.xml")
+        assert message in str(e.value) and e.value.location.file.endswith("e.xml"), str(e.value)

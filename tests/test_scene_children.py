@@ -61,3 +61,15 @@ def test_mitsuba_second_single_object(second):
 def test_mitsuba_area_emitter_at_top_level():
     e = scene_error(f'<scene version="3.0.0">{MI_SENSOR}\n  {MI_AREA}</scene>')
     assert str(e) == "s.xml:2:3: an area emitter must be nested in a <shape>"
+
+
+def test_mitsuba_area_emitter_declared_at_top_level_for_a_ref():
+    """Mitsuba's own Cornell boxes declare the area light at the top level, after the shape that refers to it:
+    Mitsuba 3.9.1 lists it through that shape only, and so does clrender (one emitter, the shape's)."""
+    from clrender.scene.registry import create
+    from clrender.scene.xmlparser import parse_string
+
+    scene = create(parse_string(f'<scene version="3.0.0">{MI_SENSOR}<shape type="sphere"><ref id="light"/></shape>'
+                                f'<emitter type="area" id="light"/></scene>', "s.xml"))
+    assert [s.spec.type for s in scene.shapes] == ["sphere"] and scene.emitters == []
+    assert scene.shapes[0].emitter is not None and scene.shapes[0].emitter.spec.type == "area"

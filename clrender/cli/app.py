@@ -72,6 +72,10 @@ def cmd_render(args) -> int:
         print("clrender: aborted (second Ctrl-C); nothing written", file=sys.stderr)
         _exit_now(args, 130)
         return 130
+    if getattr(scene, "aovs", None) and not film.stats.interrupted:   # an aov's channels beside the image
+        from ..renderer import aov_channels
+
+        film.aovs = aov_channels(scene, spp=film.spp, seed=args.seed, device=args.device, driver=args.driver)
     write_film(film)   # the whole image now
     if args.denoise:
         d_exr, _ = write_denoised(film, out)

@@ -10,8 +10,10 @@ It shares pass one (bytes -> located element tree) and the value parsing of the 
 - property tags ``float integer boolean string point vector rgb spectrum transform``; ``point``/``vector`` take
   ``value`` or ``x y z``; a ``spectrum`` is a constant (grey) or a ``wavelength:value`` list, turned into the
   RGB that Mitsuba's RGB variants compute (:mod:`clrender.scene.spectrum`);
-- ``<ref id="..."/>`` (``<ref name="..." id="..."/>`` for a named parameter) to an object declared earlier with
-  that ``id``; ``<alias id as>``;
+- ``<ref id="..."/>`` (``<ref name="..." id="..."/>`` for a named parameter) to an object declared with that
+  ``id`` anywhere in the scene, before or after the ref (as Mitsuba 3.9 resolves refs once the whole scene is read;
+  a ref to an id that never comes and a cycle of refs are located errors); ``<alias id as>`` (of an id declared
+  before it, as in Mitsuba);
 - ``<include filename="..."/>``: the included file's root ``<scene>`` children are spliced in where the include
   is written; ``<path value="folder"/>`` (a child of a file's root) adds a folder to the resolver. Relative paths
   are resolved as Mitsuba 3.9 resolves them (:class:`_State`);
@@ -74,6 +76,9 @@ class _State:
         self.chain: list[str] = []
         #: the filename properties, resolved once the whole scene is read
         self.filenames: list[tuple[PropertyList, str]] = []
+        #: refs to ids not declared yet: (the spec holding the ref, its child index, the id, where the id is written);
+        #: the child is a stand-in until the whole scene is read
+        self.forward: list[tuple[PluginSpec, int, str, SourceLocation]] = []
 
     def looked_in(self) -> list[str]:
         return list(dict.fromkeys(self.folders + [os.getcwd()]))
@@ -153,9 +158,11 @@ class MitsubaBuilder(_x._Builder):
                 raise self.err(f"<default> name '{a['name']}' is not a valid variable name",
                                self.attr_loc(c, "name"))
             first = self.state.file_defaults.get(a["name"])
-            if first is not None:
+            if first is not None and first.file == c.loc.file:
                 raise self.err(f"<default> '{a['name']}' given twice (first at {first})", c.loc)
             self.no_children(c)
+            if first is not None:   # an included file's default for a name already given: the first wins, as in
+                continue            # Mitsuba 3.9.1 (mitsuba-data's participating_media tests and their preamble)
             self.state.file_defaults[a["name"]] = c.loc
             if a["name"] not in self.state.user_defines:  # -D wins over the file's default
                 self.defines[a["name"]] = a["value"]
@@ -207,8 +214,14 @@ class MitsubaBuilder(_x._Builder):
                 self.build_property(c, spec.props)
             elif c.tag == "ref":
                 target = self.build_ref(c)
-                spec.refs[len(spec.children)] = RefSite(c.loc, self.substitute(c, "id"),
+                oid = self.substitute(c, "id")
+                spec.refs[len(spec.children)] = RefSite(c.loc, oid,
                                                         self.substitute(c, "name") if "name" in c.attrs else None)
+                if target is None:   # declared further on (or never): resolved once the whole scene is read
+                    self.state.forward.append((spec, len(spec.children), oid, self.attr_loc(c, "id")))
+                    name = self.param_name(self.substitute(c, "name")) if "name" in c.attrs else None
+                    target = PluginSpec("ref", oid, name, PropertyList(f'<ref id="{oid}">', c.loc), [], c.loc,
+                                        format="mitsuba")
                 spec.children.append(target)
             elif c.tag == "include":
                 self.build_include(c, spec)
@@ -256,9 +269,10 @@ class MitsubaBuilder(_x._Builder):
         self.state.folders = [os.path.normpath(folder)] + self.state.folders
 
     def unknown_id(self, el, oid: str) -> SceneError:
+        """An <alias> of an id not declared before it (Mitsuba 3.9 refuses it too)."""
         known = ", ".join(sorted(self.state.ids)) or "none"
-        return self.err(f"reference to unknown id '{oid}' (an object must be declared with that id before it is "
-                        f"referenced; declared so far: {known})", self.attr_loc(el, "id"))
+        return self.err(f"<alias> of unknown id '{oid}' (an alias must come after the object it names; declared so "
+                        f"far: {known})", self.attr_loc(el, "id"))
 
     def build_ref(self, el) -> PluginSpec:
         for name in el.attrs:
@@ -271,13 +285,8 @@ class MitsubaBuilder(_x._Builder):
         oid = self.substitute(el, "id")
         target = self.state.ids.get(oid)
         if target is None:
-            raise self.unknown_id(el, oid)
-        name = self.param_name(self.substitute(el, "name")) if "name" in el.attrs else None
-        if name is None or name == target.name or target.tag != "texture":
-            return target   # one object wherever it is referenced (a bsdf's or emitter's name says nothing)
-        # A texture filling another parameter (its name tells the BSDF which): a spec sharing the texture's
-        # properties and children under that name.
-        return replace(target, name=name)
+            return None
+        return _referenced(target, self.param_name(self.substitute(el, "name")) if "name" in el.attrs else None)
 
     def build_include(self, el, spec: PluginSpec) -> None:
         a = self.attrs(el, ("filename",))
@@ -470,6 +479,49 @@ class MitsubaBuilder(_x._Builder):
                                self.attr_loc(op, n, at_value=False))
 
 
+def _referenced(target: PluginSpec, name: str | None) -> PluginSpec:
+    """What a ``<ref>`` with parameter name ``name`` to ``target`` puts into its parent."""
+    if name is None or name == target.name or target.tag != "texture":
+        return target   # one object wherever it is referenced (a bsdf's or emitter's name says nothing)
+    # A texture filling another parameter (its name tells the BSDF which): a spec sharing the texture's
+    # properties and children under that name.
+    return replace(target, name=name)
+
+
+def _resolve_forward(state: _State, root: PluginSpec) -> None:
+    """Put the objects that refs to later ids name in place of their stand-ins, then refuse a cycle of refs (which
+    only such a ref can close), as Mitsuba 3.9.1's parser does once the whole scene is read."""
+    if not state.forward:
+        return
+    for spec, index, oid, loc in state.forward:
+        target = state.ids.get(oid)
+        if target is None:
+            known = ", ".join(sorted(state.ids)) or "none"
+            raise SceneError(f"reference to unknown id '{oid}': no object in the scene is declared with that id "
+                             f"(declared: {known})", loc)
+        # the stand-in's name, which an old file's upgrade may have renamed since
+        spec.children[index] = _referenced(target, spec.children[index].name)
+    # a texture a named ref renamed is a copy sharing its target's children list: objects are told by that list
+    names: dict[int, str] = {}
+    for oid, spec in state.ids.items():
+        names.setdefault(id(spec.children), oid)
+    done: set[int] = set()
+
+    def visit(spec: PluginSpec, path: list[PluginSpec]) -> None:
+        for i, child in enumerate(spec.children):
+            start = next((k for k, p in enumerate(path) if p.children is child.children), None)
+            if start is not None:
+                cycle = [names.get(id(p.children), p.describe()) for p in path[start:]]
+                ref = spec.refs.get(i)
+                raise SceneError(f"circular reference: {' -> '.join(cycle + [cycle[0]])} (an object cannot "
+                                 f"contain itself)", ref.location if ref is not None else child.location)
+            if id(child.children) not in done:
+                visit(child, path + [child])
+        done.add(id(spec.children))
+
+    visit(root, [root])
+
+
 def _frame_vector(n: np.ndarray) -> np.ndarray:
     """The first vector of Mitsuba's coordinate_system(n) (Duff et al. 2017): the up <lookat> takes when none is
     written."""
@@ -485,6 +537,7 @@ def build(src, root, defines, main_dir: str) -> PluginSpec:
                        else src.filename)
     try:
         spec = MitsubaBuilder(src, state).build_root(root)
+        _resolve_forward(state, spec)
         state.resolve_filenames()
         _x.check_defines_used(state.user_defines, state.used_defines, src.filename)
         return spec

@@ -91,7 +91,12 @@ class MitsubaScene(Scene):
         self.location = spec.location
         self.nori_dialect = "upstream"   # Mitsuba's camera convention is upstream Nori's
         self.camera = self.integrator = None
-        # bsdfs and textures at the top level are only declared for references: _take_children passes them over
+        # bsdfs and textures at the top level are only declared for references: _take_children passes them over.
+        # So is an area emitter that a shape holds by a <ref> (Mitsuba's own Cornell boxes declare the light at the
+        # top level, after the shape): Mitsuba 3.9.1's scene lists area emitters only through their shapes. One that
+        # no shape holds stays an error (Mitsuba ignores it silently: the light the file meant is missing).
+        attached = {id(c.emitter) for c in children if c.spec.tag == "shape" and getattr(c, "emitter", None)}
+        children = [c for c in children if id(c) not in attached]
         self._take_children(children, "shape", {"sensor": "camera", "integrator": "integrator"},
                             "clrender renders one <{tag}> per scene; this is a second one")
         from ..shapes.instance import flatten
@@ -102,6 +107,15 @@ class MitsubaScene(Scene):
                              'type="hdrfilm"> (Mitsuba 3 cannot render a scene without one either)', spec.location)
         if self.integrator is None:
             self.integrator = _default_integrator(spec)
+        #: the EXR's second-moment channels' prefix (a `moment` integrator's; integrators/moment.py), or None
+        self.moment_channels = None
+        nested = getattr(self.integrator, "nested", None)
+        #: the (name, type) AOVs an `aov` with a nested integrator asks for beside the image (renderer.aov_channels)
+        self.aovs = []
+        if nested is not None:   # `moment`, `aov` with a nested integrator: that one renders the image
+            self.moment_channels = self.integrator.channels(self.camera.filter)
+            self.aovs = self.integrator.renderable() if hasattr(self.integrator, "renderable") else []
+            self.integrator = nested
         self.sampler = self.camera.sampler
 
 

@@ -107,10 +107,11 @@ def _transformed(shape, m: np.ndarray, where):
 
 
 def flatten(shapes: list) -> list:
-    """The scene's shapes with shapegroups left out and each instance replaced by its copies."""
+    """The scene's shapes with shapegroups left out, each instance replaced by its copies, and meshes without a
+    triangle of non-zero area (``empty``: never hit, as Mitsuba renders them) left out."""
     out = []
     for s in shapes:
         if isinstance(s, ShapeGroup):
             continue
-        out.extend(s.copies() if isinstance(s, Instance) else [s])
+        out.extend(c for c in (s.copies() if isinstance(s, Instance) else [s]) if not getattr(c, "empty", False))
     return out

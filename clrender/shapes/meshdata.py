@@ -6,7 +6,7 @@ object space; the scene baking step calls `transformed()` with the shape's `toWo
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -19,12 +19,15 @@ class MeshData:
     normals:   (V, 3) float32 or None (None: shade with the face normal)
     uvs:       (V, 2) float32 or None
     faces:     (F, 3) int32 indices into the per-vertex arrays
+    attributes: Mitsuba's mesh attributes by name: "vertex_<name>" (V, k), "face_<name>" (F, k) float32, k 1 or 3
+               (a PLY file's other properties; what the mesh_attribute texture reads)
     """
 
     positions: np.ndarray
     normals: np.ndarray | None
     uvs: np.ndarray | None
     faces: np.ndarray
+    attributes: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         # A coordinate beyond float32's range becomes infinite here; the mesh shape reports it with its location.
@@ -71,6 +74,7 @@ class MeshData:
             normals=None if normals is None else normals.astype(np.float32),
             uvs=None if self.uvs is None else self.uvs.copy(),
             faces=self.faces.copy(),
+            attributes=dict(self.attributes),
         )
 
     def triangle_areas(self) -> np.ndarray:
@@ -101,6 +105,7 @@ class MeshData:
                 normals=self.normals,
                 uvs=self.uvs,
                 faces=f[~bad],
+                attributes={k: v[~bad] if k.startswith("face_") else v for k, v in self.attributes.items()},
             ),
             dropped,
         )

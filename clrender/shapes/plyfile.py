@@ -38,22 +38,73 @@ def load_ply(path, location: SourceLocation | None = None) -> MeshData:
 
     try:
         if re.search(rb"^format\s+ascii\b", data[:data.find(b"end_header")], re.M):
-            vertex, polygons = _read_with_trimesh(data)
+            vertex, polygons, face = _read_with_trimesh(data)
         else:
-            vertex, polygons = _read_binary(data, here)
+            vertex, polygons, face = _read_binary(data, here)
     except SceneError:
         raise
     except Exception as e:  # trimesh raises assorted types for malformed files
         raise SceneError(f"cannot parse PLY file: {type(e).__name__}: {e}", here) from None
 
     try:
-        return _mesh_from(vertex, polygons, here)
+        return _mesh_from(vertex, polygons, here, face)
     except (ValueError, TypeError, IndexError, OverflowError) as e:
         # e.g. an ASCII line with fewer numbers than the header promises: trimesh hands back ragged rows
         raise SceneError(f"PLY data do not match the header ({type(e).__name__}: {e})", here) from None
 
 
-def _mesh_from(vertex, polygons, here: SourceLocation) -> MeshData:
+#: Mitsuba 3.9.1's attribute name postfixes (src/shapes/ply.h, find_other_fields): a group's fields run x y z w, r g b a,
+#: 0 1 2 3 or 1 2 3 4, its postfix scheme being the column its first field's postfix is in
+_POSTFIXES = ("xr01", "yg12", "zb23", "wa34")
+
+
+def _attributes(element, kind: str, reserved: set, count: int, here: SourceLocation) -> dict:
+    """Mitsuba 3.9.1's mesh attributes of a PLY element (``kind`` "vertex_" or "face_"): `r g b [a]` (or `red green
+    blue [alpha]`) make ``<kind>color``; other fields ``<prefix>_<postfix>``, one or three in a row with one
+    prefix and a postfix scheme of _POSTFIXES, make ``<kind><prefix>`` (``<kind><prefix>_color`` for r g b);
+    integer fields are normalised to [0, 1] and sRGB-decoded, as Mitsuba's PLY reader flags them. Fields that
+    follow none of this are passed over (Mitsuba warns)."""
+    from ..textures.imagefile import srgb_to_linear
+
+    if element is None or count == 0:
+        return {}
+    names = [n for n in _field_names(element) if not n.endswith(" count")]
+
+    def column(n):
+        a = np.asarray(element[n])
+        if a.ndim != 1 or a.shape[0] != count:
+            return None
+        if a.dtype.kind in "iu":   # Mitsuba's Normalized | Gamma integer fields
+            return srgb_to_linear(a.astype(np.float64) / np.iinfo(a.dtype).max)
+        return a.astype(np.float64)
+
+    out = {}
+    rename = {"red": "r", "green": "g", "blue": "b", "alpha": "a"}
+    plain = {rename.get(n, n): n for n in names if n in ("r", "g", "b", "a", "red", "green", "blue", "alpha")}
+    if {"r", "g", "b"} <= set(plain):
+        cols = [column(plain[c]) for c in "rgb"]
+        if all(c is not None for c in cols):
+            out[kind + "color"] = np.stack(cols, axis=1)
+    i = 0
+    rest = [n for n in names if n not in reserved and n not in plain.values()]
+    while i < len(rest):
+        prefix, _, post = rest[i].rpartition("_")
+        if not prefix or len(post) != 1 or post not in _POSTFIXES[0]:
+            i += 1
+            continue
+        scheme = _POSTFIXES[0].index(post)
+        group = [rest[i]]
+        while (i + len(group) < len(rest) and len(group) < 4
+               and rest[i + len(group)] == f"{prefix}_{_POSTFIXES[len(group)][scheme]}"):
+            group.append(rest[i + len(group)])
+        i += len(group)
+        cols = [column(n) for n in group]
+        if len(group) in (1, 3) and all(c is not None for c in cols):
+            out[kind + prefix + ("_color" if scheme == 1 else "")] = np.stack(cols, axis=1)
+    return out
+
+
+def _mesh_from(vertex, polygons, here: SourceLocation, face=None) -> MeshData:
     names = set(_field_names(vertex))
     if not {"x", "y", "z"} <= names:
         raise SceneError("PLY vertex element lacks x/y/z properties", here)
@@ -77,7 +128,17 @@ def _mesh_from(vertex, polygons, here: SourceLocation) -> MeshData:
         raise SceneError("PLY file contains no faces", here)
     if faces.min() < 0 or faces.max() >= positions.shape[0]:
         raise SceneError(f"PLY face index out of range (the file has {positions.shape[0]} vertices)", here)
-    return MeshData(positions=positions, normals=normals, uvs=uvs, faces=faces)
+    uv_names = {n for pair in _UV_NAMES for n in pair}
+    attributes = _attributes(vertex, "vertex_", {"x", "y", "z", "nx", "ny", "nz"} | uv_names, len(positions), here)
+    n_polygons = len(polygons)
+    face_attributes = _attributes(face, "face_", set(_INDEX_NAMES), n_polygons, here) if n_polygons else {}
+    if face_attributes:
+        # a polygon's attribute goes to each triangle of its fan (_fan keeps polygons in order)
+        sizes = np.array([len(np.asarray(q).reshape(-1)) for q in polygons]) if isinstance(polygons, list) \
+            else np.full(n_polygons, np.asarray(polygons).shape[1])
+        repeat = np.maximum(sizes - 2, 0)
+        attributes.update({k: np.repeat(v, repeat, axis=0) for k, v in face_attributes.items()})
+    return MeshData(positions=positions, normals=normals, uvs=uvs, faces=faces, attributes=attributes)
 
 
 def _check_header(data: bytes, path: str) -> None:
@@ -196,7 +257,7 @@ def _read_with_trimesh(data: bytes):
     vertex = elements["vertex"]["data"]
     face = elements.get("face", {}).get("data")
     if face is None:
-        return vertex, np.zeros((0, 3), np.int64)
+        return vertex, np.zeros((0, 3), np.int64), None
     for name in _INDEX_NAMES:
         if name in _field_names(face):
             lists = face[name]
@@ -205,7 +266,7 @@ def _read_with_trimesh(data: bytes):
         raise ValueError("face element has no vertex_indices list")
     if isinstance(face, np.ndarray):
         lists = lists["f1"]  # binary: ('f0' = list length, 'f1' = the indices)
-    return vertex, lists
+    return vertex, lists, face
 
 
 #: a header whose vertex count is smaller than the data makes the reader take vertex data for faces
@@ -264,7 +325,7 @@ def _read_binary(data: bytes, here: SourceLocation):
                 elements[-1][2].append((tok[2], _PLY_TYPES[tok[1]], None))
     buf = memoryview(data)
     off = body_start
-    vertex = None
+    vertex = face = None
     polygons: list | np.ndarray = []
     for name, count, props in elements:
         rec, off = _uniform_records(buf, off, count, props, endian, name, here)
@@ -274,9 +335,10 @@ def _read_binary(data: bytes, here: SourceLocation):
             vertex = rec
         if name == "face":
             polygons = next((rec[i] for i in _INDEX_NAMES if i in _field_names(rec)), polygons)
+            face = rec if isinstance(rec, np.ndarray) else None   # other properties: uniform records only
     if vertex is None:
         raise SceneError("PLY file has no vertex element", here)
-    return vertex, polygons
+    return vertex, polygons, face
 
 
 def _uniform_records(buf, off: int, count: int, props, endian: str, name: str, here: SourceLocation):

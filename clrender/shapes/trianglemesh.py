@@ -87,12 +87,27 @@ class TriangleMesh(Shape):
         mesh, dropped = mesh.drop_degenerate()
         if dropped:
             log.warning("%s: dropped %d degenerate triangle(s) of %s", spec.location, dropped, filename or name)
+        #: a Mitsuba mesh with no triangle of non-zero area, left out of the scene (Scene's flatten)
+        self.empty = False
         if len(mesh.faces) == 0:
-            raise SceneError(f"mesh '{filename or name}' has no non-degenerate triangles", spec.location)
+            emitting = any(c.spec.tag == "emitter" for c in children)
+            if getattr(spec, "format", "nori") != "mitsuba" or emitting:
+                # Mitsuba 3.9.1 refuses an emitting one too: its area distribution has no mass to sample
+                raise SceneError(f"mesh '{filename or name}' has no non-degenerate triangles"
+                                 + (" (an area light must have some area)" if emitting else ""), spec.location)
+            # Mitsuba 3.9.1 loads it (warning only where it computes normals) and renders the scene around it,
+            # since a triangle of zero area is never hit (Bitterli's staircase has one, Mesh432.obj)
+            log.warning("%s: mesh '%s' has no triangle of non-zero area (%d degenerate): left out of the scene, "
+                        "which renders as in Mitsuba", spec.location, filename or name, dropped)
+            self.empty = True
         self.mesh = mesh
         self.filename = filename
         self.dropped = dropped
         self._attach(children, spec)
+        if not self.empty:   # a mesh_attribute texture in the BSDF: the mesh's attribute, baked into a bitmap
+            from ..textures.mesh_attribute import bake
+
+            self.mesh, self.bsdf = bake(self.mesh, self.bsdf, filename or name)
 
 
 def half_normals(normals) -> np.ndarray:
@@ -173,8 +188,10 @@ def crease_normals(mesh, max_angle: float):
     normals = np.zeros((first.size, 3))
     np.add.at(normals, new_index, np.repeat(n, 3, axis=0) * angles.reshape(-1, 1))
     old = f.reshape(-1)[first]
+    attributes = {k: v[old] if k.startswith("vertex_") else v for k, v in mesh.attributes.items()}
     return MeshData(positions=mesh.positions[old], normals=_normalize_rows(normals),
-                    uvs=None if mesh.uvs is None else mesh.uvs[old], faces=new_index.reshape(-1, 3))
+                    uvs=None if mesh.uvs is None else mesh.uvs[old], faces=new_index.reshape(-1, 3),
+                    attributes=attributes)
 
 
 class MitsubaMeshOptions:
@@ -203,7 +220,8 @@ class MitsubaMeshOptions:
             if flip:
                 faces = faces[:, [0, 2, 1]]
                 normals = None if normals is None else -normals
-            return MeshData(positions=mesh.positions, normals=normals, uvs=mesh.uvs, faces=faces)
+            return MeshData(positions=mesh.positions, normals=normals, uvs=mesh.uvs, faces=faces,
+                            attributes=mesh.attributes)
 
         self._load(props, children, spec, loader, "to_world", prepare, generate, name)
 

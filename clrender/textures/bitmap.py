@@ -8,6 +8,7 @@ PPM, TIFF) looked up at the surface's uv.
         <string name="filter_type" value="bilinear"/>    <!-- bilinear (default) | nearest -->
         <string name="wrap_mode" value="repeat"/>        <!-- repeat (default) | mirror | clamp -->
         <boolean name="raw" value="false"/>              <!-- true: no sRGB decoding of 8/16-bit images -->
+        <string name="format" value="auto"/>             <!-- auto (default) | variant | float16 | uint8 -->
         <transform name="to_uv"><scale x="2" y="2"/></transform>   <!-- default identity -->
     </texture>
 </bsdf>
@@ -20,6 +21,9 @@ indices outside the image wrap: `repeat` modulo the size, `mirror` reflected at 
 W−1, W−1, W−2, …), `clamp` to the edge. 8- and 16-bit images are sRGB-encoded and decoded to linear unless
 `raw`; EXR, HDR and PFM are linear. Grey images give three equal channels; alpha is ignored. Where a float parameter takes
 the texture (a roughness, a blend weight, an opacity), Mitsuba reads the luminance of the (decoded) colour.
+`format` is the texels' storage as Mitsuba's (textures/imagefile.py says what each keeps; "fp16" is float16):
+`auto` keeps 8 bits as bytes, 16 bits as half floats and float images as floats; `variant` float32 throughout;
+`float16` rounds every value to half; `uint8` rounds every channel to a byte (clamped to [0, 1]).
 
 Texture row (kernels/textures/bitmap.h): p.bitmap.dims = (W, H, filter: 0 bilinear / 1 nearest, wrap: 0 repeat /
 1 mirror / 2 clamp); to_uv[0..1].xyz = the rows of the 2-D affine map; the W·H pixels (float4, row by row)
@@ -33,7 +37,7 @@ import numpy as np
 from ..emitters.emitter import LUMINANCE
 from ..errors import SceneError
 from ..scene.registry import register
-from .imagefile import read_image
+from .imagefile import STORAGE, read_image
 from .texture import Texture
 
 FILTERS = ("bilinear", "nearest")
@@ -74,7 +78,11 @@ class Bitmap(Texture):
     def __init__(self, props, children, spec):
         path = Path(props.get_string("filename"))   # the reader resolved it against the scene's folder
         self.raw = props.get_bool("raw", False)
-        self.image = read_image(path, raw=self.raw, location=props.location("filename"))
+        storage = props.get_string("format", "auto")
+        storage = "float16" if storage == "fp16" else storage   # Mitsuba's old name, still read
+        if storage not in STORAGE:
+            raise SceneError(f"format must be one of {', '.join(STORAGE)}; got '{storage}'", props.location("format"))
+        self.image = read_image(path, raw=self.raw, location=props.location("filename"), storage=storage)
         self.filter = choice(props, "filter_type", FILTERS, "bilinear")
         self.wrap = choice(props, "wrap_mode", WRAPS, "repeat")
         self.to_uv = uv_transform(props)

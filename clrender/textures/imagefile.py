@@ -14,6 +14,13 @@ TIFF hold linear values; 8- and 16-bit images hold sRGB-encoded values, which ar
 image's (decoded) values are kept as half floats, as Mitsuba's `bitmap` texture stores them (`half=False`: as
 float32, as its `envmap` does). Grey images become three equal channels; an alpha channel is dropped, as Mitsuba's
 `bitmap` and `envmap` drop it (colours as stored, not divided by alpha).
+
+`storage` is the bitmap texture's `format` (Mitsuba 3.9.1's src/textures/bitmap.cpp, values checked against its
+own lookups): `auto` as above (Mitsuba keeps 8-bit images as bytes decoded texel by texel, the same values);
+`variant` float32 throughout (a 16-bit image not rounded to half); `float16` every value rounded to half after
+decoding; `uint8` every channel as a byte: an 8-bit image as it is, a 16-bit one's (encoded) values and a float
+image's linear ones, clamped to [0, 1], to the nearest 1/255 (Mitsuba dithers there, so its texels differ from
+these by one step at most, about half of them near a half step).
 """
 from __future__ import annotations
 
@@ -23,6 +30,8 @@ import numpy as np
 
 from ..errors import SceneError
 
+#: the bitmap texture's `format`s (Mitsuba 3.9.1's; "fp16", its old name for float16, is read as float16)
+STORAGE = ("auto", "variant", "float16", "uint8")
 #: Pillow's names of the formats we read through it (Mitsuba 3.9.1 reads PNG, JPEG, BMP, TGA, PPM; TIFF is ours).
 PILLOW_FORMATS = ("PNG", "JPEG", "BMP", "TGA", "PPM", "TIFF")
 EXR_MAGIC = b"\x76\x2f\x31\x01"
@@ -35,7 +44,11 @@ def srgb_to_linear(x: np.ndarray) -> np.ndarray:
     return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
 
 
-def read_image(path, raw: bool = False, location=None, half: bool = True) -> np.ndarray:
+def read_image(path, raw: bool = False, location=None, half: bool = True, storage: str = "auto") -> np.ndarray:
+    """The image's pixels, linear float32 (H, W, 3); ``half``: an `auto` 16-bit image's values rounded to half floats
+    (the bitmap texture's, not the envmap's); ``storage``: the bitmap's `format` (see the module's docstring)."""
+    if storage == "variant":
+        half = False
     path = Path(path)
     if not path.is_file():
         what = "not found" if not path.exists() else "is not a regular file (a folder or a device)"
@@ -43,6 +56,7 @@ def read_image(path, raw: bool = False, location=None, half: bool = True) -> np.
     try:
         with open(path, "rb") as f:
             head = f.read(4)
+        linear = True   # float values (not 8 or 16 bits): what `float16` and `uint8` storage round
         if head == EXR_MAGIC:
             img = _read_exr(path)
         elif head[:2] == b"#?":
@@ -50,7 +64,11 @@ def read_image(path, raw: bool = False, location=None, half: bool = True) -> np.
         elif head[:2] == b"PF":
             img = _read_pfm(path)
         else:
-            img = _read_pillow(path, raw, half, location)
+            img, linear = _read_pillow(path, raw, half, location, storage)
+        if linear and storage == "float16":
+            img = img.astype(np.float16).astype(np.float32)
+        elif linear and storage == "uint8":
+            img = _to_bytes(img).astype(np.float32)
     except SceneError:
         raise
     except MemoryError:
@@ -80,7 +98,13 @@ def _read_exr(path: Path) -> np.ndarray:
     return np.ascontiguousarray(img, np.float32)
 
 
-def _read_pillow(path: Path, raw: bool, half: bool, location) -> np.ndarray:
+def _to_bytes(a: np.ndarray) -> np.ndarray:
+    """Values clamped to [0, 1] and rounded to the nearest 1/255 (8-bit storage)."""
+    return np.round(np.clip(np.asarray(a, np.float64), 0.0, 1.0) * 255.0) / 255.0
+
+
+def _read_pillow(path: Path, raw: bool, half: bool, location, storage: str = "auto") -> tuple[np.ndarray, bool]:
+    """(pixels, whether they are float values rather than 8- or 16-bit ones)."""
     from PIL import Image, UnidentifiedImageError
 
     try:
@@ -91,7 +115,7 @@ def _read_pillow(path: Path, raw: bool, half: bool, location) -> np.ndarray:
     with im:
         if im.mode == "F":   # greyscale PFM (Pillow gives its scale's magnitude), float TIFF: linear already
             a = np.asarray(im, np.float64) * im.info.get("scale", 1.0)
-            return np.repeat(a[..., None], 3, axis=-1).astype(np.float32)
+            return np.repeat(a[..., None], 3, axis=-1).astype(np.float32), True
         wide = True
         if im.mode.startswith("I;16") or (im.mode == "I" and im.format in ("PNG", "PPM")):   # 16-bit grey
             a = np.repeat((np.asarray(im, np.float64) / 65535.0)[..., None], 3, axis=-1)
@@ -101,9 +125,12 @@ def _read_pillow(path: Path, raw: bool, half: bool, location) -> np.ndarray:
             a = wide_rgb
         else:   # 1-, 8-bit grey (+ alpha), palette, RGB(A), CMYK: 8 bits a channel
             a, wide = np.asarray(im.convert("RGB"), np.float64) / 255.0, False
+    if wide and storage == "uint8":   # the encoded values as bytes, decoded at lookup as Mitsuba does
+        a = _to_bytes(a)
     a = a if raw else srgb_to_linear(a)
     # Mitsuba's bitmap keeps a 16-bit image's (decoded) values as half floats (checked against Mitsuba 3.9.1's bitmap)
-    return (a.astype(np.float16) if wide and half else a).astype(np.float32)
+    rounded = (wide and half and storage == "auto") or storage == "float16"
+    return (a.astype(np.float16) if rounded else a).astype(np.float32), False
 
 
 #: Raw modes of 16-bit colour samples that Pillow decodes to 8 bits (keeping the high byte of each), and the raw
