@@ -3,7 +3,7 @@
     python benchmarks/mem_table.py [--n 255] [--json benchmarks/results/mem_table-DATE.json]
 
 Packs (clrender.pack.pack_scene, the default 4-wide BVH) a lumpy geodesic sphere of 20 n^2 triangles (n = 255:
-1,300,500 triangles, 650,252 shared vertices; scenes/build.py's ``blob``) alone under a camera, once with its
+1,300,500 triangles, 650,252 shared vertices; scenes/scenekit's ``blob``) alone under a camera, once with its
 smooth vertex normals and once without, and the 1 M-triangle largemesh scene (blob, ground, area light) if its
 PLY exists. Prints bytes per triangle of every table that is not a single row, and the total (the
 ``device_bytes`` of SceneBuffers.stats).
@@ -47,7 +47,8 @@ def main(argv=None) -> int:
     ap.add_argument("--json", help="also write the numbers here")
     args = ap.parse_args(argv)
 
-    from build import blob, write_ply
+    from scenekit.files import write_ply   # scenes/ is on sys.path (above)
+    from scenekit.geometry import blob
 
     from clrender.loader import load_scene
     from clrender.shapes.meshdata import MeshData

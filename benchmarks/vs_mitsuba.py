@@ -23,7 +23,7 @@ integrator (its MIS and its roulette from depth 5) on both sides, the fairest co
 - `cornell_spheres_mi`: the Cornell twin's Mitsuba file;
 - `rough_plates`: four metal plates from nearly smooth to rough under four spherical lights of equal power and
   very different sizes (the MIS test case; described in our own words below);
-- `large_mesh`: a bumpy sphere of 1,003,520 triangles (scenes/build.py's blob, written as binary PLY) on a
+- `large_mesh`: a bumpy sphere of 1,003,520 triangles (scenes/scenekit's blob, written as binary PLY) on a
   diffuse floor under a square area light;
 - `furnace`: a diffuse sphere (albedo 0.8) in a constant sky of radiance 1: the sphere's pixels are 0.8 and the
   others 1, exactly; both renderers' region means are reported against those values.
@@ -238,13 +238,16 @@ def twin_rough_plates(d: Path, spp: int, res: int = 256) -> dict:
 
 
 def _scenes_build():
-    """The repository's scenes/build.py as a module (its geodesic 'blob' mesh and binary PLY writer)."""
-    import importlib.util
+    """The repository's scene kit (scenes/scenekit: its geodesic 'blob' mesh and binary PLY writer), as a namespace."""
+    import types
 
-    spec = importlib.util.spec_from_file_location("clrender_scenes_build", ROOT / "scenes" / "build.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    scenes = str(ROOT / "scenes")
+    if scenes not in sys.path:
+        sys.path.insert(0, scenes)
+    from scenekit.files import write_ply
+    from scenekit.geometry import blob
+
+    return types.SimpleNamespace(blob=blob, write_ply=write_ply)
 
 
 LARGE_MESH_SUBDIVISIONS = 224  # 20 * 224^2 = 1,003,520 triangles
