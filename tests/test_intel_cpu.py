@@ -287,3 +287,20 @@ def test_default_scene_on_the_intel_runtime_matches_pocl(monkeypatch):
     z = block_z(a, b)
     assert np.abs(z).max() < 4.5, f"max |z| = {np.abs(z).max():.2f}"
     assert 0.5 < (z ** 2).mean() < 2.0
+
+
+def test_a_program_built_again_still_names_its_arguments():
+    """Kernel arguments are set by name, which Intel's runtime reports only for programs built from source: one
+    made from pyopencl's cached binary (the second build of a source, e.g. every render after the first process's)
+    has none, so the build must not go through that cache there."""
+    from clrender.device.kernelargs import KernelArgs
+    from clrender.device.program import build_program
+
+    p, d = intel_device_or_skip()
+    import pyopencl as pcl
+
+    ctx = pcl.Context([d])
+    src = "__kernel void named(__global float* out, uint count) { if (get_global_id(0) < count) out[0] = 1.0f; }"
+    for _ in range(2):   # the second build is the one a binary cache would serve
+        prg = build_program(ctx, src, with_types=False, use_cache=False)
+        assert KernelArgs(pcl.Kernel(prg, "named")).names() == ["out", "count"]

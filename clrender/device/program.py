@@ -130,7 +130,10 @@ def build_program(ctx, source: str, defines: dict | None = None, fast_math: bool
             # pyopencl prints the log itself. A failed build still raises, with its log.
             if not _want_build_logs():
                 warnings.simplefilter("ignore", cl.CompilerWarning)
-            prg = cl.Program(ctx, source).build(options=opts)
+            # pyopencl's own binary cache only for PoCL: a program that other drivers (Intel's CPU runtime, seen
+            # here) create from a cached binary reports no kernel-argument names (clGetKernelArgInfo:
+            # KERNEL_ARG_INFO_NOT_AVAILABLE), and every kernel's arguments are set by name (kernelargs.py)
+            prg = cl.Program(ctx, source).build(options=opts, cache_dir=None if is_pocl(ctx) else False)
     except cl.RuntimeError as exc:
         raise DeviceError(f"OpenCL program failed to build:\n{exc}") from exc
     if use_cache:
