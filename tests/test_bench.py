@@ -171,6 +171,17 @@ def test_skipped_device_is_reported_not_a_crash(monkeypatch):
     assert ok["integrator"] == "normals" and ok["rays"]["per_sample"] == 1.0
 
 
+def test_the_wavefront_is_benchmarked_and_its_rays_counted_by_the_megakernel():
+    """`bench --driver wavefront` times the wavefront; the rays per sample it reports are the megakernel's count of
+    the same samples (the same rays), and equal to a megakernel row's."""
+    res = {d: bench.run_benchmark([CORNELL], width=16, height=8, spp=2, repeat=1, cold=False, driver=d)["results"][0]
+           for d in ("wavefront", "megakernel")}
+    assert res["wavefront"]["status"] == "ok" and res["wavefront"]["driver"] == "wavefront"
+    assert res["megakernel"]["driver"] == "megakernel"
+    assert res["wavefront"]["rays"] == res["megakernel"]["rays"]
+    assert res["wavefront"]["samples_per_second"]["median"] > 0
+
+
 def test_devices_all_skips_a_simulator_unless_named(monkeypatch):
     # `--devices all` used to run the default set on the Oclgrind simulator too (installed by the test extra):
     # hours of a simulated CPU. It is listed as skipped; named, it is benchmarked.

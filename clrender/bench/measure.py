@@ -227,9 +227,11 @@ class PreparedScene:
 
 
 def bench_one(prepared, dev: dict, *, spp=16, repeat=3, seed=0, reference=None, cold=True, count_rays=True,
-              fast_math=False, say=None) -> dict:
+              fast_math=False, say=None, driver="auto") -> dict:
     """Measure one scene (a :class:`PreparedScene` or a path) on one device (``dev`` from
-    :func:`resolve_devices`); returns a result row."""
+    :func:`resolve_devices`) with `driver` (clrender/executors.py); returns a result row. The build timings are of
+    the megakernel's program (a wavefront row leaves them out), and rays are counted by the megakernel, which traces
+    the very rays of the wavefront (the same samples)."""
     from ..renderer import LOCAL_SIZE, Renderer
 
     say = say or (lambda msg: None)
@@ -242,15 +244,19 @@ def bench_one(prepared, dev: dict, *, spp=16, repeat=3, seed=0, reference=None, 
         row.update(status="skipped", reason=f"cannot build kernels: {dev['reason']}")
         return row
     say(f"{row['scene']} on {dev['name']}: building")
-    r = Renderer(scene, device=dev["spec"], buffers=buffers, fast_math=fast_math)
+    r = Renderer(scene, device=dev["spec"], buffers=buffers, fast_math=fast_math, driver=driver)
+    row["driver"] = r.driver
     row["upload_seconds"] = r.upload_seconds
     defines = r.defines  # exactly the program the renderer runs (integrator, BVH width, ...)
     build = {"first_build_seconds": r.build_seconds}
+    if r.driver != "megakernel":
+        cold = False   # the timed builds below are of render.cl's program
     if cold:
         c = cold_build(dev["spec"], defines, r.global_size, LOCAL_SIZE, fast_math)
         build.update(cold_program=c["program"], cold_first_launch=c["first_launch"], cold_total=c["total"])
-    w = _timed_build(r.ctx, r.queue, defines, fast_math, r.global_size, LOCAL_SIZE)
-    build.update(warm_program=w["program"], warm_first_launch=w["first_launch"], warm_total=w["total"])
+    if r.driver == "megakernel":
+        w = _timed_build(r.ctx, r.queue, defines, fast_math, r.global_size, LOCAL_SIZE)
+        build.update(warm_program=w["program"], warm_first_launch=w["first_launch"], warm_total=w["total"])
     row["build"] = build
     say(f"{row['scene']} on {dev['name']}: warm-up and {repeat} x {spp} spp")
     r.render(spp=1, seed=seed)  # warm-up: PoCL compiles the launch shape
@@ -268,7 +274,8 @@ def bench_one(prepared, dev: dict, *, spp=16, repeat=3, seed=0, reference=None, 
     row["device_memory_bytes"] = r.device_memory_bytes()
     if count_rays:
         say(f"{row['scene']} on {dev['name']}: counting rays")
-        rc = Renderer(scene, device=dev["spec"], buffers=buffers, fast_math=fast_math, count_rays=True)
+        rc = Renderer(scene, device=dev["spec"], buffers=buffers, fast_math=fast_math, count_rays=True,
+                      driver="megakernel")
         rc.render(spp=1, seed=seed)
         film = rc.render(spp=spp, seed=seed)
         cam, closest, shadow = film.stats.rays
@@ -306,12 +313,13 @@ def _references(scenes, reference):
 def run_benchmark(scenes=None, devices=None, *, integrator: str | None = None, spp: int = 16, repeat: int = 3,
                   width: int | None = None, height: int | None = None, seed: int = 0, reference=None,
                   cold: bool = True, count_rays: bool = True, fast_math: bool = False, scenes_dir=None,
-                  progress=None) -> dict:
+                  progress=None, driver: str = "auto") -> dict:
     """Benchmark ``scenes`` (default: the default set) on ``devices`` (None = default device, "all", or specs).
 
     ``reference``: one EXR per scene (a path for a single scene, a list, or a {scene: path} dict) for the
     convergence curves. ``cold=False`` skips the cold-build subprocess. ``progress``: a callable taking a
-    message. Returns the JSON-ready result dict (see :func:`write_json`)."""
+    message. ``driver``: the renderers' (clrender/executors.py). Returns the JSON-ready result dict (see
+    :func:`write_json`)."""
     if spp < 1 or repeat < 1:
         raise ClrenderError("spp and repeat must be at least 1")
     scenes = [Path(s) for s in scenes] if scenes else default_scenes(scenes_dir)
@@ -330,7 +338,8 @@ def run_benchmark(scenes=None, devices=None, *, integrator: str | None = None, s
         for dev in devs:
             try:
                 rows.append(bench_one(prepared, dev, spp=spp, repeat=repeat, seed=seed, reference=ref,
-                                      cold=cold, count_rays=count_rays, fast_math=fast_math, say=progress))
+                                      cold=cold, count_rays=count_rays, fast_math=fast_math, say=progress,
+                                      driver=driver))
             except _cl_errors() as exc:
                 msg = str(exc).strip().splitlines()
                 rows.append({**prepared.row(), "device": dev["name"], "platform": dev["platform"],
@@ -342,6 +351,7 @@ def run_benchmark(scenes=None, devices=None, *, integrator: str | None = None, s
         "timestamp": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "host": {**_host_info(), "loadavg_start": load_start, "loadavg_end": _loadavg()},
         "settings": {"spp": spp, "repeat": repeat, "seed": seed, "integrator": integrator, "width": width,
-                     "height": height, "cold_builds": cold, "count_rays": count_rays, "fast_math": fast_math},
+                     "height": height, "cold_builds": cold, "count_rays": count_rays, "fast_math": fast_math,
+                     "driver": driver},
         "devices": devs, "results": rows, "total_seconds": time.perf_counter() - t0,
     }

@@ -169,7 +169,7 @@ def cmd_bench(args) -> int:
     result = bench.run_benchmark(args.scenes or None, devices=args.devices, integrator=args.integrator,
                                  spp=args.spp, repeat=args.repeat, width=args.width, height=args.height,
                                  seed=args.seed, reference=args.reference, cold=not args.no_cold,
-                                 scenes_dir=args.scenes_dir, progress=say)
+                                 scenes_dir=args.scenes_dir, progress=say, driver=args.driver)
     print(bench.format_table(result))
     if args.json:
         print(f"clrender bench: wrote {bench.write_json(result, args.json)}", file=sys.stderr)
@@ -231,6 +231,8 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--devices", metavar="all|SPEC,...",
                    help="'all', or comma-separated device specs as --device takes (default: the default device)")
     b.add_argument("--integrator", metavar="NAME", help="render with this integrator instead of the scene's")
+    b.add_argument("--driver", choices=DRIVERS, default="auto",
+                   help="how passes run: megakernel or wavefront (path integrators); rays are counted by the megakernel")
     b.add_argument("--spp", type=int, default=16, help="samples per pixel per repetition (default 16)")
     b.add_argument("--repeat", type=int, default=3, help="timed repetitions after the warm-up (default 3)")
     b.add_argument("--width", type=int, help="override the image width")
