@@ -81,17 +81,13 @@ def main(argv=None):
     os.environ["POCL_VECTORIZER_REMARKS"] = "1"
     import clrender
     from clrender.renderer import Renderer
-    from vs_mitsuba import TWINS, cpu_name, scene_xml
+    from vs_mitsuba import cpu_name, made_twins, scene_xml
 
     say = lambda m: print(f"profile_wavefront: {m}", file=sys.stderr, flush=True)  # noqa: E731
     load_before = os.getloadavg()
     results = {}
     with tempfile.TemporaryDirectory(prefix="wf-") as tmp:
-        for name, make in TWINS.items():
-            if args.only and name not in args.only:
-                continue
-            d = Path(tmp) / name
-            t = make(d, args.spp, args.res)
+        for name, d, t in made_twins(tmp, args.only, args.spp, args.res):
             if "xml" in t:
                 xml = d / "scene.xml"
                 xml.write_text(t["xml"])

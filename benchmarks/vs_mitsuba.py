@@ -466,6 +466,15 @@ QUICK = dict(spp=4, repeat=1, reference_spp=16, res=128)
 FULL = dict(spp=64, repeat=5, reference_spp=1024, res=256)
 
 
+def made_twins(tmp, only, spp: int, res: int):
+    """(name, folder, twin description) of each twin (those in `only`, if given), made in its own folder of tmp."""
+    for name, make in TWINS.items():
+        if only and name not in only:
+            continue
+        d = Path(tmp) / name
+        yield name, d, make(d, spp, res)
+
+
 def cornell_twin_xml(folder: Path, spp: int = 64) -> Path:
     """The Cornell twin in our Nori XML, written into `folder` (the default scene of the A/B and profiling
     tools in this folder)."""
@@ -590,11 +599,8 @@ def main(argv=None):
     load_before = os.getloadavg()
     results = {}
     with tempfile.TemporaryDirectory(prefix="vs-mitsuba-") as tmp:
-        for name, make in TWINS.items():
-            if args.only and name not in args.only:
-                continue
-            d = Path(tmp) / name
-            results[name] = bench_twin(make(d, args.spp, args.res), d, args.spp, args.repeat, args.reference_spp,
+        for name, d, t in made_twins(tmp, args.only, args.spp, args.res):
+            results[name] = bench_twin(t, d, args.spp, args.repeat, args.reference_spp,
                                        say, count_rays=not args.no_count_rays, device=args.device,
                                        variant=args.mitsuba_variant)
     from clrender.bench import git_revision
