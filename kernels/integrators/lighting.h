@@ -130,14 +130,21 @@ INLINE float3 escaped(const SceneData* sd, float3 d) { return scene_eval_environ
 
 /* A camera ray under Mitsuba's hide_emitters: shapes that carry an area emitter are not there for it (Mitsuba
    3.9 lets the camera see through them, front or back, to what lies behind), so it continues past each such hit;
-   every later segment sees them as usual. */
+   every later segment sees them as usual. hidden_emitter_passed: the ray on past the emitter hit `its` (keeping a
+   far clip where it was), or false if `its` is no emitter; path_mitsuba.h's camera stage uses it one hit at a
+   time. */
+INLINE bool hidden_emitter_passed(const SceneData* sd, const Intersection* its, Ray* ray) {
+    if (sd->shapes[its->shape].emitter == NONE) return false;
+    Ray next = spawn_ray_from(its, ray->d);
+    next.tmax = ray->tmax - its->t;
+    *ray = next;
+    return true;
+}
+
 INLINE bool scene_intersect_hiding_emitters(const SceneData* sd, Ray* ray, Intersection* its) {
     for (;;) {
         if (!scene_intersect(sd, ray, its)) return false;
-        if (sd->shapes[its->shape].emitter == NONE) return true;
-        Ray next = spawn_ray_from(its, ray->d);
-        next.tmax = ray->tmax - its->t;   /* keeps a far clip where it was */
-        *ray = next;
+        if (!hidden_emitter_passed(sd, its, ray)) return true;
     }
 }
 

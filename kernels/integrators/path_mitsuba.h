@@ -35,12 +35,7 @@ INLINE void path_vertex(const SceneData* sd, PathState* ps, bool traced, const H
            through emitter shapes, front or back, to what lies behind (the next trace, keeping a far clip where it
            was); every later segment sees them as usual. */
         if (!hit) { ps->alive = 0u; return; }
-        if (sd->shapes[its.shape].emitter != NONE) {
-            Ray next = spawn_ray_from(&its, ps->ray.d);
-            next.tmax = ps->ray.tmax - its.t;
-            ps->ray = next;
-            return;
-        }
+        if (hidden_emitter_passed(sd, &its, &ps->ray)) return;   /* traced again, past the emitter */
         if (sd->info->max_depth == 1u) { ps->valid = 1u; ps->alive = 0u; return; }
     } else if (!path_emission(sd, ps, hit, &its, false)) {
         if (traced) ps->valid = 1u;   /* a surface at the depth limit counts */
