@@ -10,7 +10,7 @@ typedef struct {
     uint base, n, cap, dropped;
 } RecordScene;
 
-static inline void record_ray(const SceneData* sd, uint kind, float3 o, float3 d, float tmin, float tmax) {
+static inline void record_ray(const SceneData* sd, uint kind, vec3 o, vec3 d, float tmin, float tmax) {
     RecordScene* r = (RecordScene*)sd;
     if (r->n >= r->cap) { r->dropped += 1u; return; }
     uint i = r->base + r->n++;
@@ -70,17 +70,17 @@ __kernel void cast_rays(SCENE_ARGS, __global const float4* rec, __global const u
         float t = hit_t[i];
         float tmax = t >= 0.0f ? t : b.w;
         Hit h;
-        if (kind[i] == 0u) acc += bvh_closest_hit(sd.nodes, sd.prims, a.xyz, b.xyz, a.w, tmax, &h) ? 1.0f : 0.0f;
-        else acc += bvh_any_hit(sd.nodes, sd.prims, a.xyz, b.xyz, a.w, tmax) ? 1.0f : 0.0f;
+        if (kind[i] == 0u) acc += bvh_closest_hit(sd.nodes, sd.prims, vxyz(a), vxyz(b), a.w, tmax, &h) ? 1.0f : 0.0f;
+        else acc += bvh_any_hit(sd.nodes, sd.prims, vxyz(a), vxyz(b), a.w, tmax) ? 1.0f : 0.0f;
 #else
         if (kind[i] == 0u) {
             Hit h;
-            float t = bvh_closest_hit(sd.nodes, sd.prims, a.xyz, b.xyz, a.w, b.w, &h) ? h.t : -1.0f;
+            float t = bvh_closest_hit(sd.nodes, sd.prims, vxyz(a), vxyz(b), a.w, b.w, &h) ? h.t : -1.0f;
             hit_t[i] = t;
             acc += t;
         } else {
             Hit h;   /* the traversal itself, for the t of the hit that stopped it */
-            bool o = BVH_TRAVERSE(sd.nodes, sd.prims, a.xyz, b.xyz, a.w, b.w, &h, true);
+            bool o = BVH_TRAVERSE(sd.nodes, sd.prims, vxyz(a), vxyz(b), a.w, b.w, &h, true);
             hit_t[i] = o ? h.t : -1.0f;
             acc += o ? 1.0f : 0.0f;
         }
@@ -104,7 +104,7 @@ __kernel void count_visits(SCENE_ARGS, __global const float4* rec, __global cons
         float4 a = rec[2 * i], b = rec[2 * i + 1];
         uint any = kind[i] == 0u ? 0u : 1u;
         Hit h;
-        BVH_TRAVERSE(sd.nodes, sd.prims, a.xyz, b.xyz, a.w, b.w, &h, any != 0u);
+        BVH_TRAVERSE(sd.nodes, sd.prims, vxyz(a), vxyz(b), a.w, b.w, &h, any != 0u);
         v[any] += (uint4)(h.nodes, h.leaves, h.blocks, 1u);
     }
     visits[2 * pix] = v[0];
@@ -279,8 +279,8 @@ __kernel void setup_pass(__global const Camera* cam, __global const float* filte
     float w;
     Ray ray;
     if (!camera_sample(cam, filter_cdf, px, py, &smp, &w, &ray)) return;   /* render.cl's step */
-    float3 wl = (ray.d + ray.o * next1d(&smp)) * w;   /* keeps the sampling alive without tracing */
+    vec3 wl = (ray.d + ray.o * next1d(&smp)) * w;   /* keeps the sampling alive without tracing */
     float4 a0 = acc0[pix], a1 = acc1[pix];
-    acc0[pix] = (float4)(a0.xyz + wl, a0.w + w);
-    acc1[pix] = (float4)(a1.xyz + wl * wl, a1.w + 1.0f);
+    acc0[pix] = (float4)(vxyz(a0) + wl, a0.w + w);
+    acc1[pix] = (float4)(vxyz(a1) + wl * wl, a1.w + 1.0f);
 }

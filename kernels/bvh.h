@@ -1,8 +1,8 @@
 /* BVH traversal: closest hit and any hit against triangles and analytic spheres (OpenCL C 1.2).
 
    Node table (built by clrender/accel/bvh.py): 2-wide nodes of 4 float4 (64 B); node k is nodes[4k..4k+3]:
-       [4k+0] = A.lo.xyz, as_float(A.ref)      [4k+2] = B.lo.xyz, as_float(B.ref)
-       [4k+1] = A.hi.xyz, as_float(A.count)    [4k+3] = B.hi.xyz, as_float(B.count)
+       [4k+0] = vxyz(A.lo), as_float(A.ref)      [4k+2] = vxyz(B.lo), as_float(B.ref)
+       [4k+1] = vxyz(A.hi), as_float(A.count)    [4k+3] = vxyz(B.hi), as_float(B.count)
    A and B are the two children. Interior child: ref = node index (bit 31 clear), count = 0. Leaf child:
    ref = 0x80000000 | first, count = primitives (0 only for an empty slot); its primitives are rows
    first .. first+count-1 of the primitive table. Node 0 is the root; even a one-leaf or empty scene has it.
@@ -19,7 +19,7 @@
 
 /* Slab test of one child box: is [entry, exit] non-empty within (tmin, tmax)? The exit distance is widened
    by a few ulps so rounding cannot drop a primitive lying on a box face. */
-BVH_INLINE bool bvh_slab(float4 lo, float4 hi, float3 o, float3 inv, float tmin, float tmax, float* entry) {
+BVH_INLINE bool bvh_slab(float4 lo, float4 hi, vec3 o, vec3 inv, float tmin, float tmax, float* entry) {
     float x0 = (lo.x - o.x) * inv.x, x1 = (hi.x - o.x) * inv.x;
     float y0 = (lo.y - o.y) * inv.y, y1 = (hi.y - o.y) * inv.y;
     float z0 = (lo.z - o.z) * inv.z, z1 = (hi.z - o.z) * inv.z;
@@ -31,10 +31,10 @@ BVH_INLINE bool bvh_slab(float4 lo, float4 hi, float3 o, float3 inv, float tmin,
 
 /* Shared traversal: depth-first, nearer child first, leaves intersected as soon as their box is hit so the
    shortened t culls the interior children of the same node. */
-BVH_INLINE bool bvh_traverse(__global const float4* nodes, __global const float4* prims, float3 o, float3 d,
+BVH_INLINE bool bvh_traverse(__global const float4* nodes, __global const float4* prims, vec3 o, vec3 d,
                              float tmin, float tmax, Hit* hit, bool any_hit) {
     BvhRay ray = bvh_ray(o, d);
-    float3 inv = (float3)(bvh_safe_rcp(d.x), bvh_safe_rcp(d.y), bvh_safe_rcp(d.z));
+    vec3 inv = v3(bvh_safe_rcp(d.x), bvh_safe_rcp(d.y), bvh_safe_rcp(d.z));
     uint stack[BVH_STACK_SIZE];
     float stack_t[BVH_STACK_SIZE];
     int sp = 0;

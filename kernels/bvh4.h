@@ -22,7 +22,7 @@ BVH_INLINE float4 bvh4_max(float4 a, float4 b) { return a > b ? a : b; }
 /* Depth-first, front to back: the hit children of a node are pushed sorted by entry distance (nearest on top)
    and the nearest is taken at once; leaves are intersected when they come off the stack, entries that a hit
    has moved behind t are skipped. Any-hit queries do not sort. */
-BVH_INLINE bool bvh4_traverse(__global const float4* nodes, __global const float4* prims, float3 o, float3 d,
+BVH_INLINE bool bvh4_traverse(__global const float4* nodes, __global const float4* prims, vec3 o, vec3 d,
                               float tmin, float tmax, Hit* hit, bool any_hit) {
     BvhRay ray = bvh_ray(o, d);
     /* bvh_safe_rcp of the three components with one vector division */

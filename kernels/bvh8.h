@@ -34,7 +34,7 @@ typedef union { float8 v; float a[8]; } BvhLanes8;
 BVH_INLINE float8 bvh8_min(float8 a, float8 b) { return a < b ? a : b; }
 BVH_INLINE float8 bvh8_max(float8 a, float8 b) { return a > b ? a : b; }
 
-BVH_INLINE bool bvh8_traverse(__global const float4* nodes, __global const float4* prims, float3 o, float3 d,
+BVH_INLINE bool bvh8_traverse(__global const float4* nodes, __global const float4* prims, vec3 o, vec3 d,
                               float tmin, float tmax, Hit* hit, bool any_hit) {
     BvhRay ray = bvh_ray(o, d);
     float4 d4 = (float4)(d.x, d.y, d.z, 1.0f);

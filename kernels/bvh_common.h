@@ -3,10 +3,10 @@
 
    Primitive table: 10 words per primitive in leaf order, each leaf cut into blocks of up to 4 primitives
    stored structure of arrays (clrender/accel/primitives.py pack_leaf_blocks; bvh_isect_leaf reads it):
-       triangle:   v0.xyz, v1.xyz, v2.xyz, id = its leaf reference (pack_scene: pos << 4 | lane << 2 | (c - 1),
+       triangle:   vxyz(v0), vxyz(v1), vxyz(v2), id = its leaf reference (pack_scene: pos << 4 | lane << 2 | (c - 1),
                    clrender/accel/primitives.py leaf_refs; kernels/shapes/mesh.h finds its vertices from it:
                    this table is their only copy) or, in tables that the tests pack, its triangle number
-       sphere j:   centre.xyz, radius, 0 x 5, id = j | 0x80000000
+       sphere j:   vxyz(centre), radius, 0 x 5, id = j | 0x80000000
 
    Hits count for tmin < t < tmax, both sides of triangles. Ray directions need not be normalised.
    Plain arithmetic instead of fmin/fmax/dot/cross: on PoCL 3.0 the builtins were 1.2-2.4x slower here. */
@@ -89,7 +89,7 @@ BVH_INLINE float bvh_safe_rcp(float x) {
    two, and a vertex p maps to (p[kx] - o[kx] - sx (p[kz] - o[kz]), p[ky] - o[ky] - sy (p[kz] - o[kz])) with
    depth sz (p[kz] - o[kz]). */
 typedef struct {
-    float3 o, d;
+    vec3 o, d;
     float okx, oky, okz;   /* the origin's components along kx, ky, kz */
     float sx, sy, sz;
     int kx, ky, kz;
@@ -97,7 +97,7 @@ typedef struct {
 
 BVH_INLINE float bvh_pick(float4 p, int k) { return k == 0 ? p.x : (k == 1 ? p.y : p.z); }
 
-BVH_INLINE BvhRay bvh_ray(float3 o, float3 d) {
+BVH_INLINE BvhRay bvh_ray(vec3 o, vec3 d) {
     BvhRay r;
     r.o = o;
     r.d = d;
@@ -105,7 +105,7 @@ BVH_INLINE BvhRay bvh_ray(float3 o, float3 d) {
     r.kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
     r.kx = r.kz == 2 ? 0 : r.kz + 1;
     r.ky = r.kx == 2 ? 0 : r.kx + 1;
-    float4 o4 = (float4)(o, 0.0f), d4 = (float4)(d, 0.0f);
+    float4 o4 = vf4(o, 0.0f), d4 = vf4(d, 0.0f);
     r.okx = bvh_pick(o4, r.kx); r.oky = bvh_pick(o4, r.ky); r.okz = bvh_pick(o4, r.kz);
     float dz = bvh_pick(d4, r.kz);
     r.sz = 1.0f / dz;                 /* a zero direction gives inf/NaN here, and every test then misses */
@@ -147,7 +147,7 @@ BVH_INLINE bool bvh_isect_triangle(float4 p0, float4 p1, float4 p2, const BvhRay
 /* Ray/sphere with a general (unnormalised) d. The discriminant is formed from the distance between the
    centre and the line (Haines et al., Ray Tracing Gems ch. 7), which stays accurate for far or grazing rays,
    and the two roots come from the cancellation-free pair q/a, c/q. */
-BVH_INLINE bool bvh_isect_sphere(float4 c, float r, float3 o, float3 d, float tmin, float* t) {
+BVH_INLINE bool bvh_isect_sphere(float4 c, float r, vec3 o, vec3 d, float tmin, float* t) {
     float fx = o.x - c.x, fy = o.y - c.y, fz = o.z - c.z;
     float a = d.x * d.x + d.y * d.y + d.z * d.z;
     float b = fx * d.x + fy * d.y + fz * d.z;                 /* half of the usual b */

@@ -4,7 +4,7 @@
 #define CLRENDER_BVH_QUERIES_H
 
 /* Closest hit in (tmin, tmax); *hit is written only when there is one. */
-bool bvh_closest_hit(__global const float4* nodes, __global const float4* prims, float3 o, float3 d,
+bool bvh_closest_hit(__global const float4* nodes, __global const float4* prims, vec3 o, vec3 d,
                      float tmin, float tmax, Hit* hit) {
     Hit h;
     bool found = BVH_TRAVERSE(nodes, prims, o, d, tmin, tmax, &h, false);
@@ -13,7 +13,7 @@ bool bvh_closest_hit(__global const float4* nodes, __global const float4* prims,
 }
 
 /* Anything in (tmin, tmax)? Stops at the first hit (shadow rays). */
-bool bvh_any_hit(__global const float4* nodes, __global const float4* prims, float3 o, float3 d,
+bool bvh_any_hit(__global const float4* nodes, __global const float4* prims, vec3 o, vec3 d,
                  float tmin, float tmax) {
     Hit h;
     return BVH_TRAVERSE(nodes, prims, o, d, tmin, tmax, &h, true);

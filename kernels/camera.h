@@ -7,7 +7,7 @@
 #include "math.h"
 #include "warp.h"
 
-typedef struct { float3 o; float3 d; float tmin; float tmax; } Ray;
+typedef struct { vec3 o; vec3 d; float tmin; float tmax; } Ray;
 
 /* (sx, sy): position in the image in pixels (0..width, 0..height), which is the window at (crop_x, crop_y) of a
    film_width x film_height film; lens: a uniform 2D sample for the thin lens (unused when lens_radius is 0). */
@@ -16,9 +16,9 @@ INLINE Ray camera_ray_lens(__global const Camera* cam, float sx, float sy, float
     if (cam->ortho != 0u) {
         /* Mitsuba's orthographic sensor: from the point (2nx - 1, (1 - 2ny) height/width, near) of camera space
            (its x and y axes scaled by to_world: the visible area), along z, for far - near */
-        float3 X = cam->to_world[0].xyz, Y = cam->to_world[1].xyz, Z = cam->to_world[2].xyz;
+        vec3 X = vxyz(cam->to_world[0]), Y = vxyz(cam->to_world[1]), Z = vxyz(cam->to_world[2]);
         Ray r;
-        r.o = cam->to_world[3].xyz + X * (2.0f * nx - 1.0f) + Y * ((1.0f - 2.0f * ny) * cam->inv_aspect)
+        r.o = vxyz(cam->to_world[3]) + X * (2.0f * nx - 1.0f) + Y * ((1.0f - 2.0f * ny) * cam->inv_aspect)
               + Z * cam->near_clip;
         r.d = Z * (1.0f / len3(Z));
         r.tmin = 0.0f;
@@ -26,21 +26,21 @@ INLINE Ray camera_ray_lens(__global const Camera* cam, float sx, float sy, float
         return r;
     }
     float t = cam->tan_half_fov;
-    float3 dc = (float3)((2.0f * nx - 1.0f) * t, (1.0f - 2.0f * ny) * t * cam->inv_aspect, 1.0f);
-    float3 oc = (float3)(0.0f);
+    vec3 dc = v3((2.0f * nx - 1.0f) * t, (1.0f - 2.0f * ny) * t * cam->inv_aspect, 1.0f);
+    vec3 oc = v3s(0.0f);
     if (cam->lens_radius > 0.0f) {
         /* thin lens: the ray through the lens point aims at where the pinhole ray meets the plane in focus */
         float2 p = square_to_uniform_disk(lens) * cam->lens_radius;
-        oc = (float3)(p.x, p.y, 0.0f);
+        oc = v3(p.x, p.y, 0.0f);
         dc = dc * cam->focus_distance - oc;
     }
     float inv_len = 1.0f / len3(dc);
     dc *= inv_len;
-    float3 X = cam->to_world[0].xyz, Y = cam->to_world[1].xyz, Z = cam->to_world[2].xyz;
-    float3 dw = X * dc.x + Y * dc.y + Z * dc.z;
+    vec3 X = vxyz(cam->to_world[0]), Y = vxyz(cam->to_world[1]), Z = vxyz(cam->to_world[2]);
+    vec3 dw = X * dc.x + Y * dc.y + Z * dc.z;
     float scale = len3(dw); /* a scaled toWorld stretches distances: keep the clip planes where Nori has them */
     Ray r;
-    r.o = cam->to_world[3].xyz + X * oc.x + Y * oc.y;
+    r.o = vxyz(cam->to_world[3]) + X * oc.x + Y * oc.y;
     r.d = dw * (1.0f / scale);
     r.tmin = cam->near_clip / dc.z * scale;
     r.tmax = cam->far_clip / dc.z * scale;

@@ -23,15 +23,15 @@
 #include "shapes/common.h"   /* shape_cdf_search */
 
 /* Fill a query from a surface hit seen from ref (for emitter_pdf/emitter_eval of a BSDF-sampled ray). */
-INLINE void emitter_query_from_hit(EmitterQuery* q, float3 ref, const Intersection* its) {
+INLINE void emitter_query_from_hit(EmitterQuery* q, vec3 ref, const Intersection* its) {
     q->ref = ref;
     q->p = its->p;
     q->n = its->sh.n;
     q->ng = its->ng;
-    float3 d = its->p - ref;
+    vec3 d = its->p - ref;
     float l = len3(d);
     q->dist = l;
-    q->wi = l > 0.0f ? d * (1.0f / l) : (float3)(0.0f, 0.0f, 1.0f);
+    q->wi = l > 0.0f ? d * (1.0f / l) : v3(0.0f, 0.0f, 1.0f);
     q->pdf = 0.0f;
     q->delta = 0u;
     q->emitter = NONE;
@@ -39,7 +39,7 @@ INLINE void emitter_query_from_hit(EmitterQuery* q, float3 ref, const Intersecti
 }
 
 /* A query for an escaping direction d (infinite emitters only need wi). */
-INLINE void emitter_query_from_direction(const SceneData* sd, EmitterQuery* q, float3 ref, float3 d) {
+INLINE void emitter_query_from_direction(const SceneData* sd, EmitterQuery* q, vec3 ref, vec3 d) {
     q->ref = ref;
     q->wi = d;
     q->p = ref + d * emitter_far(sd, ref);
@@ -53,7 +53,7 @@ INLINE void emitter_query_from_direction(const SceneData* sd, EmitterQuery* q, f
 
 /* Sample a direction toward emitter e from q->ref; returns radiance / pdf (0 if the sample carries nothing,
    e.g. it sees the back of a one-sided area light; q->pdf is still the density of the sampled wi). */
-INLINE float3 emitter_sample(const SceneData* sd, uint e, EmitterQuery* q, float2 u) {
+INLINE vec3 emitter_sample(const SceneData* sd, uint e, EmitterQuery* q, float2 u) {
     __global const Emitter* em = &sd->emitters[e];
     q->emitter = e;
     q->delta = (em->flags & EMITTER_DELTA) ? 1u : 0u;
@@ -67,7 +67,7 @@ INLINE float emitter_pdf(const SceneData* sd, uint e, const EmitterQuery* q) {
 }
 
 /* Radiance leaving the emitter toward ref along -q->wi. */
-INLINE float3 emitter_eval(const SceneData* sd, uint e, const EmitterQuery* q) {
+INLINE vec3 emitter_eval(const SceneData* sd, uint e, const EmitterQuery* q) {
     return emitter_row_eval(sd, &sd->emitters[e], q);
 }
 
@@ -103,16 +103,16 @@ INLINE float scene_emitter_prob(const SceneData* sd, uint e) {
 /* Choose one of the N emitters with u3.x (scene_pick_emitter), let it sample with u3.yz. Returns
    radiance / (pdf * P(e)); q->pdf = emitter pdf * P(e), q->emitter = the chosen one. No emitters: returns 0 with
    pdf 0. */
-INLINE float3 scene_sample_emitter(const SceneData* sd, EmitterQuery* q, float3 u3) {
+INLINE vec3 scene_sample_emitter(const SceneData* sd, EmitterQuery* q, vec3 u3) {
     uint n = sd->info->n_emitters;
     float prob = 0.0f;
     uint e = n ? scene_pick_emitter(sd, u3.x, &prob) : 0u;
     if (n == 0u || !(prob > 0.0f)) {
-        q->pdf = 0.0f; q->dist = 0.0f; q->delta = 0u; q->emitter = NONE; q->wi = (float3)(0.0f, 0.0f, 1.0f);
-        q->p = q->ref; q->n = q->ng = (float3)(0.0f, 0.0f, 1.0f);
-        return (float3)(0.0f);
+        q->pdf = 0.0f; q->dist = 0.0f; q->delta = 0u; q->emitter = NONE; q->wi = v3(0.0f, 0.0f, 1.0f);
+        q->p = q->ref; q->n = q->ng = v3(0.0f, 0.0f, 1.0f);
+        return v3s(0.0f);
     }
-    float3 w = emitter_sample(sd, e, q, (float2)(u3.y, u3.z));
+    vec3 w = emitter_sample(sd, e, q, (float2)(u3.y, u3.z));
     q->pdf *= prob;
     return w * (1.0f / prob);
 }
@@ -124,9 +124,9 @@ INLINE float scene_emitter_pdf(const SceneData* sd, uint e, const EmitterQuery* 
 
 /* Radiance of an escaping ray (direction d): the sum over the infinite emitters (an index list, so an escaped
    ray visits only those). */
-INLINE float3 scene_eval_environment(const SceneData* sd, float3 d) {
+INLINE vec3 scene_eval_environment(const SceneData* sd, vec3 d) {
     uint n = sd->info->n_infinite;
-    float3 L = (float3)(0.0f);
+    vec3 L = v3s(0.0f);
     EmitterQuery q;
     q.wi = d;  /* all an infinite emitter's eval reads */
     for (uint i = 0u; i < n; ++i) L += emitter_row_eval(sd, &sd->emitters[sd->infinite[i]], &q);
@@ -134,7 +134,7 @@ INLINE float3 scene_eval_environment(const SceneData* sd, float3 d) {
 }
 
 /* Light-selection pdf of an escaping direction: sum over infinite emitters of P(e) pdf_e(d). */
-INLINE float scene_environment_pdf(const SceneData* sd, float3 d) {
+INLINE float scene_environment_pdf(const SceneData* sd, vec3 d) {
     uint n = sd->info->n_infinite;
     float pdf = 0.0f;
     EmitterQuery q;
@@ -149,11 +149,11 @@ INLINE float scene_environment_pdf(const SceneData* sd, float3 d) {
 
 /* Radiance leaving the hit surface toward the viewer (wo_world points at the viewer); 0 if the shape does
    not emit or wo is on the back of its shading normal. */
-INLINE float3 area_emitter_Le(const SceneData* sd, const Intersection* its, float3 wo_world) {
+INLINE vec3 area_emitter_Le(const SceneData* sd, const Intersection* its, vec3 wo_world) {
     uint e = sd->shapes[its->shape].emitter;
-    if (e == NONE) return (float3)(0.0f);
+    if (e == NONE) return v3s(0.0f);
     __global const Emitter* em = &sd->emitters[e];
-    if (!(em->flags & EMITTER_SURFACE)) return (float3)(0.0f);
+    if (!(em->flags & EMITTER_SURFACE)) return v3s(0.0f);
     EmitterQuery q;
     q.n = its->sh.n;
     q.wi = -wo_world;

@@ -11,11 +11,11 @@
 
 #define FEATURE_MAX_DELTA_BOUNCES 16
 
-INLINE void feature_sample(const SceneData* sd, Ray ray, Sampler* smp, float3* albedo, float3* normal, float* depth,
-                           float3* position) {
-    *albedo = *normal = *position = (float3)(0.0f);
+INLINE void feature_sample(const SceneData* sd, Ray ray, Sampler* smp, vec3* albedo, vec3* normal, float* depth,
+                           vec3* position) {
+    *albedo = *normal = *position = v3s(0.0f);
     *depth = 0.0f;
-    float3 thr = (float3)(1.0f);
+    vec3 thr = v3s(1.0f);
     for (uint k = 0u; k <= FEATURE_MAX_DELTA_BOUNCES; ++k) {
         Intersection its;
         if (!scene_intersect(sd, &ray, &its)) return;
@@ -25,7 +25,7 @@ INLINE void feature_sample(const SceneData* sd, Ray ray, Sampler* smp, float3* a
         }
         __global const Bsdf* b = bsdf_at(sd, &its);
         BsdfQuery q = bsdf_query(sd, &its, -ray.d);
-        float3 w = bsdf_sample(b, &q, next2d(smp));
+        vec3 w = bsdf_sample(b, &q, next2d(smp));
         if (!bsdf_is_delta(b)) {
             *albedo = thr * w;
             *normal = its.sh.n;
@@ -53,7 +53,7 @@ __kernel void feature_pass(SCENE_ARGS, __global const Camera* cam, __global cons
         float w;
         Ray ray;
         if (!camera_sample(cam, filter_cdf, pix % cam->width, pix / cam->width, &smp, &w, &ray)) continue;
-        float3 albedo, normal, position;
+        vec3 albedo, normal, position;
         float depth;
         feature_sample(&sd, ray, &smp, &albedo, &normal, &depth, &position);
         if (!all_finite(albedo) || !all_finite(normal) || !all_finite(position) || !isfinite(depth) || !isfinite(w))

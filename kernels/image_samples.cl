@@ -13,6 +13,6 @@ __kernel void image_samples(SCENE_ARGS, __global const Camera* cam, __global flo
     sampler_init(&smp, seed, 0u, first + i);
     float2 u = next2d(&smp);
     Ray ray = camera_ray(cam, u.x * (float)cam->width, u.y * (float)cam->height);
-    float3 L = Li(&sd, ray, &smp);
+    vec3 L = Li(&sd, ray, &smp);
     out[i] = (float4)(L, 0.0f);
 }

@@ -14,7 +14,7 @@
 inline void render_pixel(SceneData* sd, __global const Camera* cam, __global const float* filter_cdf, FILM_ARGS,
                          uint pix, uint sample_offset, uint spp, uint seed) {
     uint px = pix % cam->width, py = pix / cam->width;
-    float3 swl = (float3)(0.0f), swl2 = (float3)(0.0f);
+    vec3 swl = v3s(0.0f), swl2 = v3s(0.0f);
     float sw = 0.0f;
     uint nbad = 0u;
 #ifdef CLRENDER_COUNT_RAYS
@@ -30,7 +30,7 @@ inline void render_pixel(SceneData* sd, __global const Camera* cam, __global con
         sd->n_closest = 0u;
         sd->n_shadow = 0u;
 #endif
-        float3 L = Li(sd, ray, &smp);
+        vec3 L = Li(sd, ray, &smp);
 #ifdef CLRENDER_COUNT_RAYS
         uint cam_ray = sd->n_closest > 0u ? 1u : 0u;
         n_camera += cam_ray;
@@ -44,14 +44,14 @@ inline void render_pixel(SceneData* sd, __global const Camera* cam, __global con
         else if (si % 7u == 0u) L.y = INFINITY;
 #endif
         if (!all_finite(L) || !isfinite(w)) { nbad += 1u; continue; }
-        float3 wl = L * w;
+        vec3 wl = L * w;
         swl += wl;
         swl2 += wl * wl;
         sw += w;
     }
     float4 a0 = acc0[pix], a1 = acc1[pix];
-    acc0[pix] = (float4)(a0.xyz + swl, a0.w + sw);
-    acc1[pix] = (float4)(a1.xyz + swl2, a1.w + (float)(spp - nbad));
+    acc0[pix] = (float4)(vxyz(a0) + swl, a0.w + sw);
+    acc1[pix] = (float4)(vxyz(a1) + swl2, a1.w + (float)(spp - nbad));
     bad[pix] += nbad;
 #ifdef CLRENDER_COUNT_RAYS
     rays[pix] += (uint4)(n_camera, n_closest, n_shadow, 0u);

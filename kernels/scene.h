@@ -40,17 +40,17 @@
 #endif
 
 typedef struct {
-    float3 p;        /* hit point */
-    float3 ng;       /* geometric normal (triangle winding / sphere outward) */
+    vec3 p;        /* hit point */
+    vec3 ng;       /* geometric normal (triangle winding / sphere outward) */
     Frame sh;        /* shading frame, z = interpolated shading normal */
     float2 uv;       /* spheres: (0, 0) unless the shape's BSDF has a texture (the only reader of uv) */
     float t;
-    float3 po;       /* where rays leaving the surface start from, before the offset along ng (spawn_origin) */
+    vec3 po;       /* where rays leaving the surface start from, before the offset along ng (spawn_origin) */
     float off;       /* how far they are pushed off the surface along ng */
     uint shape;
     uint tri;        /* the triangle's leaf reference (Hit.prim, see kernels/shapes/mesh.h), or NONE for spheres */
 #ifdef CLR_SURFACE_DERIVATIVES
-    float3 dpdu, dpdv;   /* Mitsuba's dp/du, dp/dv in world space where SHAPE_NEEDS_UV (else 0): derivatives.h */
+    vec3 dpdu, dpdv;   /* Mitsuba's dp/du, dp/dv in world space where SHAPE_NEEDS_UV (else 0): derivatives.h */
 #endif
 } Intersection;
 
@@ -103,19 +103,19 @@ INLINE bool scene_intersect(const SceneData* sd, const Ray* r, Intersection* its
     return scene_trace(sd, r, &h) && scene_surface(sd, r, &h, its);
 }
 
-INLINE bool scene_occluded(const SceneData* sd, float3 o, float3 d, float tmin, float tmax) {
+INLINE bool scene_occluded(const SceneData* sd, vec3 o, vec3 d, float tmin, float tmax) {
     COUNT_RAY(sd, n_shadow);
     return bvh_any_hit(sd->nodes, sd->prims, o, d, tmin, tmax);
 }
 
 /* The origin of a ray leaving the surface hit at `its` along d (see SPAWN_OFFSET). */
-INLINE float3 spawn_origin(const Intersection* its, float3 d) {
-    float3 o = its->ng * its->off;
+INLINE vec3 spawn_origin(const Intersection* its, vec3 d) {
+    vec3 o = its->ng * its->off;
     return dot3(d, its->ng) < 0.0f ? its->po - o : its->po + o;
 }
 
 /* A ray leaving the surface hit at `its` along d. */
-INLINE Ray spawn_ray_from(const Intersection* its, float3 d) {
+INLINE Ray spawn_ray_from(const Intersection* its, vec3 d) {
     Ray r;
     r.o = spawn_origin(its, d);
     r.d = d;
@@ -126,7 +126,7 @@ INLINE Ray spawn_ray_from(const Intersection* its, float3 d) {
 
 /* A ray from a point p on no known surface, offset along the ray by ray_eps(p) instead (unlike spawn_ray_from,
    this skips anything within ray_eps(p) of p). */
-INLINE Ray spawn_ray(float3 p, float3 d) {
+INLINE Ray spawn_ray(vec3 p, vec3 d) {
     Ray r;
     r.o = p;
     r.d = d;

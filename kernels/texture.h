@@ -7,8 +7,8 @@
 #include "gen/texture_dispatch.h"
 #include "bsdfs/common.h"
 
-INLINE float3 param_color(const BsdfQuery* q, float4 value, uint tex) {
-    return tex == NONE ? value.xyz : texture_eval(q->textures + tex, q->uv);
+INLINE vec3 param_color(const BsdfQuery* q, float4 value, uint tex) {
+    return tex == NONE ? vxyz(value) : texture_eval(q->textures + tex, q->uv);
 }
 
 /* The host gives a float parameter the texture's float view (Texture.float_view), whose first channel it is. */

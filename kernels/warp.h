@@ -29,40 +29,40 @@ INLINE float2 square_to_uniform_disk(float2 u) {
 }
 INLINE float square_to_uniform_disk_pdf(float2 p) { return (p.x * p.x + p.y * p.y <= 1.0f) ? INV_PI : 0.0f; }
 
-INLINE float3 square_to_uniform_sphere(float2 u) {
+INLINE vec3 square_to_uniform_sphere(float2 u) {
     float z = 1.0f - 2.0f * u.x;
     float r = safe_sqrt(1.0f - z * z);
     float phi = 2.0f * M_PI_F_ * u.y;
     float2 sc = sin_cos(phi);
-    return (float3)(r * sc.y, r * sc.x, z);
+    return v3(r * sc.y, r * sc.x, z);
 }
-INLINE float square_to_uniform_sphere_pdf(float3 v) { return INV_FOURPI; }
+INLINE float square_to_uniform_sphere_pdf(vec3 v) { return INV_FOURPI; }
 
-INLINE float3 square_to_uniform_hemisphere(float2 u) {
+INLINE vec3 square_to_uniform_hemisphere(float2 u) {
     float z = u.x;
     float r = safe_sqrt(1.0f - z * z);
     float phi = 2.0f * M_PI_F_ * u.y;
     float2 sc = sin_cos(phi);
-    return (float3)(r * sc.y, r * sc.x, z);
+    return v3(r * sc.y, r * sc.x, z);
 }
-INLINE float square_to_uniform_hemisphere_pdf(float3 v) { return v.z > 0.0f ? INV_TWOPI : 0.0f; }
+INLINE float square_to_uniform_hemisphere_pdf(vec3 v) { return v.z > 0.0f ? INV_TWOPI : 0.0f; }
 
-INLINE float3 square_to_cosine_hemisphere(float2 u) {
+INLINE vec3 square_to_cosine_hemisphere(float2 u) {
     float2 d = square_to_uniform_disk(u);
     float z = safe_sqrt(1.0f - d.x * d.x - d.y * d.y);
-    return (float3)(d.x, d.y, z);
+    return v3(d.x, d.y, z);
 }
-INLINE float square_to_cosine_hemisphere_pdf(float3 v) { return v.z > 0.0f ? v.z * INV_PI : 0.0f; }
+INLINE float square_to_cosine_hemisphere_pdf(vec3 v) { return v.z > 0.0f ? v.z * INV_PI : 0.0f; }
 
 /* Uniform directions in the cone of half-angle acos(cos_max) about +z. */
-INLINE float3 square_to_uniform_cone(float2 u, float cos_max) {
+INLINE vec3 square_to_uniform_cone(float2 u, float cos_max) {
     float z = 1.0f - u.x * (1.0f - cos_max);
     float r = safe_sqrt(1.0f - z * z);
     float phi = 2.0f * M_PI_F_ * u.y;
     float2 sc = sin_cos(phi);
-    return (float3)(r * sc.y, r * sc.x, z);
+    return v3(r * sc.y, r * sc.x, z);
 }
-INLINE float square_to_uniform_cone_pdf(float3 v, float cos_max) {
+INLINE float square_to_uniform_cone_pdf(vec3 v, float cos_max) {
     return (v.z >= cos_max && cos_max < 1.0f) ? 1.0f / (2.0f * M_PI_F_ * (1.0f - cos_max)) : 0.0f;
 }
 
@@ -76,15 +76,15 @@ INLINE float square_to_uniform_triangle_pdf(float2 b) {
 }
 
 /* Beckmann microfacet normals, density D(h) cos(theta_h) over solid angle (integrates to 1). */
-INLINE float3 square_to_beckmann(float2 u, float alpha) {
+INLINE vec3 square_to_beckmann(float2 u, float alpha) {
     float tan2 = -alpha * alpha * log(1.0f - u.x);
     float cos_t = 1.0f / sqrt(1.0f + tan2);
     float sin_t = safe_sqrt(1.0f - cos_t * cos_t);
     float phi = 2.0f * M_PI_F_ * u.y;
     float2 sc = sin_cos(phi);
-    return (float3)(sin_t * sc.y, sin_t * sc.x, cos_t);
+    return v3(sin_t * sc.y, sin_t * sc.x, cos_t);
 }
-INLINE float beckmann_d(float3 h, float alpha) {
+INLINE float beckmann_d(vec3 h, float alpha) {
     /* D(h) itself (without the cos), zero below the surface. */
     float c = h.z;
     if (c <= 0.0f) return 0.0f;
@@ -95,6 +95,6 @@ INLINE float beckmann_d(float3 h, float alpha) {
     /* near the horizon cos^4 underflows to 0 (0/0 = NaN) long after exp() has reached 0 */
     return e > 0.0f ? e / (M_PI_F_ * a2 * c2 * c2) : 0.0f;
 }
-INLINE float square_to_beckmann_pdf(float3 h, float alpha) { return beckmann_d(h, alpha) * h.z; }
+INLINE float square_to_beckmann_pdf(vec3 h, float alpha) { return beckmann_d(h, alpha) * h.z; }
 
 #endif

@@ -107,7 +107,7 @@ __kernel void wf_finish(SCENE_ARGS, __global const PathState* paths, __global co
     uint gid = get_global_id(0);
     if (gid >= n_pixels) return;
     SCENE_INIT(sd);
-    float3 swl = sum0[gid].xyz, swl2 = sum1[gid].xyz;
+    vec3 swl = vxyz(sum0[gid]), swl2 = vxyz(sum1[gid]);
     float sw = sum0[gid].w;
     uint bad = nbad[gid];
     for (uint j = 0u; j < k; ++j) {
@@ -115,9 +115,9 @@ __kernel void wf_finish(SCENE_ARGS, __global const PathState* paths, __global co
         float2 w = wt[slot];
         if (w.y == 0.0f) continue;
         PathState ps = paths[slot];
-        float3 L = path_result(&sd, &ps);
+        vec3 L = path_result(&sd, &ps);
         if (!all_finite(L) || !isfinite(w.x)) { bad += 1u; continue; }
-        float3 wl = L * w.x;
+        vec3 wl = L * w.x;
         swl += wl;
         swl2 += wl * wl;
         sw += w.x;
@@ -137,8 +137,8 @@ __kernel void wf_flush(__global float4* sum0, __global float4* sum1, __global ui
     float4 s0 = sum0[gid], s1 = sum1[gid];
     uint nb = nbad[gid];
     float4 a0 = acc0[pix], a1 = acc1[pix];
-    acc0[pix] = (float4)(a0.xyz + s0.xyz, a0.w + s0.w);
-    acc1[pix] = (float4)(a1.xyz + s1.xyz, a1.w + (float)(spp - nb));
+    acc0[pix] = (float4)(vxyz(a0) + vxyz(s0), a0.w + s0.w);
+    acc1[pix] = (float4)(vxyz(a1) + vxyz(s1), a1.w + (float)(spp - nb));
     bad[pix] += nb;
     sum0[gid] = (float4)(0.0f);
     sum1[gid] = (float4)(0.0f);

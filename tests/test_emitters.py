@@ -29,7 +29,7 @@ LOCAL = 64
 SRC = r"""
 #include "emitter.h"
 
-/* One emitter sample per work-item. e == NONE: scene-level selection (u.xyz), else emitter e (u.xy).
+/* One emitter sample per work-item. e == NONE: scene-level selection (vxyz(u)), else emitter e (u.xy).
    wi_pdf = (wi, q.pdf); w_dist = (weight, q.dist); p_delta = (p, delta); n_em = (n, emitter);
    chk = (emitter_pdf(q) [scene-level: scene_emitter_pdf], emitter_pdf(q) of the chosen one, occluded,
           pdf through a traced ray, or -1 when the ray sees another point); ev = (emitter_eval(q), hit t). */
@@ -40,19 +40,19 @@ __kernel void sample_em(SCENE_ARGS, uint e, uint n, __global const float4* refs,
     if (i >= n) return;
     SCENE_INIT(sd);
     EmitterQuery q;
-    q.ref = refs[i].xyz;
+    q.ref = vxyz(refs[i]);
     float4 u = us[i];
-    float3 w;
+    vec3 w;
     uint chosen = e;
     if (e == NONE) {
-        w = scene_sample_emitter(&sd, &q, u.xyz);
+        w = scene_sample_emitter(&sd, &q, vxyz(u));
         chosen = q.emitter;
     } else {
         w = emitter_sample(&sd, e, &q, u.xy);
     }
     float pdf_again = (e == NONE) ? scene_emitter_pdf(&sd, chosen, &q) : emitter_pdf(&sd, e, &q);
     float pdf_one = chosen != NONE ? emitter_pdf(&sd, chosen, &q) : 0.0f;
-    float3 L = chosen != NONE ? emitter_eval(&sd, chosen, &q) : (float3)(0.0f);
+    vec3 L = chosen != NONE ? emitter_eval(&sd, chosen, &q) : v3s(0.0f);
     float occl = (q.pdf > 0.0f && scene_occluded(&sd, q.ref, q.wi, ray_eps(q.ref), q.dist * (1.0f - 1e-4f)))
                ? 1.0f : 0.0f;
     float pdf_hit = -1.0f, t_hit = -1.0f;
@@ -85,7 +85,7 @@ __kernel void pdf_dirs(SCENE_ARGS, uint e, uint mode, uint n, __global const flo
     uint i = get_global_id(0);
     if (i >= n) return;
     SCENE_INIT(sd);
-    float3 ref = ref4[0].xyz, d = dirs[i].xyz;
+    vec3 ref = vxyz(ref4[0]), d = vxyz(dirs[i]);
     if (sd.emitters[e].flags & EMITTER_INFINITE) {
         EmitterQuery q;
         emitter_query_from_direction(&sd, &q, ref, d);
@@ -115,7 +115,7 @@ __kernel void environment(SCENE_ARGS, uint n, __global const float4* dirs, __glo
     uint i = get_global_id(0);
     if (i >= n) return;
     SCENE_INIT(sd);
-    float3 d = dirs[i].xyz;
+    vec3 d = vxyz(dirs[i]);
     out[i] = (float4)(scene_eval_environment(&sd, d), scene_environment_pdf(&sd, d));
 }
 
@@ -125,9 +125,9 @@ __kernel void hit_le(SCENE_ARGS, uint n, __global const float4* org, __global co
     uint i = get_global_id(0);
     if (i >= n) return;
     SCENE_INIT(sd);
-    Ray r = spawn_ray(org[i].xyz, dirs[i].xyz);
+    Ray r = spawn_ray(vxyz(org[i]), vxyz(dirs[i]));
     Intersection its;
-    if (scene_intersect(&sd, &r, &its)) out[i] = (float4)(area_emitter_Le(&sd, &its, -dirs[i].xyz), 1.0f);
+    if (scene_intersect(&sd, &r, &its)) out[i] = (float4)(area_emitter_Le(&sd, &its, -vxyz(dirs[i])), 1.0f);
     else out[i] = (float4)(0.0f);
 }
 """

@@ -134,6 +134,6 @@ def test_a_declared_method_missing_from_the_header_fails_the_build(ctx):
     try:
         with pytest.raises(DeviceError, match="broken_eval"):
             build_program(ctx, '#include "bsdf.h"\n__kernel void k(__global const Bsdf* b, __global float* o) '
-                               '{ BsdfQuery q; q.wi = q.wo = (float3)(0.0f, 0.0f, 1.0f); o[0] = bsdf_pdf(b, &q); }')
+                               '{ BsdfQuery q; q.wi = q.wo = v3(0.0f, 0.0f, 1.0f); o[0] = bsdf_pdf(b, &q); }')
     finally:
         registry.unregister("bsdf", "broken")

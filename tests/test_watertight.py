@@ -183,11 +183,11 @@ __kernel void spawn(SCENE_ARGS, uint n, __global const float4* org, __global con
     uint i = get_global_id(0);
     if (i >= n) return;
     SCENE_INIT(sd);
-    Ray r = spawn_ray(org[i].xyz, dir[i].xyz);
+    Ray r = spawn_ray(vxyz(org[i]), vxyz(dir[i]));
     Intersection its;
     if (!scene_intersect(&sd, &r, &its)) { out0[i] = (float4)(0.0f, 0.0f, 0.0f, as_float(NONE)); return; }
     Frame f = frame_from_normal(dot3(its.ng, r.d) < 0.0f ? its.ng : -its.ng);
-    float3 d = to_world(&f, frame_dir[i].xyz);
+    vec3 d = to_world(&f, vxyz(frame_dir[i]));
     Ray s = spawn_ray_from(&its, d);
     Intersection h;
     bool hit = scene_intersect(&sd, &s, &h);

@@ -75,16 +75,16 @@ BSDF = Kind(
     # a parameter decides it (Bsdf.capabilities)
     flags=("DELTA", "DIFFUSE", "GLOSSY", "UV", "TRANSMISSION"), dispatch_name="bsdf", row="b",
     methods=(
-        Method("eval", "float3", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return (float3)(0.0f);"),
+        Method("eval", "vec3", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return v3s(0.0f);"),
         Method("pdf", "float", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return 0.0f;"),
-        Method("sample", "float3", "__global const Bsdf* b, BsdfQuery* q, float2 u", "b, q, u",
-               "q->wo = (float3)(0.0f, 0.0f, 1.0f); q->eta = 1.0f; q->measure = MEASURE_SOLID_ANGLE; "
-               "return (float3)(0.0f);", required=True),
-        Method("albedo", "float3", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return (float3)(1.0f);"),
+        Method("sample", "vec3", "__global const Bsdf* b, BsdfQuery* q, float2 u", "b, q, u",
+               "q->wo = v3(0.0f, 0.0f, 1.0f); q->eta = 1.0f; q->measure = MEASURE_SOLID_ANGLE; "
+               "return v3s(0.0f);", required=True),
+        Method("albedo", "vec3", "__global const Bsdf* b, const BsdfQuery* q", "b, q", "return v3s(1.0f);"),
         # the normal the BSDF shades with, in the local frame: a normalmap's or bumpmap's, (0, 0, 1) for the rest
         # (Mitsuba's BSDF::sh_frame, which aov's sh_normal shows)
-        Method("normal", "float3", "__global const Bsdf* b, const BsdfQuery* q", "b, q",
-               "return (float3)(0.0f, 0.0f, 1.0f);"),
+        Method("normal", "vec3", "__global const Bsdf* b, const BsdfQuery* q", "b, q",
+               "return v3(0.0f, 0.0f, 1.0f);"),
     ),
     after=("bsdfs/common.h", "texture.h"),
     # twosided(blendbsdf(mask(diffuse))) is three levels: each level is a switch over the composites that calls
@@ -95,19 +95,19 @@ BSDF = Kind(
 # constant colour plus the index of a texture row (NONE: the constant), read through texture.h's param_color.
 TEXTURE = Kind(
     tag="texture", struct="Texture", flags=(), dispatch_name="texture", row="t",
-    methods=(Method("eval", "float3", "__global const Texture* t, float2 uv", "t, uv", "return (float3)(0.0f);",
+    methods=(Method("eval", "vec3", "__global const Texture* t, float2 uv", "t, uv", "return v3s(0.0f);",
                     required=True),),
     after=("math.h",))
 
 EMITTER = Kind(
     tag="emitter", struct="Emitter", flags=("DELTA", "INFINITE", "SURFACE"), dispatch_name="emitter_row", row="em",
     methods=(
-        Method("sample", "float3", "const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u",
-               "sd, em, q, u", "q->pdf = 0.0f; q->dist = 0.0f; return (float3)(0.0f);", required=True),
+        Method("sample", "vec3", "const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u",
+               "sd, em, q, u", "q->pdf = 0.0f; q->dist = 0.0f; return v3s(0.0f);", required=True),
         Method("pdf", "float", "const SceneData* sd, __global const Emitter* em, const EmitterQuery* q",
                "sd, em, q", "return 0.0f;"),
-        Method("eval", "float3", "const SceneData* sd, __global const Emitter* em, const EmitterQuery* q",
-               "sd, em, q", "return (float3)(0.0f);"),
+        Method("eval", "vec3", "const SceneData* sd, __global const Emitter* em, const EmitterQuery* q",
+               "sd, em, q", "return v3s(0.0f);"),
     ),
     after=("emitters/common.h",))
 
@@ -125,10 +125,10 @@ SHAPE = Kind(
         Method("surface", "bool",
                "const SceneData* sd, __global const Shape* s, const Ray* r, const Hit* h, Intersection* its",
                "sd, s, r, h, its", "return false;", required=True),
-        Method("sample", "float", "const SceneData* sd, __global const Shape* s, float3 ref, float2 u, "
+        Method("sample", "float", "const SceneData* sd, __global const Shape* s, vec3 ref, float2 u, "
                "ShapeSample* ss", "sd, s, ref, u, ss", "return 0.0f;", required=True),
-        Method("pdf", "float", "const SceneData* sd, __global const Shape* s, float3 ref, float3 p, float3 ng, "
-               "float3 wi", "sd, s, ref, p, ng, wi", "return 0.0f;", required=True),
+        Method("pdf", "float", "const SceneData* sd, __global const Shape* s, vec3 ref, vec3 p, vec3 ng, "
+               "vec3 wi", "sd, s, ref, p, ng, wi", "return 0.0f;", required=True),
     ),
     after=("shapes/common.h",))
 

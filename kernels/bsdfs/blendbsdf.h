@@ -10,9 +10,9 @@ INLINE float blendbsdf_weight(__global const Bsdf* b, const BsdfQuery* q) {
 }
 #endif
 
-INLINE float3 COMPOSITE_FN(blendbsdf_eval)(__global const Bsdf* b, const BsdfQuery* q) {
+INLINE vec3 COMPOSITE_FN(blendbsdf_eval)(__global const Bsdf* b, const BsdfQuery* q) {
     float w = blendbsdf_weight(b, q);
-    float3 f = (float3)(0.0f);
+    vec3 f = v3s(0.0f);
     if (w < 1.0f) f += (1.0f - w) * CHILD_FN(eval)(b + b->p.blendbsdf.first, q);
     if (w > 0.0f) f += w * CHILD_FN(eval)(b + b->p.blendbsdf.second, q);
     return f;
@@ -26,12 +26,12 @@ INLINE float COMPOSITE_FN(blendbsdf_pdf)(__global const Bsdf* b, const BsdfQuery
     return p;
 }
 
-INLINE float3 COMPOSITE_FN(blendbsdf_sample)(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+INLINE vec3 COMPOSITE_FN(blendbsdf_sample)(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     float w = blendbsdf_weight(b, q);
     bool second = u.x < w;
     u.x = second ? u.x / w : (u.x - w) / (1.0f - w);   /* uniform again on [0,1) */
     __global const Bsdf* child = b + (second ? b->p.blendbsdf.second : b->p.blendbsdf.first);
-    float3 r = CHILD_FN(sample)(child, q, u);
+    vec3 r = CHILD_FN(sample)(child, q, u);
     if (q->measure == MEASURE_DISCRETE) return r;
     /* A black weight is a failed sample, or a direction from a child that reflects nothing there (a black diffuse):
        that direction is still a sample of the mixture, and the other child's share of it counts. */
@@ -39,7 +39,7 @@ INLINE float3 COMPOSITE_FN(blendbsdf_sample)(__global const Bsdf* b, BsdfQuery* 
     return bsdf_sample_weight(COMPOSITE_FN(blendbsdf_eval)(b, q), q->wo.z, COMPOSITE_FN(blendbsdf_pdf)(b, q));
 }
 
-INLINE float3 COMPOSITE_FN(blendbsdf_albedo)(__global const Bsdf* b, const BsdfQuery* q) {
+INLINE vec3 COMPOSITE_FN(blendbsdf_albedo)(__global const Bsdf* b, const BsdfQuery* q) {
     float w = blendbsdf_weight(b, q);
     return (1.0f - w) * CHILD_FN(albedo)(b + b->p.blendbsdf.first, q) +
            w * CHILD_FN(albedo)(b + b->p.blendbsdf.second, q);

@@ -13,8 +13,8 @@
    index on wi's side): intIOR/extIOR when a dielectric refracts into the object, extIOR/intIOR when it
    refracts out of it, 1 for every reflection. */
 typedef struct {
-    float3 wi;
-    float3 wo;
+    vec3 wi;
+    vec3 wo;
     float eta;
     uint measure;
     float2 uv;
@@ -23,7 +23,7 @@ typedef struct {
 #ifdef CLR_SURFACE_DERIVATIVES
     /* Mitsuba's si.dp_du, si.dp_dv and geometric normal si.n in this (local) frame, and dp_du in world space (what
        bumpmap needs: kernels/bsdfs/perturb.h) */
-    float3 dpdu, dpdv, ng, dpdu_world;
+    vec3 dpdu, dpdv, ng, dpdu_world;
 #endif
 } BsdfQuery;
 
@@ -43,12 +43,12 @@ INLINE float fresnel_dielectric(float cos_i, float eta_ext, float eta_int, float
     return 0.5f * (rs * rs + rp * rp);
 }
 
-INLINE float3 reflect_local(float3 w) { return (float3)(-w.x, -w.y, w.z); }
+INLINE vec3 reflect_local(vec3 w) { return v3(-w.x, -w.y, w.z); }
 
 /* The weight f |cos| / pdf of a direction sampled from a BSDF's non-delta part, given eval (f) and pdf there;
    0 where the pdf is 0 or NaN: no sample lands there, and f may be infinite or NaN. */
-INLINE float3 bsdf_sample_weight(float3 f, float cos_o, float pdf) {
-    return pdf > 0.0f ? f * (fabs(cos_o) / pdf) : (float3)(0.0f);
+INLINE vec3 bsdf_sample_weight(vec3 f, float cos_o, float pdf) {
+    return pdf > 0.0f ? f * (fabs(cos_o) / pdf) : v3s(0.0f);
 }
 
 #endif

@@ -6,12 +6,12 @@
 #include "common.h"
 #include "distribution.h"
 
-INLINE float3 conductor_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+INLINE vec3 conductor_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     q->measure = MEASURE_DISCRETE;
     q->eta = 1.0f;
     q->wo = reflect_local(q->wi);
-    if (q->wi.z <= 0.0f) return (float3)(0.0f);
-    float3 F = fresnel_conductor(q->wi.z, b->p.conductor.eta.xyz, b->p.conductor.k.xyz);
+    if (q->wi.z <= 0.0f) return v3s(0.0f);
+    vec3 F = fresnel_conductor(q->wi.z, vxyz(b->p.conductor.eta), vxyz(b->p.conductor.k));
     return F * param_color(q, b->p.conductor.specular_reflectance, b->p.conductor.specular_reflectance_tex);
 }
 

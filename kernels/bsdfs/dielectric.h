@@ -11,7 +11,7 @@
 #include "common.h"
 #include "../texture.h"
 
-INLINE float3 dielectric_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+INLINE vec3 dielectric_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     float eta_int = b->p.dielectric.int_ior, eta_ext = b->p.dielectric.ext_ior;
     float cos_i = q->wi.z;
     float cos_t;
@@ -28,7 +28,7 @@ INLINE float3 dielectric_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) 
     float r = eta_i / eta_t;
     /* Snell: the tangential part scales by eta_i/eta_t and flips (wi points away from the surface);
        the normal part goes to the other side. */
-    q->wo = (float3)(-r * q->wi.x, -r * q->wi.y, outside ? -cos_t : cos_t);
+    q->wo = v3(-r * q->wi.x, -r * q->wi.y, outside ? -cos_t : cos_t);
     q->eta = eta_t / eta_i;
     return (r * r) * param_color(q, b->p.dielectric.specular_transmittance,
                                  b->p.dielectric.specular_transmittance_tex);

@@ -6,8 +6,8 @@
 #include "../texture.h"
 #include "warp.h"
 
-INLINE float3 diffuse_eval(__global const Bsdf* b, const BsdfQuery* q) {
-    if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return (float3)(0.0f);
+INLINE vec3 diffuse_eval(__global const Bsdf* b, const BsdfQuery* q) {
+    if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return v3s(0.0f);
     return param_color(q, b->p.diffuse.albedo, b->p.diffuse.albedo_tex) * INV_PI;
 }
 
@@ -16,16 +16,16 @@ INLINE float diffuse_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     return q->wo.z * INV_PI;
 }
 
-INLINE float3 diffuse_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+INLINE vec3 diffuse_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     q->measure = MEASURE_SOLID_ANGLE;
     q->eta = 1.0f;
     q->wo = square_to_cosine_hemisphere(u);
     /* f cos / pdf = albedo; a direction on the horizon has pdf 0 and gets no weight */
-    if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return (float3)(0.0f);
+    if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return v3s(0.0f);
     return param_color(q, b->p.diffuse.albedo, b->p.diffuse.albedo_tex);
 }
 
-INLINE float3 diffuse_albedo(__global const Bsdf* b, const BsdfQuery* q) {
+INLINE vec3 diffuse_albedo(__global const Bsdf* b, const BsdfQuery* q) {
     return param_color(q, b->p.diffuse.albedo, b->p.diffuse.albedo_tex);
 }
 

@@ -31,7 +31,7 @@ INLINE MfDist mf_make(const BsdfQuery* q, uint type, float au, uint au_tex, floa
 }
 
 /* D(m), zero below the surface. */
-INLINE float mf_d(MfDist d, float3 m) {
+INLINE float mf_d(MfDist d, vec3 m) {
     if (m.z <= 0.0f) return 0.0f;
     float c2 = m.z * m.z;
     float sx = m.x / d.ax, sy = m.y / d.ay;
@@ -48,13 +48,13 @@ INLINE float mf_d(MfDist d, float3 m) {
 }
 
 /* alpha^2 tan^2(theta) of v for the roughness projected onto v's azimuth */
-INLINE float mf_tan2_alpha(MfDist d, float3 v) {
+INLINE float mf_tan2_alpha(MfDist d, vec3 v) {
     float xy = d.ax * d.ax * v.x * v.x + d.ay * d.ay * v.y * v.y;
     return xy / (v.z * v.z);
 }
 
 /* Mitsuba's Smith shadowing term for direction v and microfacet m (0 when v sees m's back). */
-INLINE float mf_g1(MfDist d, float3 v, float3 m) {
+INLINE float mf_g1(MfDist d, vec3 v, vec3 m) {
     if (dot3(v, m) * v.z <= 0.0f) return 0.0f;
     float t2 = mf_tan2_alpha(d, v);
     if (!(t2 > 0.0f)) return 1.0f;
@@ -65,7 +65,7 @@ INLINE float mf_g1(MfDist d, float3 v, float3 m) {
 }
 
 /* Smith's exact G1 (Lambda of the Gaussian or GGX slope distribution), for normalising visible normals. */
-INLINE float mf_g1_exact(MfDist d, float3 v) {
+INLINE float mf_g1_exact(MfDist d, vec3 v) {
     float t2 = mf_tan2_alpha(d, v);
     if (!(t2 > 0.0f)) return 1.0f;
     if (d.type == MF_GGX) return 2.0f / (1.0f + sqrt(1.0f + t2));
@@ -76,7 +76,7 @@ INLINE float mf_g1_exact(MfDist d, float3 v) {
 }
 
 /* Density of the sampled normal m over solid angle, given wi (above the surface). */
-INLINE float mf_pdf(MfDist d, float3 wi, float3 m) {
+INLINE float mf_pdf(MfDist d, vec3 wi, vec3 m) {
     float D = mf_d(d, m);
     if (!d.visible) return D * m.z;
     float wm = dot3(wi, m);
@@ -133,35 +133,35 @@ INLINE float2 mf_beckmann_visible_slopes(float cos_t, float2 u) {
 }
 
 /* Draw a microfacet normal (upper hemisphere) for wi (above the surface). */
-INLINE float3 mf_sample(MfDist d, float3 wi, float2 u) {
+INLINE vec3 mf_sample(MfDist d, vec3 wi, float2 u) {
     float2 s;
     if (!d.visible) {
         /* slopes of the whole surface: Gaussian (Beckmann) or r^2 = u/(1-u) (GGX) radially, then stretched */
         float r = d.type == MF_BECKMANN ? sqrt(-log(1.0f - u.x)) : sqrt(u.x / (1.0f - u.x));
         float2 sc = sin_cos(2.0f * M_PI_F_ * u.y);
         s = (float2)(r * sc.y * d.ax, r * sc.x * d.ay);
-        return normalize3((float3)(-s.x, -s.y, 1.0f));
+        return normalize3(v3(-s.x, -s.y, 1.0f));
     }
     /* to the unit-roughness configuration */
-    float3 v = normalize3((float3)(d.ax * wi.x, d.ay * wi.y, wi.z));
+    vec3 v = normalize3(v3(d.ax * wi.x, d.ay * wi.y, wi.z));
     if (d.type == MF_GGX) {
         /* Heitz 2018: a point on the projected hemisphere seen from v, lifted back onto it */
         float l2 = v.x * v.x + v.y * v.y;
-        float3 t1 = l2 > 0.0f ? (float3)(-v.y, v.x, 0.0f) * (1.0f / sqrt(l2)) : (float3)(1.0f, 0.0f, 0.0f);
-        float3 t2 = cross3(v, t1);
+        vec3 t1 = l2 > 0.0f ? v3(-v.y, v.x, 0.0f) * (1.0f / sqrt(l2)) : v3(1.0f, 0.0f, 0.0f);
+        vec3 t2 = cross3(v, t1);
         float r = sqrt(u.x);
         float2 sc = sin_cos(2.0f * M_PI_F_ * u.y);
         float p1 = r * sc.y, p2 = r * sc.x;
         float h = 0.5f * (1.0f + v.z);
         p2 = (1.0f - h) * safe_sqrt(1.0f - p1 * p1) + h * p2;
-        float3 n = p1 * t1 + p2 * t2 + safe_sqrt(1.0f - p1 * p1 - p2 * p2) * v;
-        return normalize3((float3)(d.ax * n.x, d.ay * n.y, maxf(n.z, 1e-6f)));
+        vec3 n = p1 * t1 + p2 * t2 + safe_sqrt(1.0f - p1 * p1 - p2 * p2) * v;
+        return normalize3(v3(d.ax * n.x, d.ay * n.y, maxf(n.z, 1e-6f)));
     }
     float2 sl = mf_beckmann_visible_slopes(v.z, u);
     float l = sqrt(v.x * v.x + v.y * v.y);
     float cp = l > 0.0f ? v.x / l : 1.0f, sp = l > 0.0f ? v.y / l : 0.0f;
     s = (float2)(cp * sl.x - sp * sl.y, sp * sl.x + cp * sl.y);
-    return normalize3((float3)(-s.x * d.ax, -s.y * d.ay, 1.0f));
+    return normalize3(v3(-s.x * d.ax, -s.y * d.ay, 1.0f));
 }
 
 /* Unpolarised Fresnel reflectance of a conductor with complex index eta + i k (relative to the outside), per
@@ -177,14 +177,14 @@ INLINE float fresnel_conductor1(float c, float eta, float k) {
     float rp = rs * (t3 - t4) / (t3 + t4);
     return 0.5f * (rs + rp);
 }
-INLINE float3 fresnel_conductor(float c, float3 eta, float3 k) {
-    return (float3)(fresnel_conductor1(c, eta.x, k.x), fresnel_conductor1(c, eta.y, k.y),
+INLINE vec3 fresnel_conductor(float c, vec3 eta, vec3 k) {
+    return v3(fresnel_conductor1(c, eta.x, k.x), fresnel_conductor1(c, eta.y, k.y),
                     fresnel_conductor1(c, eta.z, k.z));
 }
 
 /* Refraction of wi about the microfacet m: r = eta_i / eta_t (wi's side over wo's side), cos_t = |cos| of the
    refracted direction (from fresnel_dielectric). */
-INLINE float3 refract_about(float3 wi, float3 m, float r, float cos_t) {
+INLINE vec3 refract_about(vec3 wi, vec3 m, float r, float cos_t) {
     float c = dot3(wi, m);
     return (r * c - (c >= 0.0f ? cos_t : -cos_t)) * m - r * wi;
 }

@@ -8,9 +8,9 @@ INLINE float mask_opacity(__global const Bsdf* b, const BsdfQuery* q) {
 }
 #endif
 
-INLINE float3 COMPOSITE_FN(mask_eval)(__global const Bsdf* b, const BsdfQuery* q) {
+INLINE vec3 COMPOSITE_FN(mask_eval)(__global const Bsdf* b, const BsdfQuery* q) {
     float a = mask_opacity(b, q);
-    return a > 0.0f ? a * CHILD_FN(eval)(b + b->p.mask.child, q) : (float3)(0.0f);
+    return a > 0.0f ? a * CHILD_FN(eval)(b + b->p.mask.child, q) : v3s(0.0f);
 }
 
 INLINE float COMPOSITE_FN(mask_pdf)(__global const Bsdf* b, const BsdfQuery* q) {
@@ -18,18 +18,18 @@ INLINE float COMPOSITE_FN(mask_pdf)(__global const Bsdf* b, const BsdfQuery* q) 
     return a > 0.0f ? a * CHILD_FN(pdf)(b + b->p.mask.child, q) : 0.0f;
 }
 
-INLINE float3 COMPOSITE_FN(mask_sample)(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+INLINE vec3 COMPOSITE_FN(mask_sample)(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     float a = mask_opacity(b, q);
     if (u.x >= a) {
         q->wo = -q->wi;
         q->eta = 1.0f;
         q->measure = MEASURE_DISCRETE;
-        return (float3)(1.0f);
+        return v3s(1.0f);
     }
     /* the child's own weight: a f cos / (a pdf) for its smooth part, its delta weight otherwise */
     return CHILD_FN(sample)(b + b->p.mask.child, q, (float2)(u.x / a, u.y));
 }
 
-INLINE float3 COMPOSITE_FN(mask_albedo)(__global const Bsdf* b, const BsdfQuery* q) {
+INLINE vec3 COMPOSITE_FN(mask_albedo)(__global const Bsdf* b, const BsdfQuery* q) {
     return CHILD_FN(albedo)(b + b->p.mask.child, q);
 }

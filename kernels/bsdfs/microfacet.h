@@ -11,7 +11,7 @@
 #include "../texture.h"
 #include "warp.h"
 
-INLINE float microfacet_g1(float3 v, float3 h, float alpha) {
+INLINE float microfacet_g1(vec3 v, vec3 h, float alpha) {
     if (dot3(v, h) / v.z <= 0.0f) return 0.0f;
     float sin2 = maxf(0.0f, 1.0f - v.z * v.z);
     if (sin2 <= 0.0f) return 1.0f;
@@ -21,46 +21,46 @@ INLINE float microfacet_g1(float3 v, float3 h, float alpha) {
     return (3.535f * bb + 2.181f * bb * bb) / (1.0f + 2.276f * bb + 2.577f * bb * bb);
 }
 
-INLINE float3 microfacet_eval(__global const Bsdf* b, const BsdfQuery* q) {
-    float3 wi = q->wi, wo = q->wo;
-    if (wi.z <= 0.0f || wo.z <= 0.0f) return (float3)(0.0f);
+INLINE vec3 microfacet_eval(__global const Bsdf* b, const BsdfQuery* q) {
+    vec3 wi = q->wi, wo = q->wo;
+    if (wi.z <= 0.0f || wo.z <= 0.0f) return v3s(0.0f);
     float alpha = b->p.microfacet.alpha, eta_int = b->p.microfacet.int_ior, eta_ext = b->p.microfacet.ext_ior;
     float ks = b->p.microfacet.ks;
-    float3 h = normalize3(wi + wo);
+    vec3 h = normalize3(wi + wo);
     float cos_t;
     float F = fresnel_dielectric(dot3(h, wi), eta_ext, eta_int, &cos_t);
     float spec = beckmann_d(h, alpha) * F * microfacet_g1(wi, h, alpha) * microfacet_g1(wo, h, alpha)
                  / (4.0f * wi.z * wo.z);
-    return param_color(q, b->p.microfacet.kd, b->p.microfacet.kd_tex) * INV_PI + (float3)(ks * spec);
+    return param_color(q, b->p.microfacet.kd, b->p.microfacet.kd_tex) * INV_PI + v3s(ks * spec);
 }
 
 INLINE float microfacet_pdf(__global const Bsdf* b, const BsdfQuery* q) {
-    float3 wi = q->wi, wo = q->wo;
+    vec3 wi = q->wi, wo = q->wo;
     if (wi.z <= 0.0f || wo.z <= 0.0f) return 0.0f;
     float alpha = b->p.microfacet.alpha, ks = b->p.microfacet.ks;
-    float3 h = normalize3(wi + wo);
+    vec3 h = normalize3(wi + wo);
     /* dwo = 4 |h.wo| dh: the Jacobian of reflecting wi about h */
     float spec = square_to_beckmann_pdf(h, alpha) / (4.0f * fabs(dot3(h, wo)));
     return ks * spec + (1.0f - ks) * wo.z * INV_PI;
 }
 
-INLINE float3 microfacet_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+INLINE vec3 microfacet_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     float alpha = b->p.microfacet.alpha, ks = b->p.microfacet.ks;
     q->measure = MEASURE_SOLID_ANGLE;
     q->eta = 1.0f;
     if (u.x < ks) {
         u.x = u.x / ks;   /* re-use the sample dimension: uniform again on [0,1) */
-        float3 h = square_to_beckmann(u, alpha);
+        vec3 h = square_to_beckmann(u, alpha);
         q->wo = 2.0f * dot3(q->wi, h) * h - q->wi;
     } else {
         u.x = (u.x - ks) / (1.0f - ks);
         q->wo = square_to_cosine_hemisphere(u);
     }
-    if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return (float3)(0.0f);
+    if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return v3s(0.0f);
     return bsdf_sample_weight(microfacet_eval(b, q), q->wo.z, microfacet_pdf(b, q));
 }
 
-INLINE float3 microfacet_albedo(__global const Bsdf* b, const BsdfQuery* q) {
+INLINE vec3 microfacet_albedo(__global const Bsdf* b, const BsdfQuery* q) {
     return param_color(q, b->p.microfacet.kd, b->p.microfacet.kd_tex);
 }
 

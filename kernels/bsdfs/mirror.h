@@ -3,11 +3,11 @@
 #define CLRENDER_BSDFS_MIRROR_H
 #include "common.h"
 
-INLINE float3 mirror_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+INLINE vec3 mirror_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     q->measure = MEASURE_DISCRETE;
     q->eta = 1.0f;
     q->wo = reflect_local(q->wi);
-    return q->wi.z <= 0.0f ? (float3)(0.0f) : (float3)(1.0f);
+    return q->wi.z <= 0.0f ? v3s(0.0f) : v3s(1.0f);
 }
 
 #endif

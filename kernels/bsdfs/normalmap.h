@@ -5,8 +5,8 @@
 #define CLRENDER_BSDFS_NORMALMAP_H
 #include "perturb.h"
 INLINE Frame normalmap_frame(__global const Bsdf* b, const BsdfQuery* q) {
-    float3 c = param_color(q, b->p.normalmap.normalmap, b->p.normalmap.normalmap_tex);
-    return perturbed_frame(2.0f * c - 1.0f, q->wi, (float3)(1.0f, 0.0f, 0.0f), b->p.normalmap.options);
+    vec3 c = param_color(q, b->p.normalmap.normalmap, b->p.normalmap.normalmap_tex);
+    return perturbed_frame(2.0f * c - 1.0f, q->wi, v3(1.0f, 0.0f, 0.0f), b->p.normalmap.options);
 }
 #endif
 

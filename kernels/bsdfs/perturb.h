@@ -21,19 +21,19 @@
 #define PERTURB_FLIP 1u      /* options: flip_invalid_normals */
 #define PERTURB_SHADOW 2u    /* options: use_shadowing_function */
 
-INLINE float3 perturb_unit_or(float3 v, float3 fallback) {
+INLINE vec3 perturb_unit_or(vec3 v, vec3 fallback) {
     float l2 = dot3(v, v);
     float inv = 1.0f / sqrt(l2);
     return l2 > 0.0f && isfinite(inv) ? v * inv : fallback;
 }
 
-INLINE Frame perturbed_frame(float3 n, float3 wi, float3 tangent, uint options) {
-    if ((options & PERTURB_FLIP) && wi.z * dot3(wi, n) <= 0.0f) n = (float3)(-n.x, -n.y, n.z);
+INLINE Frame perturbed_frame(vec3 n, vec3 wi, vec3 tangent, uint options) {
+    if ((options & PERTURB_FLIP) && wi.z * dot3(wi, n) <= 0.0f) n = v3(-n.x, -n.y, n.z);
     Frame f;
-    f.n = perturb_unit_or(n, (float3)(0.0f, 0.0f, 1.0f));
-    float3 x = (float3)(1.0f, 0.0f, 0.0f);
+    f.n = perturb_unit_or(n, v3(0.0f, 0.0f, 1.0f));
+    vec3 x = v3(1.0f, 0.0f, 0.0f);
     f.s = perturb_unit_or(tangent - f.n * dot3(f.n, tangent),
-                          perturb_unit_or(x - f.n * f.n.x, (float3)(0.0f, 1.0f, 0.0f)));
+                          perturb_unit_or(x - f.n * f.n.x, v3(0.0f, 1.0f, 0.0f)));
     f.t = cross3(f.n, f.s);
     return f;
 }
@@ -52,9 +52,9 @@ INLINE bool perturb_query(const Frame* f, const BsdfQuery* q, BsdfQuery* c) {
     return q->wo.z * c->wo.z > 0.0f;
 }
 
-INLINE float perturb_tan2(float3 v) { return maxf(0.0f, 1.0f - v.z * v.z) / (v.z * v.z); }
+INLINE float perturb_tan2(vec3 v) { return maxf(0.0f, 1.0f - v.z * v.z) / (v.z * v.z); }
 
-INLINE float perturb_shadowing(uint options, const Frame* f, float3 wo) {
+INLINE float perturb_shadowing(uint options, const Frame* f, vec3 wo) {
     if (!(options & PERTURB_SHADOW)) return 1.0f;
     float a2 = minf(0.125f * perturb_tan2(f->n), 1.0f);
     return 2.0f / (1.0f + sqrt(1.0f + a2 * perturb_tan2(wo)));
@@ -65,10 +65,10 @@ INLINE float perturb_shadowing(uint options, const Frame* f, float3 wo) {
    eval: the child's f holds no cosine, which the integrators take of wo in this frame, not the child's.
    normal: the perturbed normal (aov's sh_normal), a wrapper's own, not its child's (Mitsuba 3.9's sh_frame). */
 #define PERTURB_WRAPPER(NAME)                                                                                    \
-INLINE float3 COMPOSITE_FN(NAME##_eval)(__global const Bsdf* b, const BsdfQuery* q) {                            \
+INLINE vec3 COMPOSITE_FN(NAME##_eval)(__global const Bsdf* b, const BsdfQuery* q) {                            \
     Frame f = NAME##_frame(b, q);                                                                                \
     BsdfQuery c;                                                                                                 \
-    if (!perturb_query(&f, q, &c)) return (float3)(0.0f);                                                        \
+    if (!perturb_query(&f, q, &c)) return v3s(0.0f);                                                        \
     return CHILD_FN(eval)(b + b->p.NAME.child, &c) *                                                             \
            (fabs(c.wo.z) / fabs(q->wo.z) * perturb_shadowing(b->p.NAME.options, &f, q->wo));                    \
 }                                                                                                                \
@@ -78,21 +78,21 @@ INLINE float COMPOSITE_FN(NAME##_pdf)(__global const Bsdf* b, const BsdfQuery* q
     if (!perturb_query(&f, q, &c)) return 0.0f;                                                                  \
     return CHILD_FN(pdf)(b + b->p.NAME.child, &c);                                                               \
 }                                                                                                                \
-INLINE float3 COMPOSITE_FN(NAME##_sample)(__global const Bsdf* b, BsdfQuery* q, float2 u) {                      \
+INLINE vec3 COMPOSITE_FN(NAME##_sample)(__global const Bsdf* b, BsdfQuery* q, float2 u) {                      \
     Frame f = NAME##_frame(b, q);                                                                                \
     BsdfQuery c;                                                                                                 \
     perturb_query(&f, q, &c);                                                                                    \
-    float3 w = CHILD_FN(sample)(b + b->p.NAME.child, &c, u);                                                     \
+    vec3 w = CHILD_FN(sample)(b + b->p.NAME.child, &c, u);                                                     \
     q->wo = to_world(&f, c.wo);                                                                                  \
     q->eta = c.eta;                                                                                              \
     q->measure = c.measure;                                                                                      \
-    if (!(c.wo.z * q->wo.z > 0.0f)) return (float3)(0.0f);                                                       \
+    if (!(c.wo.z * q->wo.z > 0.0f)) return v3s(0.0f);                                                       \
     return w * perturb_shadowing(b->p.NAME.options, &f, q->wo);                                                  \
 }                                                                                                                \
-INLINE float3 COMPOSITE_FN(NAME##_albedo)(__global const Bsdf* b, const BsdfQuery* q) {                          \
+INLINE vec3 COMPOSITE_FN(NAME##_albedo)(__global const Bsdf* b, const BsdfQuery* q) {                          \
     return CHILD_FN(albedo)(b + b->p.NAME.child, q);                                                             \
 }                                                                                                                \
-INLINE float3 COMPOSITE_FN(NAME##_normal)(__global const Bsdf* b, const BsdfQuery* q) {                          \
+INLINE vec3 COMPOSITE_FN(NAME##_normal)(__global const Bsdf* b, const BsdfQuery* q) {                          \
     return NAME##_frame(b, q).n;                                                                                 \
 }
 

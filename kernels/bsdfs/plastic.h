@@ -21,14 +21,14 @@ INLINE float plastic_prob_specular(float f_i, float s) {
     return ps + pd > 0.0f ? ps / (ps + pd) : 0.0f;
 }
 
-INLINE float3 plastic_diffuse_colour(const BsdfQuery* q, __global const Bsdf* b) {
-    float3 d = param_color(q, b->p.plastic.diffuse, b->p.plastic.diffuse_tex);
+INLINE vec3 plastic_diffuse_colour(const BsdfQuery* q, __global const Bsdf* b) {
+    vec3 d = param_color(q, b->p.plastic.diffuse, b->p.plastic.diffuse_tex);
     float fdr = b->p.plastic.fdr_int;
-    return b->p.plastic.nonlinear ? d / ((float3)(1.0f) - d * fdr) : d / (1.0f - fdr);
+    return b->p.plastic.nonlinear ? d / (v3s(1.0f) - d * fdr) : d / (1.0f - fdr);
 }
 
-INLINE float3 plastic_eval(__global const Bsdf* b, const BsdfQuery* q) {
-    if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return (float3)(0.0f);
+INLINE vec3 plastic_eval(__global const Bsdf* b, const BsdfQuery* q) {
+    if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return v3s(0.0f);
     float eta = b->p.plastic.eta;
     float t = (1.0f - plastic_fresnel(q->wi.z, eta)) * (1.0f - plastic_fresnel(q->wo.z, eta));
     return plastic_diffuse_colour(q, b) * (t * INV_PI / (eta * eta));
@@ -40,10 +40,10 @@ INLINE float plastic_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     return (1.0f - ps) * q->wo.z * INV_PI;
 }
 
-INLINE float3 plastic_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+INLINE vec3 plastic_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     q->eta = 1.0f;
     q->measure = MEASURE_SOLID_ANGLE;
-    if (q->wi.z <= 0.0f) { q->wo = reflect_local(q->wi); return (float3)(0.0f); }
+    if (q->wi.z <= 0.0f) { q->wo = reflect_local(q->wi); return v3s(0.0f); }
     float f_i = plastic_fresnel(q->wi.z, b->p.plastic.eta);
     float ps = plastic_prob_specular(f_i, b->p.plastic.spec_weight);
     if (u.x < ps) {
@@ -52,11 +52,11 @@ INLINE float3 plastic_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
         return param_color(q, b->p.plastic.specular, b->p.plastic.specular_tex) * (f_i / ps);
     }
     q->wo = square_to_cosine_hemisphere((float2)((u.x - ps) / (1.0f - ps), u.y));
-    if (q->wo.z <= 0.0f) return (float3)(0.0f);
+    if (q->wo.z <= 0.0f) return v3s(0.0f);
     return bsdf_sample_weight(plastic_eval(b, q), q->wo.z, plastic_pdf(b, q));
 }
 
-INLINE float3 plastic_albedo(__global const Bsdf* b, const BsdfQuery* q) {
+INLINE vec3 plastic_albedo(__global const Bsdf* b, const BsdfQuery* q) {
     return param_color(q, b->p.plastic.diffuse, b->p.plastic.diffuse_tex);
 }
 

@@ -30,8 +30,8 @@ INLINE MfDist pr_dist(__global const Bsdf* b, const BsdfQuery* q) {
 }
 
 /* The half vector of (wi, wo) (reflect: wo on wi's side; else refracted at eta_p), turned to the upper hemisphere */
-INLINE float3 pr_half(float3 wi, float3 wo, float eta_p, bool reflect) {
-    float3 h = normalize3(wi + wo * (reflect ? 1.0f : eta_p));
+INLINE vec3 pr_half(vec3 wi, vec3 wo, float eta_p, bool reflect) {
+    vec3 h = normalize3(wi + wo * (reflect ? 1.0f : eta_p));
     return h.z < 0.0f ? -h : h;
 }
 
@@ -41,7 +41,7 @@ INLINE float pr_gtr1_d(float alpha, float cos_t) {
     return r * cos_t > 1e-20f ? r : 0.0f;
 }
 
-INLINE float pr_ggx1(float3 v, float3 h, float alpha) {
+INLINE float pr_ggx1(vec3 v, vec3 h, float alpha) {
     if (dot3(v, h) * v.z <= 0.0f) return 0.0f;
     if (v.z == 1.0f) return 1.0f;
     float c2 = v.z * v.z;
@@ -71,39 +71,39 @@ INLINE float4 pr_probs(__global const Bsdf* b, float F, bool front, float metall
     return t > 0.0f ? p / t : (float4)(0.0f);
 }
 
-INLINE float3 principled_eval(__global const Bsdf* b, const BsdfQuery* q) {
-    float3 wi = q->wi, wo = q->wo;
+INLINE vec3 principled_eval(__global const Bsdf* b, const BsdfQuery* q) {
+    vec3 wi = q->wi, wo = q->wo;
     float ci = wi.z, co = wo.z;
     bool reflect = ci * co > 0.0f, refract = ci * co < 0.0f;
-    if (!(reflect || refract)) return (float3)(0.0f);
+    if (!(reflect || refract)) return v3s(0.0f);
     bool front = ci > 0.0f;
     float eta = b->p.principled.eta;
     float eta_p = front ? eta : 1.0f / eta;
     float metallic = PARAM_FLOAT(q, b->p.principled, metallic);
     float spec_trans = PARAM_FLOAT(q, b->p.principled, spec_trans);
     float bsdf = (1.0f - metallic) * spec_trans, brdf = (1.0f - metallic) * (1.0f - spec_trans);
-    float3 base = param_color(q, b->p.principled.base_color, b->p.principled.base_color_tex);
-    float3 h = pr_half(wi, wo, eta_p, reflect);
+    vec3 base = param_color(q, b->p.principled.base_color, b->p.principled.base_color_tex);
+    vec3 h = pr_half(wi, wo, eta_p, reflect);
     float wih = dot3(wi, h), woh = dot3(wo, h), cos_t;
     float F = fresnel_dielectric(wih, 1.0f, eta, &cos_t);
     bool compatible = pr_compatible(h, wi, wo, reflect);
     MfDist d = pr_dist(b, q);
     float DG = mf_d(d, h) * mf_g1(d, wi, h) * mf_g1(d, wo, h);
-    float3 value = (float3)(0.0f);
+    vec3 value = v3s(0.0f);
     float aco = fabs(co), aci = fabs(ci);
 
     if (reflect && compatible && F > 0.0f) {
-        float3 Fp;
+        vec3 Fp;
         if (front) {
             float spec_tint = PARAM_FLOAT(q, b->p.principled, spec_tint);
             float lum = luminance(base);
-            float3 tint = lum > 0.0f ? base / lum : (float3)(1.0f);
+            vec3 tint = lum > 0.0f ? base / lum : v3s(1.0f);
             float eta_it = wih >= 0.0f ? eta : 1.0f / eta;
             float r0 = (eta_it - 1.0f) / (eta_it + 1.0f);
             Fp = (1.0f - metallic) * (1.0f - spec_tint) * F + metallic * pr_schlick(base, wih, eta)
                  + (1.0f - metallic) * spec_tint * pr_schlick(tint * (r0 * r0), wih, eta);
         } else {
-            Fp = (float3)(bsdf * F);
+            Fp = v3s(bsdf * F);
         }
         value += Fp * (DG / (4.0f * aci * aco));
     }
@@ -115,9 +115,9 @@ INLINE float3 principled_eval(__global const Bsdf* b, const BsdfQuery* q) {
 
     float clearcoat = PARAM_FLOAT(q, b->p.principled, clearcoat);
     if (compatible && clearcoat > 0.0f) {
-        float Fcc = pr_schlick((float3)(0.04f), wih, eta).x;
+        float Fcc = pr_schlick(v3s(0.04f), wih, eta).x;
         float Dcc = pr_gtr1_d(pr_cc_alpha(b, q), h.z);
-        value += (float3)(0.25f * clearcoat * Fcc * Dcc * pr_ggx1(wi, h, 0.25f) * pr_ggx1(wo, h, 0.25f));
+        value += v3s(0.25f * clearcoat * Fcc * Dcc * pr_ggx1(wi, h, 0.25f) * pr_ggx1(wo, h, 0.25f));
     }
     float Fo = pr_sw(aco), Fi = pr_sw(aci);
     if (brdf > 0.0f) {
@@ -137,10 +137,10 @@ INLINE float3 principled_eval(__global const Bsdf* b, const BsdfQuery* q) {
     float sheen = PARAM_FLOAT(q, b->p.principled, sheen);
     if (sheen > 0.0f && 1.0f - metallic > 0.0f) {
         float sheen_tint = PARAM_FLOAT(q, b->p.principled, sheen_tint);
-        float3 c = (float3)(1.0f);
+        vec3 c = v3s(1.0f);
         if (sheen_tint != 0.0f) {
             float lum = luminance(base);
-            float3 tint = lum > 0.0f ? base / lum : (float3)(1.0f);
+            vec3 tint = lum > 0.0f ? base / lum : v3s(1.0f);
             c += sheen_tint * (tint - c);
         }
         value += c * (sheen * (1.0f - metallic) * pr_sw(fabs(woh)));
@@ -149,14 +149,14 @@ INLINE float3 principled_eval(__global const Bsdf* b, const BsdfQuery* q) {
 }
 
 INLINE float principled_pdf(__global const Bsdf* b, const BsdfQuery* q) {
-    float3 wi = q->wi, wo = q->wo;
+    vec3 wi = q->wi, wo = q->wo;
     float ci = wi.z, co = wo.z;
     if (ci == 0.0f) return 0.0f;
     bool reflect = ci * co > 0.0f, refract = ci * co < 0.0f;
     bool front = ci > 0.0f;
     float eta = b->p.principled.eta;
     float eta_p = front ? eta : 1.0f / eta;
-    float3 h = pr_half(wi, wo, eta_p, reflect);
+    vec3 h = pr_half(wi, wo, eta_p, reflect);
     float wih = dot3(wi, h), woh = dot3(wo, h), cos_t;
     float F = fresnel_dielectric(wih, 1.0f, eta, &cos_t);
     float clearcoat = PARAM_FLOAT(q, b->p.principled, clearcoat);
@@ -180,22 +180,22 @@ INLINE float principled_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     return pdf;
 }
 
-INLINE float3 principled_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
-    float3 wi = q->wi;
+INLINE vec3 principled_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+    vec3 wi = q->wi;
     q->eta = 1.0f;
     q->measure = MEASURE_SOLID_ANGLE;
     q->wo = reflect_local(wi);
     float ci = wi.z;
-    if (ci == 0.0f) return (float3)(0.0f);
+    if (ci == 0.0f) return v3s(0.0f);
     bool front = ci > 0.0f;
     float eta = b->p.principled.eta;
     float metallic = PARAM_FLOAT(q, b->p.principled, metallic);
     float spec_trans = PARAM_FLOAT(q, b->p.principled, spec_trans);
-    if (!front && !((1.0f - metallic) * spec_trans > 0.0f && b->p.principled.has_spec_trans)) return (float3)(0.0f);
+    if (!front && !((1.0f - metallic) * spec_trans > 0.0f && b->p.principled.has_spec_trans)) return v3s(0.0f);
     /* diffuse and clearcoat odds, and the specular lobe's as a whole, do not depend on F */
     float4 p = pr_probs(b, 0.0f, front, metallic, spec_trans, PARAM_FLOAT(q, b->p.principled, clearcoat));
     float ps = p.x + p.y;
-    float3 wo;
+    vec3 wo;
     if (u.x < p.w) {
         wo = square_to_cosine_hemisphere((float2)(u.x / p.w, u.y));
     } else if (u.x < p.w + p.z) {
@@ -205,32 +205,32 @@ INLINE float3 principled_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) 
         float c2 = (1.0f - pow(a2, 1.0f - u.y)) / (1.0f - a2);
         float st = safe_sqrt(1.0f - c2), ct = safe_sqrt(c2);
         float2 sc = sin_cos(2.0f * M_PI_F_ * ux);
-        float3 m = (float3)(sc.y * st, sc.x * st, ct);
+        vec3 m = v3(sc.y * st, sc.x * st, ct);
         wo = 2.0f * dot3(wi, m) * m - wi;
-        if (!(dot3(wi, m) > 0.0f && dot3(wo, m) > 0.0f && wo.z > 0.0f)) return (float3)(0.0f);
+        if (!(dot3(wi, m) > 0.0f && dot3(wo, m) > 0.0f && wo.z > 0.0f)) return v3s(0.0f);
     } else {
         float2 v = (float2)(ps < 1.0f ? minf((u.x - p.w - p.z) / ps, 0.99999994f) : u.x, u.y);
-        float3 m = mf_sample(pr_dist(b, q), front ? wi : -wi, v);
+        vec3 m = mf_sample(pr_dist(b, q), front ? wi : -wi, v);
         float wim = dot3(wi, m), cos_t;
         float F = fresnel_dielectric(wim, 1.0f, eta, &cos_t);
         float bsdf = (1.0f - metallic) * spec_trans;
         float p_refl = front ? 1.0f - bsdf * (1.0f - F) : F;
         if (mf_extra_uniform(u) < p_refl) {
             wo = 2.0f * wim * m - wi;
-            if (!pr_compatible(m, wi, wo, true) || !(wo.z * ci > 0.0f)) return (float3)(0.0f);
+            if (!pr_compatible(m, wi, wo, true) || !(wo.z * ci > 0.0f)) return v3s(0.0f);
         } else {
             float r = wim >= 0.0f ? 1.0f / eta : eta;
             wo = normalize3(refract_about(wi, m, r, cos_t));
             q->eta = 1.0f / r;
-            if (!pr_compatible(m, wi, wo, false) || !(wo.z * ci < 0.0f)) return (float3)(0.0f);
+            if (!pr_compatible(m, wi, wo, false) || !(wo.z * ci < 0.0f)) return v3s(0.0f);
         }
     }
-    if (!(wo.z * ci != 0.0f)) return (float3)(0.0f);
+    if (!(wo.z * ci != 0.0f)) return v3s(0.0f);
     q->wo = wo;
     return bsdf_sample_weight(principled_eval(b, q), wo.z, principled_pdf(b, q));
 }
 
-INLINE float3 principled_albedo(__global const Bsdf* b, const BsdfQuery* q) {
+INLINE vec3 principled_albedo(__global const Bsdf* b, const BsdfQuery* q) {
     return param_color(q, b->p.principled.base_color, b->p.principled.base_color_tex);
 }
 

@@ -25,7 +25,7 @@ INLINE float pr_sw(float c) {
 }
 
 /* Mitsuba's calc_schlick: Schlick's approximation with the cosine on the denser side (cos_t inside-out) */
-INLINE float3 pr_schlick(float3 r0, float cos_i, float eta) {
+INLINE vec3 pr_schlick(vec3 r0, float cos_i, float eta) {
     float eta_it = cos_i >= 0.0f ? eta : 1.0f / eta;
     float c;
     if (eta_it > 1.0f) {
@@ -40,8 +40,8 @@ INLINE float3 pr_schlick(float3 r0, float cos_i, float eta) {
 
 /* Mitsuba's mac_mic_compatibility: wi on the front of h (h as seen from wi's side) and wo on the front (reflection)
    or the back (refraction) */
-INLINE bool pr_compatible(float3 h, float3 wi, float3 wo, bool reflect) {
-    float3 hs = wi.z > 0.0f ? h : -h;
+INLINE bool pr_compatible(vec3 h, vec3 wi, vec3 wo, bool reflect) {
+    vec3 hs = wi.z > 0.0f ? h : -h;
     float o = dot3(wo, hs);
     return dot3(wi, hs) > 0.0f && (reflect ? o > 0.0f : o < 0.0f);
 }

@@ -36,18 +36,18 @@ INLINE float4 pt_probs(__global const Bsdf* b, float st, float dt) {
     return t > 0.0f ? p / t : (float4)(0.0f);
 }
 
-INLINE float3 principledthin_eval(__global const Bsdf* b, const BsdfQuery* q) {
-    float3 wi = q->wi, wo = q->wo;
-    if (wi.z == 0.0f) return (float3)(0.0f);
+INLINE vec3 principledthin_eval(__global const Bsdf* b, const BsdfQuery* q) {
+    vec3 wi = q->wi, wo = q->wo;
+    if (wi.z == 0.0f) return v3s(0.0f);
     if (wi.z < 0.0f) { wi = -wi; wo = -wo; }
     float ci = wi.z, co = wo.z, aco = fabs(co);
     bool reflect = co > 0.0f, refract = co < 0.0f;
-    if (!(reflect || refract)) return (float3)(0.0f);
+    if (!(reflect || refract)) return v3s(0.0f);
     float st = PARAM_FLOAT(q, b->p.principledthin, spec_trans);
     float dt = 0.5f * PARAM_FLOAT(q, b->p.principledthin, diff_trans);
-    float3 base = param_color(q, b->p.principledthin.base_color, b->p.principledthin.base_color_tex);
-    float3 h = normalize3(wi + (float3)(wo.x, wo.y, aco));
-    float3 value = (float3)(0.0f);
+    vec3 base = param_color(q, b->p.principledthin.base_color, b->p.principledthin.base_color_tex);
+    vec3 h = normalize3(wi + v3(wo.x, wo.y, aco));
+    vec3 value = v3s(0.0f);
     if (st > 0.0f && pr_compatible(h, wi, wo, reflect)) {
         float eta = PARAM_FLOAT(q, b->p.principledthin, eta), wih = dot3(wi, h), cos_t;
         float F = fresnel_dielectric(wih, 1.0f, eta, &cos_t);
@@ -56,9 +56,9 @@ INLINE float3 principledthin_eval(__global const Bsdf* b, const BsdfQuery* q) {
         if (reflect) {
             float spec_tint = PARAM_FLOAT(q, b->p.principledthin, spec_tint);
             float lum = luminance(base);
-            float3 tint = lum > 0.0f ? base / lum : (float3)(1.0f);
+            vec3 tint = lum > 0.0f ? base / lum : v3s(1.0f);
             float r0 = (eta - 1.0f) / (eta + 1.0f);
-            float3 Fs = pr_schlick(tint * (r0 * r0), wih, eta);
+            vec3 Fs = pr_schlick(tint * (r0 * r0), wih, eta);
             value += (st * DG) * (F + spec_tint * (Fs - F));
         } else {
             value += base * (st * (1.0f - F) * DG);
@@ -82,10 +82,10 @@ INLINE float3 principledthin_eval(__global const Bsdf* b, const BsdfQuery* q) {
         float sheen = PARAM_FLOAT(q, b->p.principledthin, sheen);
         if (sheen != 0.0f) {
             float sheen_tint = PARAM_FLOAT(q, b->p.principledthin, sheen_tint);
-            float3 c = (float3)(1.0f);
+            vec3 c = v3s(1.0f);
             if (sheen_tint != 0.0f) {
                 float lum = luminance(base);
-                float3 tint = lum > 0.0f ? base / lum : (float3)(1.0f);
+                vec3 tint = lum > 0.0f ? base / lum : v3s(1.0f);
                 c += sheen_tint * (tint - c);
             }
             value += c * (sheen * w * pr_sw(fabs(woh)));
@@ -96,7 +96,7 @@ INLINE float3 principledthin_eval(__global const Bsdf* b, const BsdfQuery* q) {
 }
 
 INLINE float principledthin_pdf(__global const Bsdf* b, const BsdfQuery* q) {
-    float3 wi = q->wi, wo = q->wo;
+    vec3 wi = q->wi, wo = q->wo;
     if (wi.z == 0.0f) return 0.0f;
     if (wi.z < 0.0f) { wi = -wi; wo = -wo; }
     float co = wo.z;
@@ -105,8 +105,8 @@ INLINE float principledthin_pdf(__global const Bsdf* b, const BsdfQuery* q) {
                         0.5f * PARAM_FLOAT(q, b->p.principledthin, diff_trans));
     float pdf = 0.0f;
     if ((reflect && p.x > 0.0f) || (refract && p.y > 0.0f)) {
-        float3 wr = (float3)(wo.x, wo.y, fabs(co));
-        float3 h = normalize3(wi + wr);
+        vec3 wr = v3(wo.x, wo.y, fabs(co));
+        vec3 h = normalize3(wi + wr);
         if (pr_compatible(h, wi, wo, reflect))
             pdf += (reflect ? p.x : p.y) * mf_pdf(pt_dist(b, q, !reflect), wi, h) / fabs(4.0f * dot3(wr, h));
     }
@@ -115,13 +115,13 @@ INLINE float principledthin_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     return pdf;
 }
 
-INLINE float3 principledthin_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+INLINE vec3 principledthin_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     q->eta = 1.0f;
     q->measure = MEASURE_SOLID_ANGLE;
     q->wo = reflect_local(q->wi);
     float side = q->wi.z > 0.0f ? 1.0f : -1.0f;
-    if (q->wi.z == 0.0f) return (float3)(0.0f);
-    float3 wi = q->wi * side, wo;
+    if (q->wi.z == 0.0f) return v3s(0.0f);
+    vec3 wi = q->wi * side, wo;
     float4 p = pt_probs(b, PARAM_FLOAT(q, b->p.principledthin, spec_trans),
                         0.5f * PARAM_FLOAT(q, b->p.principledthin, diff_trans));
     float ux = u.x;
@@ -132,23 +132,23 @@ INLINE float3 principledthin_sample(__global const Bsdf* b, BsdfQuery* q, float2
     else if ((ux -= p.y) < p.z) lobe = 2;
     else ux -= p.z;
     float pl = lobe == 0 ? p.x : lobe == 1 ? p.y : lobe == 2 ? p.z : p.w;
-    if (!(pl > 0.0f)) return (float3)(0.0f);
+    if (!(pl > 0.0f)) return v3s(0.0f);
     float2 v = (float2)(minf(ux / pl, 0.99999994f), u.y);
     if (lobe < 2) {
-        float3 m = mf_sample(pt_dist(b, q, lobe == 1), wi, v);
+        vec3 m = mf_sample(pt_dist(b, q, lobe == 1), wi, v);
         wo = 2.0f * dot3(wi, m) * m - wi;
         if (lobe == 1) wo.z = -wo.z;
-        if (!pr_compatible(m, wi, wo, lobe == 0) || !(lobe == 0 ? wo.z > 0.0f : wo.z < 0.0f)) return (float3)(0.0f);
+        if (!pr_compatible(m, wi, wo, lobe == 0) || !(lobe == 0 ? wo.z > 0.0f : wo.z < 0.0f)) return v3s(0.0f);
     } else {
         wo = square_to_cosine_hemisphere(v);
         if (lobe == 3) wo = -wo;
-        if (wo.z == 0.0f) return (float3)(0.0f);
+        if (wo.z == 0.0f) return v3s(0.0f);
     }
     q->wo = wo * side;
     return bsdf_sample_weight(principledthin_eval(b, q), wo.z, principledthin_pdf(b, q));
 }
 
-INLINE float3 principledthin_albedo(__global const Bsdf* b, const BsdfQuery* q) {
+INLINE vec3 principledthin_albedo(__global const Bsdf* b, const BsdfQuery* q) {
     return param_color(q, b->p.principledthin.base_color, b->p.principledthin.base_color_tex);
 }
 

@@ -15,38 +15,38 @@ INLINE MfDist roughconductor_dist(__global const Bsdf* b, const BsdfQuery* q) {
                    b->p.roughconductor.sample_visible);
 }
 
-INLINE float3 roughconductor_eval(__global const Bsdf* b, const BsdfQuery* q) {
-    float3 wi = q->wi, wo = q->wo;
-    if (wi.z <= 0.0f || wo.z <= 0.0f) return (float3)(0.0f);
+INLINE vec3 roughconductor_eval(__global const Bsdf* b, const BsdfQuery* q) {
+    vec3 wi = q->wi, wo = q->wo;
+    if (wi.z <= 0.0f || wo.z <= 0.0f) return v3s(0.0f);
     MfDist d = roughconductor_dist(b, q);
-    float3 h = normalize3(wi + wo);
+    vec3 h = normalize3(wi + wo);
     float s = mf_d(d, h) * mf_g1(d, wi, h) * mf_g1(d, wo, h) / (4.0f * wi.z * wo.z);
-    if (!(s > 0.0f)) return (float3)(0.0f);
-    float3 F = fresnel_conductor(dot3(wi, h), b->p.roughconductor.eta.xyz, b->p.roughconductor.k.xyz);
+    if (!(s > 0.0f)) return v3s(0.0f);
+    vec3 F = fresnel_conductor(dot3(wi, h), vxyz(b->p.roughconductor.eta), vxyz(b->p.roughconductor.k));
     return s * F * param_color(q, b->p.roughconductor.specular_reflectance,
                                b->p.roughconductor.specular_reflectance_tex);
 }
 
 INLINE float roughconductor_pdf(__global const Bsdf* b, const BsdfQuery* q) {
-    float3 wi = q->wi, wo = q->wo;
+    vec3 wi = q->wi, wo = q->wo;
     if (wi.z <= 0.0f || wo.z <= 0.0f) return 0.0f;
     MfDist d = roughconductor_dist(b, q);
-    float3 h = normalize3(wi + wo);
+    vec3 h = normalize3(wi + wo);
     float ho = dot3(h, wo);
     if (ho <= 0.0f) return 0.0f;
     /* dwo = 4 (wo.h) dh: the Jacobian of reflecting wi about h */
     return mf_pdf(d, wi, h) / (4.0f * ho);
 }
 
-INLINE float3 roughconductor_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+INLINE vec3 roughconductor_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     q->measure = MEASURE_SOLID_ANGLE;
     q->eta = 1.0f;
-    q->wo = (float3)(0.0f, 0.0f, 1.0f);
-    if (q->wi.z <= 0.0f) return (float3)(0.0f);
+    q->wo = v3(0.0f, 0.0f, 1.0f);
+    if (q->wi.z <= 0.0f) return v3s(0.0f);
     MfDist d = roughconductor_dist(b, q);
-    float3 h = mf_sample(d, q->wi, u);
+    vec3 h = mf_sample(d, q->wi, u);
     q->wo = 2.0f * dot3(q->wi, h) * h - q->wi;
-    if (q->wo.z <= 0.0f) return (float3)(0.0f);
+    if (q->wo.z <= 0.0f) return v3s(0.0f);
     return bsdf_sample_weight(roughconductor_eval(b, q), q->wo.z, roughconductor_pdf(b, q));
 }
 

@@ -25,14 +25,14 @@ INLINE MfDist roughdielectric_dist(__global const Bsdf* b, const BsdfQuery* q) {
 
 /* The microfacet normal that takes wi to wo and the event's eta; false where no microfacet does (or the
    geometry is inconsistent: wi or wo on the back of m relative to their own side). */
-INLINE bool roughdielectric_half(__global const Bsdf* b, float3 wi, float3 wo, float3* m, float* eta,
+INLINE bool roughdielectric_half(__global const Bsdf* b, vec3 wi, vec3 wo, vec3* m, float* eta,
                                  bool* reflect) {
     float ci = wi.z, co = wo.z;
     if (ci == 0.0f || co == 0.0f) return false;
     float ein = b->p.roughdielectric.int_ior, eex = b->p.roughdielectric.ext_ior;
     *reflect = ci * co > 0.0f;
     *eta = *reflect ? 1.0f : (ci > 0.0f ? ein / eex : eex / ein);
-    float3 h = wi + wo * *eta;
+    vec3 h = wi + wo * *eta;
     float l = dot3(h, h);
     if (!(l > 0.0f)) return false;
     h *= 1.0f / sqrt(l);
@@ -41,14 +41,14 @@ INLINE bool roughdielectric_half(__global const Bsdf* b, float3 wi, float3 wo, f
     return dot3(wi, h) * ci > 0.0f && dot3(wo, h) * co > 0.0f;
 }
 
-INLINE float3 roughdielectric_eval(__global const Bsdf* b, const BsdfQuery* q) {
-    float3 wi = q->wi, wo = q->wo, m;
+INLINE vec3 roughdielectric_eval(__global const Bsdf* b, const BsdfQuery* q) {
+    vec3 wi = q->wi, wo = q->wo, m;
     float eta;
     bool reflect;
-    if (!roughdielectric_half(b, wi, wo, &m, &eta, &reflect)) return (float3)(0.0f);
+    if (!roughdielectric_half(b, wi, wo, &m, &eta, &reflect)) return v3s(0.0f);
     MfDist d = roughdielectric_dist(b, q);
     float DG = mf_d(d, m) * mf_g1(d, wi, m) * mf_g1(d, wo, m);
-    if (!(DG > 0.0f)) return (float3)(0.0f);
+    if (!(DG > 0.0f)) return v3s(0.0f);
     float wim = dot3(wi, m), wom = dot3(wo, m), cos_t;
     float F = fresnel_dielectric(wim, b->p.roughdielectric.ext_ior, b->p.roughdielectric.int_ior, &cos_t);
     float cc = fabs(wi.z * wo.z);
@@ -62,12 +62,12 @@ INLINE float3 roughdielectric_eval(__global const Bsdf* b, const BsdfQuery* q) {
 }
 
 INLINE float roughdielectric_pdf(__global const Bsdf* b, const BsdfQuery* q) {
-    float3 wi = q->wi, wo = q->wo, m;
+    vec3 wi = q->wi, wo = q->wo, m;
     float eta;
     bool reflect;
     if (!roughdielectric_half(b, wi, wo, &m, &eta, &reflect)) return 0.0f;
     MfDist d = roughdielectric_dist(b, q);
-    float3 wi_up = wi.z > 0.0f ? wi : -wi;
+    vec3 wi_up = wi.z > 0.0f ? wi : -wi;
     float pm = mf_pdf(d, wi_up, m);
     float wim = dot3(wi, m), wom = dot3(wo, m), cos_t;
     float F = fresnel_dielectric(wim, b->p.roughdielectric.ext_ior, b->p.roughdielectric.int_ior, &cos_t);
@@ -76,15 +76,15 @@ INLINE float roughdielectric_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     return pm * (1.0f - F) * eta * eta * fabs(wom) / (den * den);
 }
 
-INLINE float3 roughdielectric_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
-    float3 wi = q->wi;
+INLINE vec3 roughdielectric_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+    vec3 wi = q->wi;
     q->measure = MEASURE_SOLID_ANGLE;
     q->eta = 1.0f;
-    q->wo = (float3)(0.0f, 0.0f, 1.0f);
-    if (wi.z == 0.0f) return (float3)(0.0f);
+    q->wo = v3(0.0f, 0.0f, 1.0f);
+    if (wi.z == 0.0f) return v3s(0.0f);
     MfDist d = roughdielectric_dist(b, q);
-    float3 wi_up = wi.z > 0.0f ? wi : -wi;
-    float3 m = mf_sample(d, wi_up, u);
+    vec3 wi_up = wi.z > 0.0f ? wi : -wi;
+    vec3 m = mf_sample(d, wi_up, u);
     float wim = dot3(wi, m), cos_t;
     float ein = b->p.roughdielectric.int_ior, eex = b->p.roughdielectric.ext_ior;
     float F = fresnel_dielectric(wim, eex, ein, &cos_t);
@@ -99,7 +99,7 @@ INLINE float3 roughdielectric_sample(__global const Bsdf* b, BsdfQuery* q, float
     }
     /* an event that ends on the wrong side of the macro-surface is lost (as in Mitsuba): the pdf below is the
        density of the samples that survive, so it integrates to less than 1 at grazing angles */
-    if (reflect ? !(q->wo.z * wi.z > 0.0f) : !(q->wo.z * wi.z < 0.0f)) return (float3)(0.0f);
+    if (reflect ? !(q->wo.z * wi.z > 0.0f) : !(q->wo.z * wi.z < 0.0f)) return v3s(0.0f);
     return bsdf_sample_weight(roughdielectric_eval(b, q), q->wo.z, roughdielectric_pdf(b, q));
 }
 

@@ -25,14 +25,14 @@ INLINE MfDist rp_dist(__global const Bsdf* b) {
 
 /* A microfacet normal: GGX visible normals of wi (distribution.h's sampler), else D(m) cos(m) for both
    distributions, drawn here because mf_sample maps u to the opposite azimuth (the same density, other images). */
-INLINE float3 rp_sample_normal(MfDist d, float3 wi, float2 u) {
+INLINE vec3 rp_sample_normal(MfDist d, vec3 wi, float2 u) {
     if (d.visible) return mf_sample(d, wi, u);
     float a2 = d.ax * d.ax;
     float tan2 = d.type == MF_GGX ? a2 * u.x / (1.0f - u.x) : -a2 * log(1.0f - u.x);
     float cos_t = 1.0f / sqrt(1.0f + tan2);
     float sin_t = safe_sqrt(1.0f - cos_t * cos_t);
     float2 sc = sin_cos(2.0f * M_PI_F_ * u.y);
-    return (float3)(sin_t * sc.y, sin_t * sc.x, cos_t);
+    return v3(sin_t * sc.y, sin_t * sc.x, cos_t);
 }
 
 /* T(mu): linear interpolation of the precomputed table on uniform nodes of mu in [0, 1]. */
@@ -50,48 +50,48 @@ INLINE float rp_prob_specular(__global const Bsdf* b, float t_i) {
     return ps + pd > 0.0f ? ps / (ps + pd) : 0.0f;
 }
 
-INLINE float3 roughplastic_eval(__global const Bsdf* b, const BsdfQuery* q) {
-    float3 wi = q->wi, wo = q->wo;
-    if (wi.z <= 0.0f || wo.z <= 0.0f) return (float3)(0.0f);
+INLINE vec3 roughplastic_eval(__global const Bsdf* b, const BsdfQuery* q) {
+    vec3 wi = q->wi, wo = q->wo;
+    if (wi.z <= 0.0f || wo.z <= 0.0f) return v3s(0.0f);
     float eta = b->p.roughplastic.eta;
     MfDist dist = rp_dist(b);
-    float3 h = normalize3(wi + wo);
+    vec3 h = normalize3(wi + wo);
     float cos_t;
     float F = fresnel_dielectric(dot3(wi, h), 1.0f, eta, &cos_t);
     float spec = mf_d(dist, h) * F * mf_g1(dist, wi, h) * mf_g1(dist, wo, h) / (4.0f * wi.z * wo.z);
-    float3 d = param_color(q, b->p.roughplastic.diffuse, b->p.roughplastic.diffuse_tex);
+    vec3 d = param_color(q, b->p.roughplastic.diffuse, b->p.roughplastic.diffuse_tex);
     float r = b->p.roughplastic.int_refl;
-    d = b->p.roughplastic.nonlinear ? d / ((float3)(1.0f) - d * r) : d / (1.0f - r);
+    d = b->p.roughplastic.nonlinear ? d / (v3s(1.0f) - d * r) : d / (1.0f - r);
     float diff = rp_trans(b, q, wi.z) * rp_trans(b, q, wo.z) * INV_PI / (eta * eta);
     return param_color(q, b->p.roughplastic.specular, b->p.roughplastic.specular_tex) * spec + d * diff;
 }
 
 INLINE float roughplastic_pdf(__global const Bsdf* b, const BsdfQuery* q) {
-    float3 wi = q->wi, wo = q->wo;
+    vec3 wi = q->wi, wo = q->wo;
     if (wi.z <= 0.0f || wo.z <= 0.0f) return 0.0f;
     float ps = rp_prob_specular(b, rp_trans(b, q, wi.z));
-    float3 h = normalize3(wi + wo);
+    vec3 h = normalize3(wi + wo);
     /* dwo = 4 (wo.h) dh: the Jacobian of reflecting wi about h */
     float spec = mf_pdf(rp_dist(b), wi, h) / (4.0f * dot3(wo, h));
     return ps * spec + (1.0f - ps) * wo.z * INV_PI;
 }
 
-INLINE float3 roughplastic_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+INLINE vec3 roughplastic_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     q->eta = 1.0f;
     q->measure = MEASURE_SOLID_ANGLE;
-    if (q->wi.z <= 0.0f) { q->wo = reflect_local(q->wi); return (float3)(0.0f); }
+    if (q->wi.z <= 0.0f) { q->wo = reflect_local(q->wi); return v3s(0.0f); }
     float ps = rp_prob_specular(b, rp_trans(b, q, q->wi.z));
     if (u.x < ps) {
-        float3 m = rp_sample_normal(rp_dist(b), q->wi, (float2)(u.x / ps, u.y));
+        vec3 m = rp_sample_normal(rp_dist(b), q->wi, (float2)(u.x / ps, u.y));
         q->wo = 2.0f * dot3(q->wi, m) * m - q->wi;
     } else {
         q->wo = square_to_cosine_hemisphere((float2)((u.x - ps) / (1.0f - ps), u.y));
     }
-    if (q->wo.z <= 0.0f) return (float3)(0.0f);
+    if (q->wo.z <= 0.0f) return v3s(0.0f);
     return bsdf_sample_weight(roughplastic_eval(b, q), q->wo.z, roughplastic_pdf(b, q));
 }
 
-INLINE float3 roughplastic_albedo(__global const Bsdf* b, const BsdfQuery* q) {
+INLINE vec3 roughplastic_albedo(__global const Bsdf* b, const BsdfQuery* q) {
     return param_color(q, b->p.roughplastic.diffuse, b->p.roughplastic.diffuse_tex);
 }
 

@@ -9,7 +9,7 @@
 #include "common.h"
 #include "../texture.h"
 
-INLINE float3 thindielectric_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+INLINE vec3 thindielectric_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     float cos_t;
     float R = fresnel_dielectric(fabs(q->wi.z), b->p.thindielectric.ext_ior, b->p.thindielectric.int_ior, &cos_t);
     if (R < 1.0f) R += (1.0f - R) * (1.0f - R) * R / (1.0f - R * R);

@@ -4,10 +4,10 @@
    functions and CHILD_FN the dispatcher one level down (see clrender/device/codegen.py). */
 #ifndef CLRENDER_BSDFS_TWOSIDED_H
 #define CLRENDER_BSDFS_TWOSIDED_H
-INLINE float3 flip_z(float3 v) { return (float3)(v.x, v.y, -v.z); }
+INLINE vec3 flip_z(vec3 v) { return v3(v.x, v.y, -v.z); }
 #endif
 
-INLINE float3 COMPOSITE_FN(twosided_eval)(__global const Bsdf* b, const BsdfQuery* q) {
+INLINE vec3 COMPOSITE_FN(twosided_eval)(__global const Bsdf* b, const BsdfQuery* q) {
     if (q->wi.z >= 0.0f) return CHILD_FN(eval)(b + b->p.twosided.front, q);
     BsdfQuery c = *q;
     c.wi = flip_z(c.wi);
@@ -23,16 +23,16 @@ INLINE float COMPOSITE_FN(twosided_pdf)(__global const Bsdf* b, const BsdfQuery*
     return CHILD_FN(pdf)(b + b->p.twosided.back, &c);
 }
 
-INLINE float3 COMPOSITE_FN(twosided_sample)(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+INLINE vec3 COMPOSITE_FN(twosided_sample)(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     if (q->wi.z >= 0.0f) return CHILD_FN(sample)(b + b->p.twosided.front, q, u);
-    float3 wi = q->wi;
+    vec3 wi = q->wi;
     q->wi = flip_z(wi);
-    float3 w = CHILD_FN(sample)(b + b->p.twosided.back, q, u);
+    vec3 w = CHILD_FN(sample)(b + b->p.twosided.back, q, u);
     q->wi = wi;
     q->wo = flip_z(q->wo);
     return w;
 }
 
-INLINE float3 COMPOSITE_FN(twosided_albedo)(__global const Bsdf* b, const BsdfQuery* q) {
+INLINE vec3 COMPOSITE_FN(twosided_albedo)(__global const Bsdf* b, const BsdfQuery* q) {
     return CHILD_FN(albedo)(b + (q->wi.z >= 0.0f ? b->p.twosided.front : b->p.twosided.back), q);
 }

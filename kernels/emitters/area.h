@@ -10,14 +10,14 @@
 #include "common.h"
 #include "gen/texture_dispatch.h"
 
-INLINE float3 area_radiance(const SceneData* sd, __global const Emitter* em, float2 uv) {
+INLINE vec3 area_radiance(const SceneData* sd, __global const Emitter* em, float2 uv) {
     uint tex = em->p.area.radiance_tex;
-    return tex == NONE ? em->p.area.radiance.xyz : texture_eval(sd->textures + tex, uv);
+    return tex == NONE ? vxyz(em->p.area.radiance) : texture_eval(sd->textures + tex, uv);
 }
 
 /* Complete the query from the emitting shape's sample (solid-angle density pdf at ref); returns L/pdf, or 0 when
    the point faces away from ref (one-sided) or the sample is unusable. */
-INLINE float3 area_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
+INLINE vec3 area_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
     ShapeSample ss;
     float pdf = shape_sample(sd, &sd->shapes[em->shape], q->ref, u, &ss);
     q->wi = ss.wi;
@@ -27,15 +27,15 @@ INLINE float3 area_sample(const SceneData* sd, __global const Emitter* em, Emitt
     q->dist = ss.dist;
     q->pdf = pdf;
     q->uv = ss.uv;
-    return (pdf > 0.0f && dot3(ss.n, ss.wi) < 0.0f) ? area_radiance(sd, em, ss.uv) * (1.0f / pdf) : (float3)(0.0f);
+    return (pdf > 0.0f && dot3(ss.n, ss.wi) < 0.0f) ? area_radiance(sd, em, ss.uv) * (1.0f / pdf) : v3s(0.0f);
 }
 
 INLINE float area_pdf(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
     return shape_pdf(sd, &sd->shapes[em->shape], q->ref, q->p, q->ng, q->wi);
 }
 
-INLINE float3 area_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
-    return dot3(q->n, q->wi) < 0.0f ? area_radiance(sd, em, q->uv) : (float3)(0.0f);
+INLINE vec3 area_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
+    return dot3(q->n, q->wi) < 0.0f ? area_radiance(sd, em, q->uv) : v3s(0.0f);
 }
 
 #endif

@@ -6,23 +6,23 @@
 #define CLRENDER_EMITTERS_CONSTANT_H
 #include "common.h"
 
-INLINE float3 constant_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
-    float3 wi = square_to_uniform_sphere(u);
+INLINE vec3 constant_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
+    vec3 wi = square_to_uniform_sphere(u);
     q->wi = wi;
     q->p = q->ref + wi * emitter_far(sd, q->ref);
     q->n = -wi;
     q->ng = -wi;
     q->dist = INFINITY;
     q->pdf = INV_FOURPI;
-    return em->p.constant_.radiance.xyz * (4.0f * M_PI_F_);
+    return vxyz(em->p.constant_.radiance) * (4.0f * M_PI_F_);
 }
 
 INLINE float constant_pdf(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
     return INV_FOURPI;
 }
 
-INLINE float3 constant_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
-    return em->p.constant_.radiance.xyz;
+INLINE vec3 constant_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
+    return vxyz(em->p.constant_.radiance);
 }
 
 #endif

@@ -8,8 +8,8 @@
 #define CLRENDER_EMITTERS_DISTANT_H
 #include "common.h"
 
-INLINE float3 distant_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
-    float3 wi = -em->p.distant.direction.xyz;
+INLINE vec3 distant_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
+    vec3 wi = -vxyz(em->p.distant.direction);
     q->wi = wi;
     q->p = q->ref + wi * emitter_far(sd, q->ref);
     q->n = -wi;
@@ -17,7 +17,7 @@ INLINE float3 distant_sample(const SceneData* sd, __global const Emitter* em, Em
     q->dist = INFINITY;
     q->pdf = 1.0f;
     q->delta = 1u;
-    return em->p.distant.irradiance.xyz;
+    return vxyz(em->p.distant.irradiance);
 }
 
 #endif

@@ -11,27 +11,27 @@
 #include "common.h"
 
 /* 1 - cos(angle between wi and the axis) >= 0, accurate for small angles (via |wi x axis|). */
-INLINE bool distantdisk_inside(__global const Emitter* em, float3 wi) {
-    float3 z = em->p.distantdisk.frame[2].xyz;
+INLINE bool distantdisk_inside(__global const Emitter* em, vec3 wi) {
+    vec3 z = vxyz(em->p.distantdisk.frame[2]);
     float c = dot3(wi, z);
     float omc_max = em->p.distantdisk.one_minus_cos;
     if (omc_max >= 2.0f) return true;
     if (c <= 0.0f) return c >= em->p.distantdisk.cos_max;
-    float3 x = cross3(wi, z);
+    vec3 x = cross3(wi, z);
     float s2 = dot3(x, x);
     /* 1 - cos = sin^2 / (1 + cos) */
     return s2 / (1.0f + c) <= omc_max;
 }
 
-INLINE float3 distantdisk_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
+INLINE vec3 distantdisk_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
     float omc_max = em->p.distantdisk.one_minus_cos;
     float omc = u.x * omc_max;
     float cos_t = 1.0f - omc;
     float sin_t = safe_sqrt(omc * (2.0f - omc));
     float phi = 2.0f * M_PI_F_ * u.y;
     float2 sc = sin_cos(phi);
-    float3 wi = em->p.distantdisk.frame[0].xyz * (sin_t * sc.y) + em->p.distantdisk.frame[1].xyz * (sin_t * sc.x)
-              + em->p.distantdisk.frame[2].xyz * cos_t;
+    vec3 wi = vxyz(em->p.distantdisk.frame[0]) * (sin_t * sc.y) + vxyz(em->p.distantdisk.frame[1]) * (sin_t * sc.x)
+              + vxyz(em->p.distantdisk.frame[2]) * cos_t;
     wi = normalize3(wi);
     q->wi = wi;
     q->p = q->ref + wi * emitter_far(sd, q->ref);
@@ -39,15 +39,15 @@ INLINE float3 distantdisk_sample(const SceneData* sd, __global const Emitter* em
     q->ng = -wi;
     q->dist = INFINITY;
     q->pdf = em->p.distantdisk.pdf;
-    return em->p.distantdisk.radiance.xyz * (1.0f / q->pdf);
+    return vxyz(em->p.distantdisk.radiance) * (1.0f / q->pdf);
 }
 
 INLINE float distantdisk_pdf(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
     return distantdisk_inside(em, q->wi) ? em->p.distantdisk.pdf : 0.0f;
 }
 
-INLINE float3 distantdisk_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
-    return distantdisk_inside(em, q->wi) ? em->p.distantdisk.radiance.xyz : (float3)(0.0f);
+INLINE vec3 distantdisk_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
+    return distantdisk_inside(em, q->wi) ? vxyz(em->p.distantdisk.radiance) : v3s(0.0f);
 }
 
 #endif

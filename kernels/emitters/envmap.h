@@ -9,13 +9,13 @@
 #include "common.h"
 #include "../shapes/common.h"   /* shape_cdf_search */
 
-INLINE float3 envmap_to_local(__global const Emitter* em, float3 d) {
-    return (float3)(dot3(em->p.envmap.inv[0].xyz, d), dot3(em->p.envmap.inv[1].xyz, d),
-                    dot3(em->p.envmap.inv[2].xyz, d));
+INLINE vec3 envmap_to_local(__global const Emitter* em, vec3 d) {
+    return v3(dot3(vxyz(em->p.envmap.inv[0]), d), dot3(vxyz(em->p.envmap.inv[1]), d),
+                    dot3(vxyz(em->p.envmap.inv[2]), d));
 }
 
 /* Grid coordinates of a local unit direction: x in [0, W) (shifted by half a texel), y in [0, H-1]. */
-INLINE float2 envmap_grid(__global const Emitter* em, float3 v) {
+INLINE float2 envmap_grid(__global const Emitter* em, vec3 v) {
     uint4 dims = em->p.envmap.dims;
     float u = atan2(v.x, -v.z) * INV_TWOPI - 0.5f / (float)dims.y;
     u -= floor(u);
@@ -34,7 +34,7 @@ INLINE float envmap_cell_pmf(const SceneData* sd, __global const Emitter* em, ui
 }
 
 /* Solid-angle density of local direction v (unit). */
-INLINE float envmap_local_pdf(const SceneData* sd, __global const Emitter* em, float3 v) {
+INLINE float envmap_local_pdf(const SceneData* sd, __global const Emitter* em, vec3 v) {
     uint4 dims = em->p.envmap.dims;
     float sin_t = sqrt(v.x * v.x + v.z * v.z);
     if (!(sin_t > 0.0f)) return 0.0f;
@@ -44,19 +44,19 @@ INLINE float envmap_local_pdf(const SceneData* sd, __global const Emitter* em, f
     return pdf_uv / (2.0f * M_PI_F_ * M_PI_F_ * sin_t);
 }
 
-INLINE float3 envmap_lookup(const SceneData* sd, __global const Emitter* em, float3 v) {
+INLINE vec3 envmap_lookup(const SceneData* sd, __global const Emitter* em, vec3 v) {
     uint4 dims = em->p.envmap.dims;
     __global const float4* px = (__global const float4*)(sd->textures + dims.x);
     float2 g = envmap_grid(em, v);
     uint ix = min((uint)g.x, dims.y - 1u), iy = min((uint)g.y, dims.z - 2u);
     float fx = g.x - (float)ix, fy = g.y - (float)iy;
     uint w1 = dims.y + 1u, i = iy * w1 + ix;
-    float3 top = px[i].xyz * (1.0f - fx) + px[i + 1u].xyz * fx;
-    float3 bot = px[i + w1].xyz * (1.0f - fx) + px[i + w1 + 1u].xyz * fx;
+    vec3 top = vxyz(px[i]) * (1.0f - fx) + vxyz(px[i + 1u]) * fx;
+    vec3 bot = vxyz(px[i + w1]) * (1.0f - fx) + vxyz(px[i + w1 + 1u]) * fx;
     return (top * (1.0f - fy) + bot * fy) * em->p.envmap.inv[0].w;
 }
 
-INLINE float3 envmap_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
+INLINE vec3 envmap_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
     uint4 dims = em->p.envmap.dims;
     uint rows = dims.z - 1u;
     __global const float* marg = sd->cdf + dims.w;
@@ -71,9 +71,9 @@ INLINE float3 envmap_sample(const SceneData* sd, __global const Emitter* em, Emi
     float uu = ((float)ix + fx) / (float)dims.y + 0.5f / (float)dims.y;
     float vv = ((float)iy + fy) / (float)rows;
     float2 sp = sin_cos(M_PI_F_ * vv), sc = sin_cos(2.0f * M_PI_F_ * uu);
-    float3 v = (float3)(sc.x * sp.x, sp.y, -sc.y * sp.x);
-    float3 wi = normalize3(em->p.envmap.inv[0].xyz * v.x + em->p.envmap.inv[1].xyz * v.y
-                           + em->p.envmap.inv[2].xyz * v.z);
+    vec3 v = v3(sc.x * sp.x, sp.y, -sc.y * sp.x);
+    vec3 wi = normalize3(vxyz(em->p.envmap.inv[0]) * v.x + vxyz(em->p.envmap.inv[1]) * v.y
+                           + vxyz(em->p.envmap.inv[2]) * v.z);
     q->wi = wi;
     q->p = q->ref + wi * emitter_far(sd, q->ref);
     q->n = -wi;
@@ -82,14 +82,14 @@ INLINE float3 envmap_sample(const SceneData* sd, __global const Emitter* em, Emi
     /* the density of the direction as pdf() will see it, so that sample and pdf agree exactly */
     float pdf = envmap_local_pdf(sd, em, envmap_to_local(em, wi));
     q->pdf = pdf;
-    return pdf > 0.0f ? envmap_lookup(sd, em, envmap_to_local(em, wi)) * (1.0f / pdf) : (float3)(0.0f);
+    return pdf > 0.0f ? envmap_lookup(sd, em, envmap_to_local(em, wi)) * (1.0f / pdf) : v3s(0.0f);
 }
 
 INLINE float envmap_pdf(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
     return envmap_local_pdf(sd, em, envmap_to_local(em, q->wi));
 }
 
-INLINE float3 envmap_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
+INLINE vec3 envmap_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
     return envmap_lookup(sd, em, envmap_to_local(em, q->wi));
 }
 

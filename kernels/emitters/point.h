@@ -7,8 +7,8 @@
 #define CLRENDER_EMITTERS_POINT_H
 #include "common.h"
 
-INLINE float3 point_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
-    return em->p.point.intensity.xyz * emitter_point_query(q, em->p.point.position.xyz);
+INLINE vec3 point_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
+    return vxyz(em->p.point.intensity) * emitter_point_query(q, vxyz(em->p.point.position));
 }
 
 #endif

@@ -11,26 +11,26 @@
 #include "common.h"
 #include "gen/texture_dispatch.h"
 
-INLINE float3 spot_local(__global const Emitter* em, float3 d) {
-    return normalize3((float3)(dot3(em->p.spot.inv[0].xyz, d), dot3(em->p.spot.inv[1].xyz, d),
-                               dot3(em->p.spot.inv[2].xyz, d)));
+INLINE vec3 spot_local(__global const Emitter* em, vec3 d) {
+    return normalize3(v3(dot3(vxyz(em->p.spot.inv[0]), d), dot3(vxyz(em->p.spot.inv[1]), d),
+                               dot3(vxyz(em->p.spot.inv[2]), d)));
 }
 
 /* Falloff of the local direction ld leaving the light. */
-INLINE float spot_falloff(__global const Emitter* em, float3 ld) {
+INLINE float spot_falloff(__global const Emitter* em, vec3 ld) {
     float c = ld.z;
     if (!(c > em->p.spot.inv[0].w)) return 0.0f;
     if (c >= em->p.spot.inv[1].w) return 1.0f;
     return (em->p.spot.inv[2].w - acos(clampf(c, -1.0f, 1.0f))) * em->p.spot.position.w;
 }
 
-INLINE float3 spot_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
-    float inv_d2 = emitter_point_query(q, em->p.spot.position.xyz);
-    if (!(inv_d2 > 0.0f)) return (float3)(0.0f);
-    float3 ld = spot_local(em, -q->wi);
+INLINE vec3 spot_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
+    float inv_d2 = emitter_point_query(q, vxyz(em->p.spot.position));
+    if (!(inv_d2 > 0.0f)) return v3s(0.0f);
+    vec3 ld = spot_local(em, -q->wi);
     float falloff = spot_falloff(em, ld);
-    if (!(falloff > 0.0f)) return (float3)(0.0f);   /* outside the cone: no texture lookup (Mitsuba's too) */
-    float3 I = em->p.spot.intensity.xyz;
+    if (!(falloff > 0.0f)) return v3s(0.0f);   /* outside the cone: no texture lookup (Mitsuba's too) */
+    vec3 I = vxyz(em->p.spot.intensity);
     uint tex = em->p.spot.texture_tex;
     if (tex != NONE) {
         float k = 0.5f * em->p.spot.intensity.w / ld.z;

@@ -4,11 +4,11 @@
    Depth is measured from the near clip plane, where Mitsuba's camera rays start (their t), not from the pinhole
    where ours do: the distance minus tmin. */
 #include "lighting.h"
-INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
+INLINE vec3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     Intersection its;
-    if (!scene_intersect(sd, &ray, &its)) return (float3)(0.0f);
+    if (!scene_intersect(sd, &ray, &its)) return v3s(0.0f);
     switch (sd->info->p.aov.kind) {
-    case 0u: return (float3)(its.t - ray.tmin);
+    case 0u: return v3s(its.t - ray.tmin);
     case 1u: return its.p;
     case 2u: return its.ng;
     default: {

@@ -5,16 +5,16 @@
    such lights count emitter_samples times. */
 #include "lighting.h"
 
-INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
+INLINE vec3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     uint ne = sd->info->p.direct_mitsuba.emitter_samples, nb = sd->info->p.direct_mitsuba.bsdf_samples;
     bool hide = sd->info->p.direct_mitsuba.hide_emitters != 0u;
     Intersection its;
     bool hit = hide ? scene_intersect_hiding_emitters(sd, &ray, &its) : scene_intersect(sd, &ray, &its);
-    if (!hit) return hide ? (float3)(0.0f) : escaped(sd, ray.d);
-    float3 L = hide ? (float3)(0.0f) : hit_emission(sd, &its, ray.d);
+    if (!hit) return hide ? v3s(0.0f) : escaped(sd, ray.d);
+    vec3 L = hide ? v3s(0.0f) : hit_emission(sd, &its, ray.d);
     __global const Bsdf* b = bsdf_at(sd, &its);
     float frac_e = (float)ne / (float)(ne + nb), frac_b = (float)nb / (float)(ne + nb);
-    float3 wi = to_local(&its.sh, -ray.d);
+    vec3 wi = to_local(&its.sh, -ray.d);
 
     if (bsdf_is_smooth(b)) {
         for (uint i = 0u; i < ne; ++i) {
@@ -22,12 +22,12 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
             q.ref = its.p;
             float a = next1d(smp);
             float2 u = next2d(smp);
-            float3 le = scene_sample_emitter(sd, &q, (float3)(a, u.x, u.y));
+            vec3 le = scene_sample_emitter(sd, &q, v3(a, u.x, u.y));
             if (is_black(le) || !(q.pdf > 0.0f)) continue;
             BsdfQuery bq = bsdf_query(sd, &its, -ray.d);
             bq.wi = wi;
             bq.wo = to_local(&its.sh, q.wi);
-            float3 f = bsdf_eval(b, &bq);
+            vec3 f = bsdf_eval(b, &bq);
             if (is_black(f) || light_occluded(sd, &its, &q)) continue;
             float w = q.delta ? 1.0f : mis_power(q.pdf * frac_e, bsdf_pdf(b, &bq) * frac_b) / (float)ne;
             L += f * fabs(bq.wo.z) * le * w;
@@ -36,14 +36,14 @@ INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
 
     for (uint i = 0u; i < nb; ++i) {
         BsdfQuery bq = bsdf_query(sd, &its, -ray.d);
-        float3 w = bsdf_sample(b, &bq, next2d(smp));
+        vec3 w = bsdf_sample(b, &bq, next2d(smp));
         if (is_black(w)) continue;
-        float3 d = to_world(&its.sh, bq.wo);
+        vec3 d = to_world(&its.sh, bq.wo);
         bool discrete = bq.measure == MEASURE_DISCRETE;
         Ray r = spawn_ray_from(&its, d);
         Intersection h;
         bool found = scene_intersect(sd, &r, &h);
-        float3 le = found ? hit_emission(sd, &h, d) : escaped(sd, d);
+        vec3 le = found ? hit_emission(sd, &h, d) : escaped(sd, d);
         if (is_black(le)) continue;
         float wb = 1.0f;
         if (!discrete) {

@@ -30,12 +30,12 @@ INLINE bool bsdf_is_smooth(__global const Bsdf* b) {
     return (b->flags & (BSDF_DIFFUSE | BSDF_GLOSSY)) != 0u || (b->flags & BSDF_DELTA) == 0u;
 }
 
-INLINE BsdfQuery bsdf_query(const SceneData* sd, const Intersection* its, float3 wi_world) {
+INLINE BsdfQuery bsdf_query(const SceneData* sd, const Intersection* its, vec3 wi_world) {
     BsdfQuery q;
     q.textures = sd->textures;
     q.tables = sd->bsdf_tables;
     q.wi = to_local(&its->sh, wi_world);
-    q.wo = (float3)(0.0f);
+    q.wo = v3s(0.0f);
     q.eta = 1.0f;
     q.measure = MEASURE_SOLID_ANGLE;
     q.uv = its->uv;
@@ -49,13 +49,13 @@ INLINE BsdfQuery bsdf_query(const SceneData* sd, const Intersection* its, float3
 }
 
 /* Radiance an emitter sends from the hit `its` back along -d (0 if the surface does not emit). */
-INLINE float3 hit_emission(const SceneData* sd, const Intersection* its, float3 d) {
-    if (sd->shapes[its->shape].emitter == NONE) return (float3)(0.0f);
+INLINE vec3 hit_emission(const SceneData* sd, const Intersection* its, vec3 d) {
+    if (sd->shapes[its->shape].emitter == NONE) return v3s(0.0f);
     return area_emitter_Le(sd, its, -d);
 }
 
 /* The light-selection pdf of having reached emitter hit `its` from `ref` (for MIS of BSDF samples). */
-INLINE float hit_emitter_pdf(const SceneData* sd, float3 ref, const Intersection* its) {
+INLINE float hit_emitter_pdf(const SceneData* sd, vec3 ref, const Intersection* its) {
     uint e = sd->shapes[its->shape].emitter;
     if (e == NONE) return 0.0f;
     EmitterQuery q;
@@ -75,7 +75,7 @@ INLINE Ray light_shadow_ray(const Intersection* its, const EmitterQuery* q) {
         r.tmax = INFINITY;
         return r;
     }
-    float3 d = q->p - r.o;
+    vec3 d = q->p - r.o;
     float len = len3(d);
     r.d = d * (1.0f / len);
     r.tmax = len * (1.0f - 1e-4f) - ray_eps(q->p);
@@ -97,19 +97,19 @@ INLINE bool light_occluded(const SceneData* sd, const Intersection* its, const E
    (LIGHTING_MIS) against BSDF sampling when `mis` (delta lights always get full weight: BSDF sampling cannot find
    them), and the shadow ray that decides whether it counts. 0 (and no ray to trace) when it cannot contribute. The
    trace is the caller's, so that a wavefront driver can run all shadow rays in a kernel of their own. */
-INLINE float3 sample_light_unshadowed(const SceneData* sd, const Intersection* its, __global const Bsdf* b,
-                                      float3 wi_local, Sampler* smp, bool mis, Ray* shadow) {
+INLINE vec3 sample_light_unshadowed(const SceneData* sd, const Intersection* its, __global const Bsdf* b,
+                                      vec3 wi_local, Sampler* smp, bool mis, Ray* shadow) {
     EmitterQuery q;
     q.ref = its->p;
     float a = next1d(smp);
     float2 u = next2d(smp);
-    float3 le = scene_sample_emitter(sd, &q, (float3)(a, u.x, u.y));
-    if (is_black(le) || !(q.pdf > 0.0f)) return (float3)(0.0f);
-    BsdfQuery bq = bsdf_query(sd, its, (float3)(0.0f));
+    vec3 le = scene_sample_emitter(sd, &q, v3(a, u.x, u.y));
+    if (is_black(le) || !(q.pdf > 0.0f)) return v3s(0.0f);
+    BsdfQuery bq = bsdf_query(sd, its, v3s(0.0f));
     bq.wi = wi_local;
     bq.wo = to_local(&its->sh, q.wi);
-    float3 f = bsdf_eval(b, &bq);
-    if (is_black(f)) return (float3)(0.0f);
+    vec3 f = bsdf_eval(b, &bq);
+    if (is_black(f)) return v3s(0.0f);
     *shadow = light_shadow_ray(its, &q);
     float w = 1.0f;
     if (mis && !q.delta) w = LIGHTING_MIS(q.pdf, bsdf_pdf(b, &bq));
@@ -117,16 +117,16 @@ INLINE float3 sample_light_unshadowed(const SceneData* sd, const Intersection* i
 }
 
 /* The same with its shadow ray traced. */
-INLINE float3 sample_light(const SceneData* sd, const Intersection* its, __global const Bsdf* b,
-                           float3 wi_local, Sampler* smp, bool mis) {
+INLINE vec3 sample_light(const SceneData* sd, const Intersection* its, __global const Bsdf* b,
+                           vec3 wi_local, Sampler* smp, bool mis) {
     Ray shadow;
-    float3 c = sample_light_unshadowed(sd, its, b, wi_local, smp, mis, &shadow);
-    if (is_black(c) || shadow_occluded(sd, &shadow)) return (float3)(0.0f);
+    vec3 c = sample_light_unshadowed(sd, its, b, wi_local, smp, mis, &shadow);
+    if (is_black(c) || shadow_occluded(sd, &shadow)) return v3s(0.0f);
     return c;
 }
 
 /* Radiance from the environment (infinite emitters) along an escaping direction d. */
-INLINE float3 escaped(const SceneData* sd, float3 d) { return scene_eval_environment(sd, d); }
+INLINE vec3 escaped(const SceneData* sd, vec3 d) { return scene_eval_environment(sd, d); }
 
 /* A camera ray under Mitsuba's hide_emitters: shapes that carry an area emitter are not there for it (Mitsuba
    3.9 lets the camera see through them, front or back, to what lies behind), so it continues past each such hit;

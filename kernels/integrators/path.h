@@ -24,10 +24,10 @@
 typedef struct {
     Ray ray;            /* the segment to trace next */
     Ray shadow;         /* the shadow ray of a pending emitter sample (shadow_pending) */
-    float3 L;           /* radiance gathered so far */
-    float3 beta;        /* path throughput */
-    float3 prev_p;      /* where `ray` starts */
-    float3 shadow_L;    /* what the pending emitter sample adds to L if `shadow` is not blocked */
+    vec3 L;           /* radiance gathered so far */
+    vec3 beta;        /* path throughput */
+    vec3 prev_p;      /* where `ray` starts */
+    vec3 shadow_L;    /* what the pending emitter sample adds to L if `shadow` is not blocked */
     float eta;          /* product of the relative IORs crossed (Russian roulette uses beta * eta^2) */
     float prev_pdf;     /* solid-angle pdf of the BSDF sample that made `ray` */
     uint depth;         /* segments traced so far */
@@ -40,8 +40,8 @@ typedef struct {
 /* Stage 0: a camera ray. */
 INLINE void path_begin(const SceneData* sd, PathState* ps, Ray ray) {
     ps->ray = ray;
-    ps->L = (float3)(0.0f);
-    ps->beta = (float3)(1.0f);
+    ps->L = v3s(0.0f);
+    ps->beta = v3s(1.0f);
     ps->eta = 1.0f;
     ps->prev_pdf = 0.0f;
     ps->prev_p = ray.o;
@@ -60,7 +60,7 @@ INLINE void path_begin(const SceneData* sd, PathState* ps, Ray ray) {
    emitter sampling at the previous vertex. Returns whether the path goes on from `its` (it ends on a miss, and at
    max_depth unless `no_limit`: Mitsuba's volpath decides at its next BSDF sample, path_mitsuba.h). */
 INLINE bool path_emission(const SceneData* sd, PathState* ps, bool hit, const Intersection* its, bool no_limit) {
-    float3 le = hit ? hit_emission(sd, its, ps->ray.d) : escaped(sd, ps->ray.d);
+    vec3 le = hit ? hit_emission(sd, its, ps->ray.d) : escaped(sd, ps->ray.d);
     if (!is_black(le)) {
         float w;
         if (ps->after_delta) w = 1.0f;
@@ -84,11 +84,11 @@ INLINE void path_sample_lights(const SceneData* sd, PathState* ps, const Interse
                                Sampler* smp) {
 #if defined(PATH_USE_EMS)
     if (PATH_SAMPLES_LIGHTS(b) && ps->depth + 2u <= sd->info->max_depth) {
-        float3 wi = to_local(&its->sh, -ps->ray.d);
+        vec3 wi = to_local(&its->sh, -ps->ray.d);
 #if defined(PATH_USE_MATS)
-        float3 c = sample_light_unshadowed(sd, its, b, wi, smp, true, &ps->shadow);
+        vec3 c = sample_light_unshadowed(sd, its, b, wi, smp, true, &ps->shadow);
 #else
-        float3 c = sample_light_unshadowed(sd, its, b, wi, smp, false, &ps->shadow);
+        vec3 c = sample_light_unshadowed(sd, its, b, wi, smp, false, &ps->shadow);
 #endif
         if (!is_black(c)) {
             ps->shadow_L = ps->beta * c;
@@ -116,7 +116,7 @@ INLINE void path_continue(const SceneData* sd, PathState* ps, const Intersection
     }
 #endif
     BsdfQuery bq = bsdf_query(sd, its, -ps->ray.d);
-    float3 w = bsdf_sample(b, &bq, next2d(smp));
+    vec3 w = bsdf_sample(b, &bq, next2d(smp));
     if (is_black(w)) { ps->alive = 0u; return; }
     ps->beta *= w;
     ps->eta *= bq.eta;
@@ -146,7 +146,7 @@ INLINE void path_vertex(const SceneData* sd, PathState* ps, bool traced, const H
     path_continue(sd, ps, &its, b, smp);
 }
 
-INLINE float3 path_result(const SceneData* sd, const PathState* ps) { return ps->L; }
+INLINE vec3 path_result(const SceneData* sd, const PathState* ps) { return ps->L; }
 
 #include "path_loop.h"
 #endif

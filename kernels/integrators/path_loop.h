@@ -4,7 +4,7 @@
 #define CLRENDER_PATH_LOOP_H
 #define CLR_PATH_STAGES 1
 
-INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
+INLINE vec3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     PathState ps;
     path_begin(sd, &ps, ray);
     while (ps.alive) {

@@ -12,7 +12,7 @@
 
 /* Whether path_continue's sample from direction d (at depth `depth`) was a null event: a discrete sample that goes
    on undeviated (a failed sample is not: depth stays). */
-INLINE bool path_null_event(const PathState* ps, uint depth, float3 d) {
+INLINE bool path_null_event(const PathState* ps, uint depth, vec3 d) {
     return ps->depth != depth && ps->after_delta && dot3(ps->ray.d, d) > 1.0f - 1e-6f;
 }
 
@@ -26,7 +26,7 @@ INLINE void path_vertex(const SceneData* sd, PathState* ps, bool traced, const H
     bool hit = traced && scene_surface(sd, &ps->ray, h, &its);
     bool hide = sd->info->p.path_mitsuba.hide_emitters != 0u;
     if (sd->info->p.path_mitsuba.volpath != 0u) {
-        float3 before = ps->L;
+        vec3 before = ps->L;
         hit = path_emission(sd, ps, hit, &its, true);
         if (hide && ps->depth == 0u) ps->L = before;
         if (!hit) return;
@@ -43,7 +43,7 @@ INLINE void path_vertex(const SceneData* sd, PathState* ps, bool traced, const H
     }
     __global const Bsdf* b = bsdf_at(sd, &its);
     path_sample_lights(sd, ps, &its, b, smp);
-    float3 d = ps->ray.d;
+    vec3 d = ps->ray.d;
     uint depth = ps->depth;
     path_continue(sd, ps, &its, b, smp);
     bool null_event = path_null_event(ps, depth, d);
@@ -55,6 +55,6 @@ INLINE void path_vertex(const SceneData* sd, PathState* ps, bool traced, const H
     }
 }
 
-INLINE float3 path_result(const SceneData* sd, const PathState* ps) { return ps->valid ? ps->L : (float3)(0.0f); }
+INLINE vec3 path_result(const SceneData* sd, const PathState* ps) { return ps->valid ? ps->L : v3s(0.0f); }
 
 #include "path_loop.h"

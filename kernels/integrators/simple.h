@@ -1,14 +1,14 @@
 /* simple (Nori): one point light given inline (p.simple.position, p.simple.energy = Φ):
    L = Φ / (4π²) · max(0, cos θ) / d² · V, i.e. a white diffuse surface lit by an isotropic point light. */
-INLINE float3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
+INLINE vec3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     Intersection its;
-    if (!scene_intersect(sd, &ray, &its)) return (float3)(0.0f);
-    float3 pos = sd->info->p.simple.position.xyz, energy = sd->info->p.simple.energy.xyz;
-    float3 v = pos - its.p;
+    if (!scene_intersect(sd, &ray, &its)) return v3s(0.0f);
+    vec3 pos = vxyz(sd->info->p.simple.position), energy = vxyz(sd->info->p.simple.energy);
+    vec3 v = pos - its.p;
     float d2 = dot3(v, v), d = sqrt(d2);
-    float3 wi = v * (1.0f / d);
+    vec3 wi = v * (1.0f / d);
     float c = dot3(wi, its.sh.n);
-    if (c <= 0.0f) return (float3)(0.0f);
-    if (scene_occluded(sd, spawn_origin(&its, wi), wi, 0.0f, d * (1.0f - 1e-4f))) return (float3)(0.0f);
+    if (c <= 0.0f) return v3s(0.0f);
+    if (scene_occluded(sd, spawn_origin(&its, wi), wi, 0.0f, d * (1.0f - 1e-4f))) return v3s(0.0f);
     return energy * (c / (4.0f * M_PI_F_ * M_PI_F_ * d2));
 }

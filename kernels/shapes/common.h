@@ -10,15 +10,15 @@
    normal ng (the measure's), and the direction/distance from the reference point. The `_sample` functions return
    the solid-angle density of wi at the reference point (0: no usable sample). */
 typedef struct {
-    float3 p, n, ng, wi;
+    vec3 p, n, ng, wi;
     float dist;
     float2 uv;   /* the surface's uv at p, as at a hit (spheres compute it only with SHAPE_NEEDS_UV; else 0) */
 } ShapeSample;
 
 /* Solid-angle density at ref of a point p with area density `inv_area` (dist^2 / (area |cos at p|)); 0 when
    degenerate (grazing, coincident). cos is taken against the geometric normal: the true change of measure. */
-INLINE float shape_solid_angle_pdf(float inv_area, float3 ref, float3 p, float3 ng, float3 wi) {
-    float3 d = p - ref;
+INLINE float shape_solid_angle_pdf(float inv_area, vec3 ref, vec3 p, vec3 ng, vec3 wi) {
+    vec3 d = p - ref;
     float d2 = dot3(d, d);
     float c = fabs(dot3(ng, wi));
     if (c <= 0.0f || d2 <= 0.0f) return 0.0f;
@@ -26,8 +26,8 @@ INLINE float shape_solid_angle_pdf(float inv_area, float3 ref, float3 p, float3 
 }
 
 /* Complete a sample at p (normals n, ng) drawn with area density inv_area; returns its solid-angle density. */
-INLINE float shape_point_sample(ShapeSample* ss, float3 ref, float3 p, float3 n, float3 ng, float inv_area) {
-    float3 d = p - ref;
+INLINE float shape_point_sample(ShapeSample* ss, vec3 ref, vec3 p, vec3 n, vec3 ng, float inv_area) {
+    vec3 d = p - ref;
     float l = len3(d);
     ss->wi = l > 0.0f ? d * (1.0f / l) : ng;
     ss->p = p;

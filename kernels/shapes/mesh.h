@@ -15,7 +15,7 @@
 #include "common.h"
 
 typedef struct {
-    float3 p0, p1, p2;
+    vec3 p0, p1, p2;
     uint i0, i1, i2;   /* vertex indices (rows of the per-vertex tables) */
 } MeshTriangle;
 
@@ -26,9 +26,9 @@ INLINE MeshTriangle mesh_triangle(const SceneData* sd, uint ref) {
     uint pos = ref >> PRIM_REF_POS_SHIFT, lane = (ref >> 2) & 3u, c = (ref & 3u) + 1u;
     __global const float* q = (__global const float*)sd->prims + (10u * (pos - lane) + lane);
     MeshTriangle t;
-    t.p0 = (float3)(q[0], q[c], q[2u * c]);
-    t.p1 = (float3)(q[3u * c], q[4u * c], q[5u * c]);
-    t.p2 = (float3)(q[6u * c], q[7u * c], q[8u * c]);
+    t.p0 = v3(q[0], q[c], q[2u * c]);
+    t.p1 = v3(q[3u * c], q[4u * c], q[5u * c]);
+    t.p2 = v3(q[6u * c], q[7u * c], q[8u * c]);
     __global const uint* idx = sd->tri_index + 3u * pos;
     t.i0 = idx[0]; t.i1 = idx[1]; t.i2 = idx[2];
     return t;
@@ -43,24 +43,24 @@ INLINE float mesh_half(uint h) {
 }
 
 /* Per-vertex normal i (3 halves a row: the table has no padding). */
-INLINE float3 mesh_normal(const SceneData* sd, uint i) {
+INLINE vec3 mesh_normal(const SceneData* sd, uint i) {
     __global const ushort* n = sd->normals + 3u * i;
-    return (float3)(mesh_half(n[0]), mesh_half(n[1]), mesh_half(n[2]));
+    return v3(mesh_half(n[0]), mesh_half(n[1]), mesh_half(n[2]));
 }
 
 /* The shading normal at barycentrics (b0, b1, b2) of triangle t: interpolated vertex normals, or ng. */
-INLINE float3 mesh_shading_normal(const SceneData* sd, __global const Shape* s, const MeshTriangle* t, float b0,
-                                  float b1, float b2, float3 ng) {
+INLINE vec3 mesh_shading_normal(const SceneData* sd, __global const Shape* s, const MeshTriangle* t, float b0,
+                                  float b1, float b2, vec3 ng) {
     if (!(s->flags & SHAPE_HAS_NORMALS)) return ng;
-    float3 n = mesh_normal(sd, t->i0) * b0 + mesh_normal(sd, t->i1) * b1 + mesh_normal(sd, t->i2) * b2;
+    vec3 n = mesh_normal(sd, t->i0) * b0 + mesh_normal(sd, t->i1) * b1 + mesh_normal(sd, t->i2) * b2;
     float l2 = dot3(n, n);
     return l2 > 0.0f ? n * (1.0f / sqrt(l2)) : ng;
 }
 
 /* Mitsuba's dp/du and dp/dv of triangle t: from its uvs, or where it has none (or they are degenerate) its first
    and second edges. */
-INLINE float3 mesh_dpduv(const SceneData* sd, __global const Shape* s, const MeshTriangle* t, float3* dpdv) {
-    float3 dp0 = t->p1 - t->p0, dp1 = t->p2 - t->p0;
+INLINE vec3 mesh_dpduv(const SceneData* sd, __global const Shape* s, const MeshTriangle* t, vec3* dpdv) {
+    vec3 dp0 = t->p1 - t->p0, dp1 = t->p2 - t->p0;
     *dpdv = dp1;
     if (!(s->flags & SHAPE_HAS_UVS)) return dp0;
     float2 uv0 = sd->uvs[t->i0], duv0 = sd->uvs[t->i1] - uv0, duv1 = sd->uvs[t->i2] - uv0;
@@ -71,8 +71,8 @@ INLINE float3 mesh_dpduv(const SceneData* sd, __global const Shape* s, const Mes
     return (dp0 * duv1.y - dp1 * duv0.y) * inv;
 }
 
-INLINE float3 mesh_dpdu(const SceneData* sd, __global const Shape* s, const MeshTriangle* t) {
-    float3 dpdv;
+INLINE vec3 mesh_dpdu(const SceneData* sd, __global const Shape* s, const MeshTriangle* t) {
+    vec3 dpdv;
     return mesh_dpduv(sd, s, t, &dpdv);
 }
 
@@ -80,11 +80,11 @@ INLINE bool mesh_surface(const SceneData* sd, __global const Shape* s, const Ray
                          Intersection* its) {
     MeshTriangle tri = mesh_triangle(sd, h->prim);
     float b0 = 1.0f - h->u - h->v;
-    float3 p0 = tri.p0, p1 = tri.p1, p2 = tri.p2;
+    vec3 p0 = tri.p0, p1 = tri.p1, p2 = tri.p2;
     its->p = p0 * b0 + p1 * h->u + p2 * h->v;
-    float3 c = cross3(p1 - p0, p2 - p0);
+    vec3 c = cross3(p1 - p0, p2 - p0);
     float a2 = len3(c);                          /* twice the area */
-    float3 ng = c * (1.0f / a2);
+    vec3 ng = c * (1.0f / a2);
     its->ng = ng;
     float off = SPAWN_OFFSET * maxf(max3(fabs(p0)), maxf(max3(fabs(p1)), max3(fabs(p2))));
     its->off = off;
@@ -95,7 +95,7 @@ INLINE bool mesh_surface(const SceneData* sd, __global const Shape* s, const Ray
     float w0 = maxf(b0, k * len3(p2 - p1)), w1 = maxf(h->u, k * len3(p0 - p2)), w2 = maxf(h->v, k * len3(p1 - p0));
     float ws = w0 + w1 + w2;
     its->po = ws > 0.0f && ws < INFINITY ? (p0 * w0 + p1 * w1 + p2 * w2) * (1.0f / ws) : its->p;
-    float3 n = mesh_shading_normal(sd, s, &tri, b0, h->u, h->v, ng);
+    vec3 n = mesh_shading_normal(sd, s, &tri, b0, h->u, h->v, ng);
     if (s->flags & SHAPE_HAS_UVS)
         its->uv = sd->uvs[tri.i0] * b0 + sd->uvs[tri.i1] * h->u + sd->uvs[tri.i2] * h->v;
     else
@@ -103,26 +103,26 @@ INLINE bool mesh_surface(const SceneData* sd, __global const Shape* s, const Ray
     its->sh = (s->flags & SHAPE_NEEDS_UV) ? frame_from_tangent(n, mesh_dpdu(sd, s, &tri)) : frame_from_normal(n);
 #ifdef CLR_SURFACE_DERIVATIVES
     bool uv = (s->flags & SHAPE_NEEDS_UV) != 0u;
-    its->dpdu = uv ? mesh_dpduv(sd, s, &tri, &its->dpdv) : (float3)(0.0f);
-    if (!uv) its->dpdv = (float3)(0.0f);
+    its->dpdu = uv ? mesh_dpduv(sd, s, &tri, &its->dpdv) : v3s(0.0f);
+    if (!uv) its->dpdv = v3s(0.0f);
 #endif
     its->tri = h->prim;
     return true;
 }
 
-INLINE float mesh_sample(const SceneData* sd, __global const Shape* s, float3 ref, float2 u, ShapeSample* ss) {
+INLINE float mesh_sample(const SceneData* sd, __global const Shape* s, vec3 ref, float2 u, ShapeSample* ss) {
     __global const float* cdf = sd->cdf + s->cdf;
     uint i = shape_cdf_search(cdf, s->count, u.x);
     float lo = i > 0u ? cdf[i - 1u] : 0.0f, hi = cdf[i];
     float ux = hi > lo ? (u.x - lo) / (hi - lo) : 0.5f;
     ux = clampf(ux, 0.0f, 0x1.fffffep-1f);
     MeshTriangle tri = mesh_triangle(sd, sd->tri_refs[s->first + i]);
-    float3 p0 = tri.p0, p1 = tri.p1, p2 = tri.p2;
+    vec3 p0 = tri.p0, p1 = tri.p1, p2 = tri.p2;
     float2 b = square_to_uniform_triangle((float2)(ux, u.y));
     float b0 = 1.0f - b.x - b.y;
-    float3 p = p0 * b0 + p1 * b.x + p2 * b.y;
-    float3 ng = normalize3(cross3(p1 - p0, p2 - p0));
-    float3 n = mesh_shading_normal(sd, s, &tri, b0, b.x, b.y, ng);
+    vec3 p = p0 * b0 + p1 * b.x + p2 * b.y;
+    vec3 ng = normalize3(cross3(p1 - p0, p2 - p0));
+    vec3 n = mesh_shading_normal(sd, s, &tri, b0, b.x, b.y, ng);
     float pdf = shape_point_sample(ss, ref, p, n, ng, 1.0f / s->area);
     /* the uv mesh_surface gives at this point (textured emission) */
     ss->uv = (s->flags & SHAPE_HAS_UVS) ? sd->uvs[tri.i0] * b0 + sd->uvs[tri.i1] * b.x + sd->uvs[tri.i2] * b.y : b;
@@ -131,7 +131,7 @@ INLINE float mesh_sample(const SceneData* sd, __global const Shape* s, float3 re
 
 /* The density of the point p (hit along wi) that mesh_sample would give: per point, so a direction that meets
    the mesh several times has the sum of these as its density (the shadow ray settles which point is seen). */
-INLINE float mesh_pdf(const SceneData* sd, __global const Shape* s, float3 ref, float3 p, float3 ng, float3 wi) {
+INLINE float mesh_pdf(const SceneData* sd, __global const Shape* s, vec3 ref, vec3 p, vec3 ng, vec3 wi) {
     return shape_solid_angle_pdf(1.0f / s->area, ref, p, ng, wi);
 }
 

@@ -21,35 +21,35 @@ INLINE float sphere_one_minus_cos(float r2, float d2) {
 }
 
 /* v turned by the sphere's rotation rot (inverse: backwards), mirrored where w's sign bit says so. */
-INLINE float3 sphere_turn(float4 q, float3 v, float inverse) {
-    float3 c = cross3(q.xyz, v);
-    v = v + 2.0f * inverse * fabs(q.w) * c + 2.0f * cross3(q.xyz, c);
+INLINE vec3 sphere_turn(float4 q, vec3 v, float inverse) {
+    vec3 c = cross3(vxyz(q), v);
+    v = v + 2.0f * inverse * fabs(q.w) * c + 2.0f * cross3(vxyz(q), c);
     return (as_uint(q.w) >> 31) ? -v : v;
 }
 
 /* Mitsuba's dp/du at the unit normal n (direction only): along phi in the sphere's own frame. */
-INLINE float3 sphere_dpdu(__global const Shape* s, float3 n) {
+INLINE vec3 sphere_dpdu(__global const Shape* s, vec3 n) {
     float4 q = s->p.sphere.rot;
-    float3 l = sphere_turn(q, n, -1.0f);
-    return sphere_turn(q, (float3)(-l.y, l.x, 0.0f), 1.0f);
+    vec3 l = sphere_turn(q, n, -1.0f);
+    return sphere_turn(q, v3(-l.y, l.x, 0.0f), 1.0f);
 }
 
 #ifdef CLR_SURFACE_DERIVATIVES
 /* Mitsuba's dp/du and dp/dv at the unit normal n, with their lengths: 2 pi r (-y, x, 0) and
    pi r (z cos phi, z sin phi, -sin theta) in the sphere's own frame, (1, 0, 0) for dp/dv at the poles. */
-INLINE void sphere_derivatives(__global const Shape* s, float r, float3 n, float3* dpdu, float3* dpdv) {
+INLINE void sphere_derivatives(__global const Shape* s, float r, vec3 n, vec3* dpdu, vec3* dpdv) {
     float4 q = s->p.sphere.rot;
-    float3 l = sphere_turn(q, n, -1.0f);
+    vec3 l = sphere_turn(q, n, -1.0f);
     float rd = sqrt(l.x * l.x + l.y * l.y);
-    float3 dv = rd > 0.0f ? (float3)(l.z * l.x / rd, l.z * l.y / rd, -rd) : (float3)(1.0f, 0.0f, 0.0f);
-    *dpdu = sphere_turn(q, (float3)(-l.y, l.x, 0.0f), 1.0f) * (2.0f * M_PI_F_ * r);
+    vec3 dv = rd > 0.0f ? v3(l.z * l.x / rd, l.z * l.y / rd, -rd) : v3(1.0f, 0.0f, 0.0f);
+    *dpdu = sphere_turn(q, v3(-l.y, l.x, 0.0f), 1.0f) * (2.0f * M_PI_F_ * r);
     *dpdv = sphere_turn(q, dv, 1.0f) * (M_PI_F_ * r);
 }
 #endif
 
 /* uv of the unit normal n (only where SHAPE_NEEDS_UV: atan2 and acos cost more than the rest of a hit), taken in
    the sphere's own frame: n turned back by the quaternion rot (w's sign bit: a mirrored frame). */
-INLINE float2 sphere_uv(__global const Shape* s, float3 n) {
+INLINE float2 sphere_uv(__global const Shape* s, vec3 n) {
     if (!(s->flags & SHAPE_NEEDS_UV)) return (float2)(0.0f);
     n = sphere_turn(s->p.sphere.rot, n, -1.0f);
     float u = atan2(n.y, n.x) * INV_TWOPI;
@@ -59,32 +59,32 @@ INLINE float2 sphere_uv(__global const Shape* s, float3 n) {
 INLINE bool sphere_surface(const SceneData* sd, __global const Shape* s, const Ray* r, const Hit* h,
                            Intersection* its) {
     float4 sp = sd->spheres[s->first];
-    float3 p = r->o + r->d * h->t;
-    float3 n = normalize3(p - sp.xyz);
-    its->p = sp.xyz + n * sp.w; /* re-project: the hit point lies on the sphere to float precision */
-    its->off = SPAWN_OFFSET * (max3(fabs(sp.xyz)) + sp.w);
+    vec3 p = r->o + r->d * h->t;
+    vec3 n = normalize3(p - vxyz(sp));
+    its->p = vxyz(sp) + n * sp.w; /* re-project: the hit point lies on the sphere to float precision */
+    its->off = SPAWN_OFFSET * (max3(fabs(vxyz(sp))) + sp.w);
     its->po = its->p;
-    float3 nf = (s->flags & SHAPE_FLIP_NORMALS) ? -n : n;
+    vec3 nf = (s->flags & SHAPE_FLIP_NORMALS) ? -n : n;
     its->ng = nf;
     its->sh = (s->flags & SHAPE_NEEDS_UV) ? frame_from_tangent(nf, sphere_dpdu(s, n)) : frame_from_normal(nf);
     its->uv = sphere_uv(s, n);
 #ifdef CLR_SURFACE_DERIVATIVES
-    its->dpdu = its->dpdv = (float3)(0.0f);
+    its->dpdu = its->dpdv = v3s(0.0f);
     if (s->flags & SHAPE_NEEDS_UV) sphere_derivatives(s, sp.w, n, &its->dpdu, &its->dpdv);
 #endif
     its->tri = NONE;
     return true;
 }
 
-INLINE float sphere_sample(const SceneData* sd, __global const Shape* s, float3 ref, float2 u, ShapeSample* ss) {
+INLINE float sphere_sample(const SceneData* sd, __global const Shape* s, vec3 ref, float2 u, ShapeSample* ss) {
     float4 sp = sd->spheres[s->first];
-    float3 oc = sp.xyz - ref;
+    vec3 oc = vxyz(sp) - ref;
     float d2 = dot3(oc, oc), r2 = sp.w * sp.w;
     if (d2 > r2) {
         /* Cone sampling about the axis toward the centre; 1 - cos theta is formed directly (no cancellation for
            distant spheres). */
         float d = sqrt(d2);
-        float3 axis = oc * (1.0f / d);
+        vec3 axis = oc * (1.0f / d);
         float omc_max = sphere_one_minus_cos(r2, d2);
         float omc = u.x * omc_max;
         float cos_t = 1.0f - omc;
@@ -93,11 +93,11 @@ INLINE float sphere_sample(const SceneData* sd, __global const Shape* s, float3 
         float phi = 2.0f * M_PI_F_ * u.y;
         Frame f = frame_from_normal(axis);
         float2 sc = sin_cos(phi);
-        float3 wi = normalize3(to_world(&f, (float3)(sin_t * sc.y, sin_t * sc.x, cos_t)));
+        vec3 wi = normalize3(to_world(&f, v3(sin_t * sc.y, sin_t * sc.x, cos_t)));
         /* near intersection: t = d cos - sqrt(r^2 - d^2 sin^2) */
         float t = d * cos_t - safe_sqrt(r2 - d2 * sin2);
-        float3 n = normalize3(ref + wi * t - sp.xyz);
-        float3 p = sp.xyz + n * sp.w;
+        vec3 n = normalize3(ref + wi * t - vxyz(sp));
+        vec3 p = vxyz(sp) + n * sp.w;
         ss->uv = sphere_uv(s, n);
         if (s->flags & SHAPE_FLIP_NORMALS) n = -n;
         ss->wi = wi;
@@ -108,21 +108,21 @@ INLINE float sphere_sample(const SceneData* sd, __global const Shape* s, float3 
         return 1.0f / (2.0f * M_PI_F_ * omc_max);
     }
     /* inside: uniform on the sphere */
-    float3 n = square_to_uniform_sphere(u);
-    float3 nf = (s->flags & SHAPE_FLIP_NORMALS) ? -n : n;
-    float pdf = shape_point_sample(ss, ref, sp.xyz + n * sp.w, nf, nf, 1.0f / s->area);
+    vec3 n = square_to_uniform_sphere(u);
+    vec3 nf = (s->flags & SHAPE_FLIP_NORMALS) ? -n : n;
+    float pdf = shape_point_sample(ss, ref, vxyz(sp) + n * sp.w, nf, nf, 1.0f / s->area);
     ss->uv = sphere_uv(s, n);
     return pdf;
 }
 
-INLINE float sphere_pdf(const SceneData* sd, __global const Shape* s, float3 ref, float3 p, float3 ng, float3 wi) {
+INLINE float sphere_pdf(const SceneData* sd, __global const Shape* s, vec3 ref, vec3 p, vec3 ng, vec3 wi) {
     float4 sp = sd->spheres[s->first];
-    float3 oc = sp.xyz - ref;
+    vec3 oc = vxyz(sp) - ref;
     float d2 = dot3(oc, oc), r2 = sp.w * sp.w;
     if (d2 > r2) {
         /* the direction must meet the sphere: in front, closest approach within r (relative slack for rays that
            hit exactly at the silhouette) */
-        float3 c = cross3(wi, oc);
+        vec3 c = cross3(wi, oc);
         if (dot3(wi, oc) <= 0.0f || dot3(c, c) > r2 * 1.0001f) return 0.0f;
         return 1.0f / (2.0f * M_PI_F_ * sphere_one_minus_cos(r2, d2));
     }

@@ -6,7 +6,7 @@
 /* Work-item i's query: its wi, wo and uv, the side tables, and the surface's derivatives where the program carries
    them (kernels/derivatives.h): geo[4 i .. 4 i + 3] = dp/du, dp/dv, the geometric normal (local frame) and dp/du in
    world space. */
-INLINE BsdfQuery batch_query(float3 wi, float3 wo, float2 uv, __global const Texture* textures,
+INLINE BsdfQuery batch_query(vec3 wi, vec3 wo, float2 uv, __global const Texture* textures,
                              __global const BsdfTable* tables, __global const float4* geo, uint i) {
     BsdfQuery q;
     q.wi = wi;
@@ -17,15 +17,15 @@ INLINE BsdfQuery batch_query(float3 wi, float3 wo, float2 uv, __global const Tex
     q.textures = textures;
     q.tables = tables;
 #ifdef CLR_SURFACE_DERIVATIVES
-    q.dpdu = geo[4u * i].xyz;
-    q.dpdv = geo[4u * i + 1u].xyz;
-    q.ng = geo[4u * i + 2u].xyz;
-    q.dpdu_world = geo[4u * i + 3u].xyz;
+    q.dpdu = vxyz(geo[4u * i]);
+    q.dpdv = vxyz(geo[4u * i + 1u]);
+    q.ng = vxyz(geo[4u * i + 2u]);
+    q.dpdu_world = vxyz(geo[4u * i + 3u]);
 #endif
     return q;
 }
 
-/* One bsdf_sample per work-item. args[i] = (wi.xyz, bitcast row index); uvs[i] = uv. */
+/* One bsdf_sample per work-item. args[i] = (vxyz(wi), bitcast row index); uvs[i] = uv. */
 __kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const Texture* textures,
                                 __global const BsdfTable* tables, __global const float4* args,
                                 __global const float2* uvs, __global const float4* geo, uint n, uint first, uint seed,
@@ -37,8 +37,8 @@ __kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const Textur
     __global const Bsdf* b = rows + as_uint(a.w);
     Sampler s;
     sampler_init(&s, seed, first + i, 0u);
-    BsdfQuery q = batch_query(a.xyz, (float3)(0.0f), uvs[i], textures, tables, geo, i);
-    float3 w = bsdf_sample(b, &q, next2d(&s));
+    BsdfQuery q = batch_query(vxyz(a), v3s(0.0f), uvs[i], textures, tables, geo, i);
+    vec3 w = bsdf_sample(b, &q, next2d(&s));
     wo_out[i] = (float4)(q.wo, q.eta);
     w_out[i] = (float4)(w, 0.0f);
     f_out[i] = (float4)(bsdf_eval(b, &q), 0.0f);
@@ -56,7 +56,7 @@ __kernel void bsdf_pdf_eval_batch(__global const Bsdf* rows, __global const Text
     if (i >= n) return;
     float4 a = wi_in[i];
     __global const Bsdf* b = rows + as_uint(a.w);
-    BsdfQuery q = batch_query(a.xyz, wo_in[i].xyz, uvs[i], textures, tables, geo, i);
+    BsdfQuery q = batch_query(vxyz(a), vxyz(wo_in[i]), uvs[i], textures, tables, geo, i);
     pdf_out[i] = bsdf_pdf(b, &q);
     f_out[i] = (float4)(bsdf_eval(b, &q), bsdf_is_delta(b) ? 1.0f : 0.0f);
     alb_out[i] = (float4)(bsdf_albedo(b, &q), 0.0f);

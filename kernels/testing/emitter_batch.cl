@@ -10,7 +10,7 @@ __kernel void emitter_sample_batch(SCENE_ARGS, uint e, float4 ref, uint n, uint 
     Sampler s;
     sampler_init(&s, seed, first + i, 0u);
     EmitterQuery q;
-    q.ref = ref.xyz;
-    float3 w = emitter_sample(&sd, e, &q, next2d(&s));
+    q.ref = vxyz(ref);
+    vec3 w = emitter_sample(&sd, e, &q, next2d(&s));
     out[i] = (float4)(w, q.pdf);
 }

@@ -23,12 +23,12 @@ INLINE float warp_density(uint kind, float param, float4 p) {
         case 0: return square_to_uniform_square_pdf(p.xy);
         case 1: return square_to_tent_pdf(p.xy);
         case 2: return square_to_uniform_disk_pdf(p.xy);
-        case 3: return square_to_uniform_sphere_pdf(p.xyz);
-        case 4: return square_to_uniform_hemisphere_pdf(p.xyz);
-        case 5: return square_to_cosine_hemisphere_pdf(p.xyz);
-        case 6: return square_to_uniform_cone_pdf(p.xyz, param);
+        case 3: return square_to_uniform_sphere_pdf(vxyz(p));
+        case 4: return square_to_uniform_hemisphere_pdf(vxyz(p));
+        case 5: return square_to_cosine_hemisphere_pdf(vxyz(p));
+        case 6: return square_to_uniform_cone_pdf(vxyz(p), param);
         case 7: return square_to_uniform_triangle_pdf(p.xy);
-        default: return square_to_beckmann_pdf(p.xyz, param);
+        default: return square_to_beckmann_pdf(vxyz(p), param);
     }
 }
 __kernel void warp_sample_batch(uint kind, float param, uint n, uint first, uint seed, __global float4* out) {

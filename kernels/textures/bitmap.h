@@ -19,9 +19,9 @@ INLINE int bitmap_wrap(int i, int n, uint mode) {
 /* Float pixel coordinate to int, kept in a range where the wrap arithmetic cannot overflow. */
 INLINE int bitmap_floor(float x) { return (int)floor(clampf(x, -1.0e8f, 1.0e8f)); }
 
-INLINE float3 bitmap_texel(__global const Texture* t, int x, int y) {
+INLINE vec3 bitmap_texel(__global const Texture* t, int x, int y) {
     __global const float4* px = (__global const float4*)(t + 1);
-    return px[y * (int)t->p.bitmap.dims.x + x].xyz;
+    return vxyz(px[y * (int)t->p.bitmap.dims.x + x]);
 }
 
 /* The four texels around a (bilinear) lookup at texture coordinates (s, tt) and their weights a (along x) and b. */
@@ -42,7 +42,7 @@ INLINE BitmapTaps bitmap_taps(uint4 d, float s, float tt) {
     return k;
 }
 
-INLINE float3 bitmap_eval(__global const Texture* t, float2 uv) {
+INLINE vec3 bitmap_eval(__global const Texture* t, float2 uv) {
     uint4 d = t->p.bitmap.dims;
     int w = (int)d.x, h = (int)d.y;
     float4 r0 = t->p.bitmap.to_uv[0], r1 = t->p.bitmap.to_uv[1];
@@ -51,8 +51,8 @@ INLINE float3 bitmap_eval(__global const Texture* t, float2 uv) {
         return bitmap_texel(t, bitmap_wrap(bitmap_floor(s * (float)w), w, d.w),
                             bitmap_wrap(bitmap_floor(tt * (float)h), h, d.w));
     BitmapTaps k = bitmap_taps(d, s, tt);
-    float3 top = bitmap_texel(t, k.xa, k.ya) * (1.0f - k.a) + bitmap_texel(t, k.xb, k.ya) * k.a;
-    float3 bot = bitmap_texel(t, k.xa, k.yb) * (1.0f - k.a) + bitmap_texel(t, k.xb, k.yb) * k.a;
+    vec3 top = bitmap_texel(t, k.xa, k.ya) * (1.0f - k.a) + bitmap_texel(t, k.xb, k.ya) * k.a;
+    vec3 bot = bitmap_texel(t, k.xa, k.yb) * (1.0f - k.a) + bitmap_texel(t, k.xb, k.yb) * k.a;
     return top * (1.0f - k.b) + bot * k.b;
 }
 

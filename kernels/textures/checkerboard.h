@@ -4,11 +4,11 @@
 #ifndef CLRENDER_TEXTURES_CHECKERBOARD_H
 #define CLRENDER_TEXTURES_CHECKERBOARD_H
 
-INLINE float3 checkerboard_eval(__global const Texture* t, float2 uv) {
+INLINE vec3 checkerboard_eval(__global const Texture* t, float2 uv) {
     float4 c0 = t->p.checkerboard.c0, c1 = t->p.checkerboard.c1, m = t->p.checkerboard.uv2;
     float s = c0.w * uv.x + c1.w * uv.y + m.x, tt = m.y * uv.x + m.z * uv.y + m.w;
     bool ms = s - floor(s) > 0.5f, mt = tt - floor(tt) > 0.5f;
-    return ms == mt ? c0.xyz : c1.xyz;
+    return ms == mt ? vxyz(c0) : vxyz(c1);
 }
 
 #endif

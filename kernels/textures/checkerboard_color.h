@@ -4,13 +4,13 @@
 #ifndef CLRENDER_TEXTURES_CHECKERBOARD_COLOR_H
 #define CLRENDER_TEXTURES_CHECKERBOARD_COLOR_H
 
-INLINE float3 checkerboard_color_eval(__global const Texture* t, float2 uv) {
+INLINE vec3 checkerboard_color_eval(__global const Texture* t, float2 uv) {
     float4 ds = t->p.checkerboard_color.delta_scale;
     float cu = floor(uv.x / ds.z - ds.x);
     float cv = floor(uv.y / ds.w - ds.y);
     /* parity of a sum of floats that are integers: fmod keeps it exact for any magnitude */
     float s = fabs(fmod(cu + cv, 2.0f));
-    return s < 0.5f ? t->p.checkerboard_color.value1.xyz : t->p.checkerboard_color.value2.xyz;
+    return s < 0.5f ? vxyz(t->p.checkerboard_color.value1) : vxyz(t->p.checkerboard_color.value2);
 }
 
 #endif

@@ -3,8 +3,8 @@
 #ifndef CLRENDER_TEXTURES_RAWCONSTANT_H
 #define CLRENDER_TEXTURES_RAWCONSTANT_H
 
-INLINE float3 rawconstant_eval(__global const Texture* t, float2 uv) {
-    return t->p.rawconstant.value.xyz;
+INLINE vec3 rawconstant_eval(__global const Texture* t, float2 uv) {
+    return vxyz(t->p.rawconstant.value);
 }
 
 #endif

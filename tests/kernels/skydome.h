@@ -4,24 +4,24 @@
 #define CLRENDER_TEST_SKYDOME_H
 #include "emitters/common.h"
 
-INLINE float3 skydome_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
-    float3 h = square_to_uniform_hemisphere(u);           /* about +z */
-    float3 wi = (float3)(h.x, h.z, h.y);                    /* about +y */
+INLINE vec3 skydome_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
+    vec3 h = square_to_uniform_hemisphere(u);           /* about +z */
+    vec3 wi = v3(h.x, h.z, h.y);                    /* about +y */
     q->wi = wi;
     q->p = q->ref + wi * emitter_far(sd, q->ref);
     q->n = -wi;
     q->ng = -wi;
     q->dist = INFINITY;
     q->pdf = 0.5f * INV_PI;
-    return em->p.skydome.radiance.xyz * (2.0f * M_PI_F_);
+    return vxyz(em->p.skydome.radiance) * (2.0f * M_PI_F_);
 }
 
 INLINE float skydome_pdf(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
     return q->wi.y > 0.0f ? 0.5f * INV_PI : 0.0f;
 }
 
-INLINE float3 skydome_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
-    return q->wi.y > 0.0f ? em->p.skydome.radiance.xyz : (float3)(0.0f);
+INLINE vec3 skydome_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
+    return q->wi.y > 0.0f ? vxyz(em->p.skydome.radiance) : v3s(0.0f);
 }
 
 #endif

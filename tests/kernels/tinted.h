@@ -5,9 +5,9 @@
 #include "bsdfs/common.h"
 #include "warp.h"
 
-INLINE float3 tinted_eval(__global const Bsdf* b, const BsdfQuery* q) {
-    if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return (float3)(0.0f);
-    return b->p.tinted.albedo.xyz * b->p.tinted.tint * INV_PI;
+INLINE vec3 tinted_eval(__global const Bsdf* b, const BsdfQuery* q) {
+    if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return v3s(0.0f);
+    return vxyz(b->p.tinted.albedo) * b->p.tinted.tint * INV_PI;
 }
 
 INLINE float tinted_pdf(__global const Bsdf* b, const BsdfQuery* q) {
@@ -15,12 +15,12 @@ INLINE float tinted_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     return q->wo.z * INV_PI;
 }
 
-INLINE float3 tinted_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
+INLINE vec3 tinted_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     q->measure = MEASURE_SOLID_ANGLE;
     q->eta = 1.0f;
     q->wo = square_to_cosine_hemisphere(u);
-    if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return (float3)(0.0f);
-    return b->p.tinted.albedo.xyz * b->p.tinted.tint;
+    if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return v3s(0.0f);
+    return vxyz(b->p.tinted.albedo) * b->p.tinted.tint;
 }
 
 #endif
