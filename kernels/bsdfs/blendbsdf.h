@@ -13,8 +13,8 @@ INLINE float blendbsdf_weight(__global const Bsdf* b, const BsdfQuery* q) {
 INLINE vec3 COMPOSITE_FN(blendbsdf_eval)(__global const Bsdf* b, const BsdfQuery* q) {
     float w = blendbsdf_weight(b, q);
     vec3 f = v3s(0.0f);
-    if (w < 1.0f) f += (1.0f - w) * CHILD_FN(eval)(b + b->p.blendbsdf.first, q);
-    if (w > 0.0f) f += w * CHILD_FN(eval)(b + b->p.blendbsdf.second, q);
+    if (w < 1.0f) f = vmad(CHILD_FN(eval)(b + b->p.blendbsdf.first, q), 1.0f - w, f);
+    if (w > 0.0f) f = vmad(CHILD_FN(eval)(b + b->p.blendbsdf.second, q), w, f);
     return f;
 }
 
@@ -41,6 +41,7 @@ INLINE vec3 COMPOSITE_FN(blendbsdf_sample)(__global const Bsdf* b, BsdfQuery* q,
 
 INLINE vec3 COMPOSITE_FN(blendbsdf_albedo)(__global const Bsdf* b, const BsdfQuery* q) {
     float w = blendbsdf_weight(b, q);
-    return (1.0f - w) * CHILD_FN(albedo)(b + b->p.blendbsdf.first, q) +
-           w * CHILD_FN(albedo)(b + b->p.blendbsdf.second, q);
+    vec3 first = CHILD_FN(albedo)(b + b->p.blendbsdf.first, q);
+    vec3 second = CHILD_FN(albedo)(b + b->p.blendbsdf.second, q);
+    return vadd(vscale(first, 1.0f - w), vscale(second, w));
 }

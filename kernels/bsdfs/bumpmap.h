@@ -12,7 +12,7 @@ INLINE Frame bumpmap_frame(__global const Bsdf* b, const BsdfQuery* q) {
     float2 g = b->p.bumpmap.scale * bitmap_grad(q->textures + b->p.bumpmap.tex, q->uv);
     vec3 du = v3(q->dpdu.x, q->dpdu.y, g.x), dv = v3(q->dpdv.x, q->dpdv.y, g.y);
     vec3 n = cross3(du, dv);
-    if (dot3(q->ng, n) < 0.0f) n = -n;
+    if (dot3(q->ng, n) < 0.0f) n = vneg(n);
     return perturbed_frame(n, q->wi, q->dpdu_world, b->p.bumpmap.options);
 }
 #endif

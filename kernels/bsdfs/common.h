@@ -48,7 +48,7 @@ INLINE vec3 reflect_local(vec3 w) { return v3(-w.x, -w.y, w.z); }
 /* The weight f |cos| / pdf of a direction sampled from a BSDF's non-delta part, given eval (f) and pdf there;
    0 where the pdf is 0 or NaN: no sample lands there, and f may be infinite or NaN. */
 INLINE vec3 bsdf_sample_weight(vec3 f, float cos_o, float pdf) {
-    return pdf > 0.0f ? f * (fabs(cos_o) / pdf) : v3s(0.0f);
+    return pdf > 0.0f ? vscale(f, fabs(cos_o) / pdf) : v3s(0.0f);
 }
 
 #endif

@@ -30,8 +30,8 @@ INLINE vec3 dielectric_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
        the normal part goes to the other side. */
     q->wo = v3(-r * q->wi.x, -r * q->wi.y, outside ? -cos_t : cos_t);
     q->eta = eta_t / eta_i;
-    return (r * r) * param_color(q, b->p.dielectric.specular_transmittance,
-                                 b->p.dielectric.specular_transmittance_tex);
+    vec3 t = param_color(q, b->p.dielectric.specular_transmittance, b->p.dielectric.specular_transmittance_tex);
+    return vscale(t, r * r);
 }
 
 #endif

@@ -8,7 +8,7 @@
 
 INLINE vec3 diffuse_eval(__global const Bsdf* b, const BsdfQuery* q) {
     if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return v3s(0.0f);
-    return param_color(q, b->p.diffuse.albedo, b->p.diffuse.albedo_tex) * INV_PI;
+    return vscale(param_color(q, b->p.diffuse.albedo, b->p.diffuse.albedo_tex), INV_PI);
 }
 
 INLINE float diffuse_pdf(__global const Bsdf* b, const BsdfQuery* q) {

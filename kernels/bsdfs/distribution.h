@@ -147,14 +147,15 @@ INLINE vec3 mf_sample(MfDist d, vec3 wi, float2 u) {
     if (d.type == MF_GGX) {
         /* Heitz 2018: a point on the projected hemisphere seen from v, lifted back onto it */
         float l2 = v.x * v.x + v.y * v.y;
-        vec3 t1 = l2 > 0.0f ? v3(-v.y, v.x, 0.0f) * (1.0f / sqrt(l2)) : v3(1.0f, 0.0f, 0.0f);
+        vec3 t1 = l2 > 0.0f ? vscale(v3(-v.y, v.x, 0.0f), 1.0f / sqrt(l2)) : v3(1.0f, 0.0f, 0.0f);
         vec3 t2 = cross3(v, t1);
         float r = sqrt(u.x);
         float2 sc = sin_cos(2.0f * M_PI_F_ * u.y);
         float p1 = r * sc.y, p2 = r * sc.x;
         float h = 0.5f * (1.0f + v.z);
         p2 = (1.0f - h) * safe_sqrt(1.0f - p1 * p1) + h * p2;
-        vec3 n = p1 * t1 + p2 * t2 + safe_sqrt(1.0f - p1 * p1 - p2 * p2) * v;
+        float p3 = safe_sqrt(1.0f - p1 * p1 - p2 * p2);
+        vec3 n = vadd(vadd(vscale(t1, p1), vscale(t2, p2)), vscale(v, p3));
         return normalize3(v3(d.ax * n.x, d.ay * n.y, maxf(n.z, 1e-6f)));
     }
     float2 sl = mf_beckmann_visible_slopes(v.z, u);
@@ -179,14 +180,14 @@ INLINE float fresnel_conductor1(float c, float eta, float k) {
 }
 INLINE vec3 fresnel_conductor(float c, vec3 eta, vec3 k) {
     return v3(fresnel_conductor1(c, eta.x, k.x), fresnel_conductor1(c, eta.y, k.y),
-                    fresnel_conductor1(c, eta.z, k.z));
+              fresnel_conductor1(c, eta.z, k.z));
 }
 
 /* Refraction of wi about the microfacet m: r = eta_i / eta_t (wi's side over wo's side), cos_t = |cos| of the
    refracted direction (from fresnel_dielectric). */
 INLINE vec3 refract_about(vec3 wi, vec3 m, float r, float cos_t) {
     float c = dot3(wi, m);
-    return (r * c - (c >= 0.0f ? cos_t : -cos_t)) * m - r * wi;
+    return vsub(vscale(m, r * c - (c >= 0.0f ? cos_t : -cos_t)), vscale(wi, r));
 }
 
 /* A third uniform number for a choice made after u drew the microfacet (the BSDF interface has two sample

@@ -10,7 +10,7 @@ INLINE float mask_opacity(__global const Bsdf* b, const BsdfQuery* q) {
 
 INLINE vec3 COMPOSITE_FN(mask_eval)(__global const Bsdf* b, const BsdfQuery* q) {
     float a = mask_opacity(b, q);
-    return a > 0.0f ? a * CHILD_FN(eval)(b + b->p.mask.child, q) : v3s(0.0f);
+    return a > 0.0f ? vscale(CHILD_FN(eval)(b + b->p.mask.child, q), a) : v3s(0.0f);
 }
 
 INLINE float COMPOSITE_FN(mask_pdf)(__global const Bsdf* b, const BsdfQuery* q) {
@@ -21,7 +21,7 @@ INLINE float COMPOSITE_FN(mask_pdf)(__global const Bsdf* b, const BsdfQuery* q) 
 INLINE vec3 COMPOSITE_FN(mask_sample)(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     float a = mask_opacity(b, q);
     if (u.x >= a) {
-        q->wo = -q->wi;
+        q->wo = vneg(q->wi);
         q->eta = 1.0f;
         q->measure = MEASURE_DISCRETE;
         return v3s(1.0f);

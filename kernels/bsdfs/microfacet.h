@@ -26,19 +26,19 @@ INLINE vec3 microfacet_eval(__global const Bsdf* b, const BsdfQuery* q) {
     if (wi.z <= 0.0f || wo.z <= 0.0f) return v3s(0.0f);
     float alpha = b->p.microfacet.alpha, eta_int = b->p.microfacet.int_ior, eta_ext = b->p.microfacet.ext_ior;
     float ks = b->p.microfacet.ks;
-    vec3 h = normalize3(wi + wo);
+    vec3 h = normalize3(vadd(wi, wo));
     float cos_t;
     float F = fresnel_dielectric(dot3(h, wi), eta_ext, eta_int, &cos_t);
     float spec = beckmann_d(h, alpha) * F * microfacet_g1(wi, h, alpha) * microfacet_g1(wo, h, alpha)
                  / (4.0f * wi.z * wo.z);
-    return param_color(q, b->p.microfacet.kd, b->p.microfacet.kd_tex) * INV_PI + v3s(ks * spec);
+    return vadds(vscale(param_color(q, b->p.microfacet.kd, b->p.microfacet.kd_tex), INV_PI), ks * spec);
 }
 
 INLINE float microfacet_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     vec3 wi = q->wi, wo = q->wo;
     if (wi.z <= 0.0f || wo.z <= 0.0f) return 0.0f;
     float alpha = b->p.microfacet.alpha, ks = b->p.microfacet.ks;
-    vec3 h = normalize3(wi + wo);
+    vec3 h = normalize3(vadd(wi, wo));
     /* dwo = 4 |h.wo| dh: the Jacobian of reflecting wi about h */
     float spec = square_to_beckmann_pdf(h, alpha) / (4.0f * fabs(dot3(h, wo)));
     return ks * spec + (1.0f - ks) * wo.z * INV_PI;
@@ -51,7 +51,7 @@ INLINE vec3 microfacet_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     if (u.x < ks) {
         u.x = u.x / ks;   /* re-use the sample dimension: uniform again on [0,1) */
         vec3 h = square_to_beckmann(u, alpha);
-        q->wo = 2.0f * dot3(q->wi, h) * h - q->wi;
+        q->wo = vsub(vscale(h, 2.0f * dot3(q->wi, h)), q->wi);
     } else {
         u.x = (u.x - ks) / (1.0f - ks);
         q->wo = square_to_cosine_hemisphere(u);

@@ -6,7 +6,7 @@
 #include "perturb.h"
 INLINE Frame normalmap_frame(__global const Bsdf* b, const BsdfQuery* q) {
     vec3 c = param_color(q, b->p.normalmap.normalmap, b->p.normalmap.normalmap_tex);
-    return perturbed_frame(2.0f * c - 1.0f, q->wi, v3(1.0f, 0.0f, 0.0f), b->p.normalmap.options);
+    return perturbed_frame(vsub(vscale(c, 2.0f), v3s(1.0f)), q->wi, v3(1.0f, 0.0f, 0.0f), b->p.normalmap.options);
 }
 #endif
 

@@ -24,7 +24,7 @@
 INLINE vec3 perturb_unit_or(vec3 v, vec3 fallback) {
     float l2 = dot3(v, v);
     float inv = 1.0f / sqrt(l2);
-    return l2 > 0.0f && isfinite(inv) ? v * inv : fallback;
+    return l2 > 0.0f && isfinite(inv) ? vscale(v, inv) : fallback;
 }
 
 INLINE Frame perturbed_frame(vec3 n, vec3 wi, vec3 tangent, uint options) {
@@ -32,8 +32,8 @@ INLINE Frame perturbed_frame(vec3 n, vec3 wi, vec3 tangent, uint options) {
     Frame f;
     f.n = perturb_unit_or(n, v3(0.0f, 0.0f, 1.0f));
     vec3 x = v3(1.0f, 0.0f, 0.0f);
-    f.s = perturb_unit_or(tangent - f.n * dot3(f.n, tangent),
-                          perturb_unit_or(x - f.n * f.n.x, v3(0.0f, 1.0f, 0.0f)));
+    f.s = perturb_unit_or(vsub(tangent, vscale(f.n, dot3(f.n, tangent))),
+                          perturb_unit_or(vsub(x, vscale(f.n, f.n.x)), v3(0.0f, 1.0f, 0.0f)));
     f.t = cross3(f.n, f.s);
     return f;
 }
@@ -65,12 +65,12 @@ INLINE float perturb_shadowing(uint options, const Frame* f, vec3 wo) {
    eval: the child's f holds no cosine, which the integrators take of wo in this frame, not the child's.
    normal: the perturbed normal (aov's sh_normal), a wrapper's own, not its child's (Mitsuba 3.9's sh_frame). */
 #define PERTURB_WRAPPER(NAME)                                                                                    \
-INLINE vec3 COMPOSITE_FN(NAME##_eval)(__global const Bsdf* b, const BsdfQuery* q) {                            \
+INLINE vec3 COMPOSITE_FN(NAME##_eval)(__global const Bsdf* b, const BsdfQuery* q) {                              \
     Frame f = NAME##_frame(b, q);                                                                                \
     BsdfQuery c;                                                                                                 \
-    if (!perturb_query(&f, q, &c)) return v3s(0.0f);                                                        \
-    return CHILD_FN(eval)(b + b->p.NAME.child, &c) *                                                             \
-           (fabs(c.wo.z) / fabs(q->wo.z) * perturb_shadowing(b->p.NAME.options, &f, q->wo));                    \
+    if (!perturb_query(&f, q, &c)) return v3s(0.0f);                                                             \
+    return vscale(CHILD_FN(eval)(b + b->p.NAME.child, &c),                                                       \
+                  fabs(c.wo.z) / fabs(q->wo.z) * perturb_shadowing(b->p.NAME.options, &f, q->wo));               \
 }                                                                                                                \
 INLINE float COMPOSITE_FN(NAME##_pdf)(__global const Bsdf* b, const BsdfQuery* q) {                              \
     Frame f = NAME##_frame(b, q);                                                                                \
@@ -78,21 +78,21 @@ INLINE float COMPOSITE_FN(NAME##_pdf)(__global const Bsdf* b, const BsdfQuery* q
     if (!perturb_query(&f, q, &c)) return 0.0f;                                                                  \
     return CHILD_FN(pdf)(b + b->p.NAME.child, &c);                                                               \
 }                                                                                                                \
-INLINE vec3 COMPOSITE_FN(NAME##_sample)(__global const Bsdf* b, BsdfQuery* q, float2 u) {                      \
+INLINE vec3 COMPOSITE_FN(NAME##_sample)(__global const Bsdf* b, BsdfQuery* q, float2 u) {                        \
     Frame f = NAME##_frame(b, q);                                                                                \
     BsdfQuery c;                                                                                                 \
     perturb_query(&f, q, &c);                                                                                    \
-    vec3 w = CHILD_FN(sample)(b + b->p.NAME.child, &c, u);                                                     \
+    vec3 w = CHILD_FN(sample)(b + b->p.NAME.child, &c, u);                                                       \
     q->wo = to_world(&f, c.wo);                                                                                  \
     q->eta = c.eta;                                                                                              \
     q->measure = c.measure;                                                                                      \
-    if (!(c.wo.z * q->wo.z > 0.0f)) return v3s(0.0f);                                                       \
-    return w * perturb_shadowing(b->p.NAME.options, &f, q->wo);                                                  \
+    if (!(c.wo.z * q->wo.z > 0.0f)) return v3s(0.0f);                                                            \
+    return vscale(w, perturb_shadowing(b->p.NAME.options, &f, q->wo));                                           \
 }                                                                                                                \
-INLINE vec3 COMPOSITE_FN(NAME##_albedo)(__global const Bsdf* b, const BsdfQuery* q) {                          \
+INLINE vec3 COMPOSITE_FN(NAME##_albedo)(__global const Bsdf* b, const BsdfQuery* q) {                            \
     return CHILD_FN(albedo)(b + b->p.NAME.child, q);                                                             \
 }                                                                                                                \
-INLINE vec3 COMPOSITE_FN(NAME##_normal)(__global const Bsdf* b, const BsdfQuery* q) {                          \
+INLINE vec3 COMPOSITE_FN(NAME##_normal)(__global const Bsdf* b, const BsdfQuery* q) {                            \
     return NAME##_frame(b, q).n;                                                                                 \
 }
 

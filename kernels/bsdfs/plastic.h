@@ -24,14 +24,14 @@ INLINE float plastic_prob_specular(float f_i, float s) {
 INLINE vec3 plastic_diffuse_colour(const BsdfQuery* q, __global const Bsdf* b) {
     vec3 d = param_color(q, b->p.plastic.diffuse, b->p.plastic.diffuse_tex);
     float fdr = b->p.plastic.fdr_int;
-    return b->p.plastic.nonlinear ? d / (v3s(1.0f) - d * fdr) : d / (1.0f - fdr);
+    return b->p.plastic.nonlinear ? vdiv(d, vsub(v3s(1.0f), vscale(d, fdr))) : vdivs(d, 1.0f - fdr);
 }
 
 INLINE vec3 plastic_eval(__global const Bsdf* b, const BsdfQuery* q) {
     if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return v3s(0.0f);
     float eta = b->p.plastic.eta;
     float t = (1.0f - plastic_fresnel(q->wi.z, eta)) * (1.0f - plastic_fresnel(q->wo.z, eta));
-    return plastic_diffuse_colour(q, b) * (t * INV_PI / (eta * eta));
+    return vscale(plastic_diffuse_colour(q, b), t * INV_PI / (eta * eta));
 }
 
 INLINE float plastic_pdf(__global const Bsdf* b, const BsdfQuery* q) {
@@ -49,7 +49,7 @@ INLINE vec3 plastic_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     if (u.x < ps) {
         q->wo = reflect_local(q->wi);
         q->measure = MEASURE_DISCRETE;
-        return param_color(q, b->p.plastic.specular, b->p.plastic.specular_tex) * (f_i / ps);
+        return vscale(param_color(q, b->p.plastic.specular, b->p.plastic.specular_tex), f_i / ps);
     }
     q->wo = square_to_cosine_hemisphere((float2)((u.x - ps) / (1.0f - ps), u.y));
     if (q->wo.z <= 0.0f) return v3s(0.0f);

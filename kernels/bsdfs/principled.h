@@ -31,8 +31,8 @@ INLINE MfDist pr_dist(__global const Bsdf* b, const BsdfQuery* q) {
 
 /* The half vector of (wi, wo) (reflect: wo on wi's side; else refracted at eta_p), turned to the upper hemisphere */
 INLINE vec3 pr_half(vec3 wi, vec3 wo, float eta_p, bool reflect) {
-    vec3 h = normalize3(wi + wo * (reflect ? 1.0f : eta_p));
-    return h.z < 0.0f ? -h : h;
+    vec3 h = normalize3(vadd(wi, vscale(wo, reflect ? 1.0f : eta_p)));
+    return h.z < 0.0f ? vneg(h) : h;
 }
 
 INLINE float pr_gtr1_d(float alpha, float cos_t) {
@@ -97,19 +97,21 @@ INLINE vec3 principled_eval(__global const Bsdf* b, const BsdfQuery* q) {
         if (front) {
             float spec_tint = PARAM_FLOAT(q, b->p.principled, spec_tint);
             float lum = luminance(base);
-            vec3 tint = lum > 0.0f ? base / lum : v3s(1.0f);
+            vec3 tint = lum > 0.0f ? vdivs(base, lum) : v3s(1.0f);
             float eta_it = wih >= 0.0f ? eta : 1.0f / eta;
             float r0 = (eta_it - 1.0f) / (eta_it + 1.0f);
-            Fp = (1.0f - metallic) * (1.0f - spec_tint) * F + metallic * pr_schlick(base, wih, eta)
-                 + (1.0f - metallic) * spec_tint * pr_schlick(tint * (r0 * r0), wih, eta);
+            vec3 s_base = pr_schlick(base, wih, eta);
+            vec3 s_tint = pr_schlick(vscale(tint, r0 * r0), wih, eta);
+            Fp = vadd(v3s((1.0f - metallic) * (1.0f - spec_tint) * F), vscale(s_base, metallic));
+            Fp = vadd(Fp, vscale(s_tint, (1.0f - metallic) * spec_tint));
         } else {
             Fp = v3s(bsdf * F);
         }
-        value += Fp * (DG / (4.0f * aci * aco));
+        value = vmad(Fp, DG / (4.0f * aci * aco), value);
     }
     if (refract && compatible && bsdf > 0.0f && F < 1.0f) {
         float den = wih + eta_p * woh;
-        value += sqrt(base) * (bsdf * fabs((1.0f - F) * DG * wih * woh / (ci * den * den)) / aco);
+        value = vmad(vsqrt(base), bsdf * fabs((1.0f - F) * DG * wih * woh / (ci * den * den)) / aco, value);
     }
     if (!(reflect && front)) return value;
 
@@ -117,7 +119,7 @@ INLINE vec3 principled_eval(__global const Bsdf* b, const BsdfQuery* q) {
     if (compatible && clearcoat > 0.0f) {
         float Fcc = pr_schlick(v3s(0.04f), wih, eta).x;
         float Dcc = pr_gtr1_d(pr_cc_alpha(b, q), h.z);
-        value += v3s(0.25f * clearcoat * Fcc * Dcc * pr_ggx1(wi, h, 0.25f) * pr_ggx1(wo, h, 0.25f));
+        value = vadds(value, 0.25f * clearcoat * Fcc * Dcc * pr_ggx1(wi, h, 0.25f) * pr_ggx1(wo, h, 0.25f));
     }
     float Fo = pr_sw(aco), Fi = pr_sw(aci);
     if (brdf > 0.0f) {
@@ -132,7 +134,7 @@ INLINE vec3 principled_eval(__global const Bsdf* b, const BsdfQuery* q) {
             float f_ss = 1.25f * (fss * (1.0f / (aco + aci) - 0.5f) + 0.5f);
             f += flatness * (f_ss - f);
         }
-        value += base * (brdf * INV_PI * f);
+        value = vmad(base, brdf * INV_PI * f, value);
     }
     float sheen = PARAM_FLOAT(q, b->p.principled, sheen);
     if (sheen > 0.0f && 1.0f - metallic > 0.0f) {
@@ -140,10 +142,10 @@ INLINE vec3 principled_eval(__global const Bsdf* b, const BsdfQuery* q) {
         vec3 c = v3s(1.0f);
         if (sheen_tint != 0.0f) {
             float lum = luminance(base);
-            vec3 tint = lum > 0.0f ? base / lum : v3s(1.0f);
-            c += sheen_tint * (tint - c);
+            vec3 tint = lum > 0.0f ? vdivs(base, lum) : v3s(1.0f);
+            c = vlerp(c, tint, sheen_tint);
         }
-        value += c * (sheen * (1.0f - metallic) * pr_sw(fabs(woh)));
+        value = vmad(c, sheen * (1.0f - metallic) * pr_sw(fabs(woh)), value);
     }
     return value;
 }
@@ -172,7 +174,7 @@ INLINE float principled_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     float pdf = 0.0f;
     bool compatible = pr_compatible(h, wi, wo, reflect);
     if (compatible && (reflect || refract)) {
-        float pm = mf_pdf(pr_dist(b, q), front ? wi : -wi, h) * dwh;
+        float pm = mf_pdf(pr_dist(b, q), front ? wi : vneg(wi), h) * dwh;
         pdf += (reflect ? p.x : p.y) * pm;
         if (reflect && p.z > 0.0f) pdf += p.z * h.z * pr_gtr1_d(pr_cc_alpha(b, q), h.z) * dwh;
     }
@@ -206,17 +208,17 @@ INLINE vec3 principled_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
         float st = safe_sqrt(1.0f - c2), ct = safe_sqrt(c2);
         float2 sc = sin_cos(2.0f * M_PI_F_ * ux);
         vec3 m = v3(sc.y * st, sc.x * st, ct);
-        wo = 2.0f * dot3(wi, m) * m - wi;
+        wo = vsub(vscale(m, 2.0f * dot3(wi, m)), wi);
         if (!(dot3(wi, m) > 0.0f && dot3(wo, m) > 0.0f && wo.z > 0.0f)) return v3s(0.0f);
     } else {
         float2 v = (float2)(ps < 1.0f ? minf((u.x - p.w - p.z) / ps, 0.99999994f) : u.x, u.y);
-        vec3 m = mf_sample(pr_dist(b, q), front ? wi : -wi, v);
+        vec3 m = mf_sample(pr_dist(b, q), front ? wi : vneg(wi), v);
         float wim = dot3(wi, m), cos_t;
         float F = fresnel_dielectric(wim, 1.0f, eta, &cos_t);
         float bsdf = (1.0f - metallic) * spec_trans;
         float p_refl = front ? 1.0f - bsdf * (1.0f - F) : F;
         if (mf_extra_uniform(u) < p_refl) {
-            wo = 2.0f * wim * m - wi;
+            wo = vsub(vscale(m, 2.0f * wim), wi);
             if (!pr_compatible(m, wi, wo, true) || !(wo.z * ci > 0.0f)) return v3s(0.0f);
         } else {
             float r = wim >= 0.0f ? 1.0f / eta : eta;

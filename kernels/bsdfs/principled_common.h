@@ -35,13 +35,13 @@ INLINE vec3 pr_schlick(vec3 r0, float cos_i, float eta) {
         c = safe_sqrt(1.0f - (1.0f - cos_i * cos_i) * r * r);
     }
     float w = pr_sw(c);
-    return r0 + (1.0f - r0) * w;
+    return vmad(vsub(v3s(1.0f), r0), w, r0);
 }
 
 /* Mitsuba's mac_mic_compatibility: wi on the front of h (h as seen from wi's side) and wo on the front (reflection)
    or the back (refraction) */
 INLINE bool pr_compatible(vec3 h, vec3 wi, vec3 wo, bool reflect) {
-    vec3 hs = wi.z > 0.0f ? h : -h;
+    vec3 hs = wi.z > 0.0f ? h : vneg(h);
     float o = dot3(wo, hs);
     return dot3(wi, hs) > 0.0f && (reflect ? o > 0.0f : o < 0.0f);
 }

@@ -39,14 +39,14 @@ INLINE float4 pt_probs(__global const Bsdf* b, float st, float dt) {
 INLINE vec3 principledthin_eval(__global const Bsdf* b, const BsdfQuery* q) {
     vec3 wi = q->wi, wo = q->wo;
     if (wi.z == 0.0f) return v3s(0.0f);
-    if (wi.z < 0.0f) { wi = -wi; wo = -wo; }
+    if (wi.z < 0.0f) { wi = vneg(wi); wo = vneg(wo); }
     float ci = wi.z, co = wo.z, aco = fabs(co);
     bool reflect = co > 0.0f, refract = co < 0.0f;
     if (!(reflect || refract)) return v3s(0.0f);
     float st = PARAM_FLOAT(q, b->p.principledthin, spec_trans);
     float dt = 0.5f * PARAM_FLOAT(q, b->p.principledthin, diff_trans);
     vec3 base = param_color(q, b->p.principledthin.base_color, b->p.principledthin.base_color_tex);
-    vec3 h = normalize3(wi + v3(wo.x, wo.y, aco));
+    vec3 h = normalize3(vadd(wi, v3(wo.x, wo.y, aco)));
     vec3 value = v3s(0.0f);
     if (st > 0.0f && pr_compatible(h, wi, wo, reflect)) {
         float eta = PARAM_FLOAT(q, b->p.principledthin, eta), wih = dot3(wi, h), cos_t;
@@ -56,12 +56,12 @@ INLINE vec3 principledthin_eval(__global const Bsdf* b, const BsdfQuery* q) {
         if (reflect) {
             float spec_tint = PARAM_FLOAT(q, b->p.principledthin, spec_tint);
             float lum = luminance(base);
-            vec3 tint = lum > 0.0f ? base / lum : v3s(1.0f);
+            vec3 tint = lum > 0.0f ? vdivs(base, lum) : v3s(1.0f);
             float r0 = (eta - 1.0f) / (eta + 1.0f);
-            vec3 Fs = pr_schlick(tint * (r0 * r0), wih, eta);
-            value += (st * DG) * (F + spec_tint * (Fs - F));
+            vec3 Fs = pr_schlick(vscale(tint, r0 * r0), wih, eta);
+            value = vmad(vlerp(v3s(F), Fs, spec_tint), st * DG, value);
         } else {
-            value += base * (st * (1.0f - F) * DG);
+            value = vmad(base, st * (1.0f - F) * DG, value);
         }
     }
     if (reflect && st < 1.0f && dt < 1.0f) {
@@ -78,27 +78,27 @@ INLINE vec3 principledthin_eval(__global const Bsdf* b, const BsdfQuery* q) {
             f += flatness * (f_ss - f);
         }
         float w = (1.0f - st) * (1.0f - dt);
-        value += base * (w * INV_PI * f);
+        value = vmad(base, w * INV_PI * f, value);
         float sheen = PARAM_FLOAT(q, b->p.principledthin, sheen);
         if (sheen != 0.0f) {
             float sheen_tint = PARAM_FLOAT(q, b->p.principledthin, sheen_tint);
             vec3 c = v3s(1.0f);
             if (sheen_tint != 0.0f) {
                 float lum = luminance(base);
-                vec3 tint = lum > 0.0f ? base / lum : v3s(1.0f);
-                c += sheen_tint * (tint - c);
+                vec3 tint = lum > 0.0f ? vdivs(base, lum) : v3s(1.0f);
+                c = vlerp(c, tint, sheen_tint);
             }
-            value += c * (sheen * w * pr_sw(fabs(woh)));
+            value = vmad(c, sheen * w * pr_sw(fabs(woh)), value);
         }
     }
-    if (refract && st < 1.0f && dt > 0.0f) value += base * ((1.0f - st) * dt * INV_PI);
+    if (refract && st < 1.0f && dt > 0.0f) value = vmad(base, (1.0f - st) * dt * INV_PI, value);
     return value;
 }
 
 INLINE float principledthin_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     vec3 wi = q->wi, wo = q->wo;
     if (wi.z == 0.0f) return 0.0f;
-    if (wi.z < 0.0f) { wi = -wi; wo = -wo; }
+    if (wi.z < 0.0f) { wi = vneg(wi); wo = vneg(wo); }
     float co = wo.z;
     bool reflect = co > 0.0f, refract = co < 0.0f;
     float4 p = pt_probs(b, PARAM_FLOAT(q, b->p.principledthin, spec_trans),
@@ -106,7 +106,7 @@ INLINE float principledthin_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     float pdf = 0.0f;
     if ((reflect && p.x > 0.0f) || (refract && p.y > 0.0f)) {
         vec3 wr = v3(wo.x, wo.y, fabs(co));
-        vec3 h = normalize3(wi + wr);
+        vec3 h = normalize3(vadd(wi, wr));
         if (pr_compatible(h, wi, wo, reflect))
             pdf += (reflect ? p.x : p.y) * mf_pdf(pt_dist(b, q, !reflect), wi, h) / fabs(4.0f * dot3(wr, h));
     }
@@ -121,7 +121,7 @@ INLINE vec3 principledthin_sample(__global const Bsdf* b, BsdfQuery* q, float2 u
     q->wo = reflect_local(q->wi);
     float side = q->wi.z > 0.0f ? 1.0f : -1.0f;
     if (q->wi.z == 0.0f) return v3s(0.0f);
-    vec3 wi = q->wi * side, wo;
+    vec3 wi = vscale(q->wi, side), wo;
     float4 p = pt_probs(b, PARAM_FLOAT(q, b->p.principledthin, spec_trans),
                         0.5f * PARAM_FLOAT(q, b->p.principledthin, diff_trans));
     float ux = u.x;
@@ -136,15 +136,15 @@ INLINE vec3 principledthin_sample(__global const Bsdf* b, BsdfQuery* q, float2 u
     float2 v = (float2)(minf(ux / pl, 0.99999994f), u.y);
     if (lobe < 2) {
         vec3 m = mf_sample(pt_dist(b, q, lobe == 1), wi, v);
-        wo = 2.0f * dot3(wi, m) * m - wi;
+        wo = vsub(vscale(m, 2.0f * dot3(wi, m)), wi);
         if (lobe == 1) wo.z = -wo.z;
         if (!pr_compatible(m, wi, wo, lobe == 0) || !(lobe == 0 ? wo.z > 0.0f : wo.z < 0.0f)) return v3s(0.0f);
     } else {
         wo = square_to_cosine_hemisphere(v);
-        if (lobe == 3) wo = -wo;
+        if (lobe == 3) wo = vneg(wo);
         if (wo.z == 0.0f) return v3s(0.0f);
     }
-    q->wo = wo * side;
+    q->wo = vscale(wo, side);
     return bsdf_sample_weight(principledthin_eval(b, q), wo.z, principledthin_pdf(b, q));
 }
 

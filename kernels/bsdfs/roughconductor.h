@@ -19,19 +19,19 @@ INLINE vec3 roughconductor_eval(__global const Bsdf* b, const BsdfQuery* q) {
     vec3 wi = q->wi, wo = q->wo;
     if (wi.z <= 0.0f || wo.z <= 0.0f) return v3s(0.0f);
     MfDist d = roughconductor_dist(b, q);
-    vec3 h = normalize3(wi + wo);
+    vec3 h = normalize3(vadd(wi, wo));
     float s = mf_d(d, h) * mf_g1(d, wi, h) * mf_g1(d, wo, h) / (4.0f * wi.z * wo.z);
     if (!(s > 0.0f)) return v3s(0.0f);
     vec3 F = fresnel_conductor(dot3(wi, h), vxyz(b->p.roughconductor.eta), vxyz(b->p.roughconductor.k));
-    return s * F * param_color(q, b->p.roughconductor.specular_reflectance,
-                               b->p.roughconductor.specular_reflectance_tex);
+    vec3 r = param_color(q, b->p.roughconductor.specular_reflectance, b->p.roughconductor.specular_reflectance_tex);
+    return vmul(vscale(F, s), r);
 }
 
 INLINE float roughconductor_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     vec3 wi = q->wi, wo = q->wo;
     if (wi.z <= 0.0f || wo.z <= 0.0f) return 0.0f;
     MfDist d = roughconductor_dist(b, q);
-    vec3 h = normalize3(wi + wo);
+    vec3 h = normalize3(vadd(wi, wo));
     float ho = dot3(h, wo);
     if (ho <= 0.0f) return 0.0f;
     /* dwo = 4 (wo.h) dh: the Jacobian of reflecting wi about h */
@@ -45,7 +45,7 @@ INLINE vec3 roughconductor_sample(__global const Bsdf* b, BsdfQuery* q, float2 u
     if (q->wi.z <= 0.0f) return v3s(0.0f);
     MfDist d = roughconductor_dist(b, q);
     vec3 h = mf_sample(d, q->wi, u);
-    q->wo = 2.0f * dot3(q->wi, h) * h - q->wi;
+    q->wo = vsub(vscale(h, 2.0f * dot3(q->wi, h)), q->wi);
     if (q->wo.z <= 0.0f) return v3s(0.0f);
     return bsdf_sample_weight(roughconductor_eval(b, q), q->wo.z, roughconductor_pdf(b, q));
 }

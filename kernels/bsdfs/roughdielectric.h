@@ -32,11 +32,11 @@ INLINE bool roughdielectric_half(__global const Bsdf* b, vec3 wi, vec3 wo, vec3*
     float ein = b->p.roughdielectric.int_ior, eex = b->p.roughdielectric.ext_ior;
     *reflect = ci * co > 0.0f;
     *eta = *reflect ? 1.0f : (ci > 0.0f ? ein / eex : eex / ein);
-    vec3 h = wi + wo * *eta;
+    vec3 h = vadd(wi, vscale(wo, *eta));
     float l = dot3(h, h);
     if (!(l > 0.0f)) return false;
-    h *= 1.0f / sqrt(l);
-    if (h.z < 0.0f) h = -h;
+    h = vscale(h, 1.0f / sqrt(l));
+    if (h.z < 0.0f) h = vneg(h);
     *m = h;
     return dot3(wi, h) * ci > 0.0f && dot3(wo, h) * co > 0.0f;
 }
@@ -53,12 +53,12 @@ INLINE vec3 roughdielectric_eval(__global const Bsdf* b, const BsdfQuery* q) {
     float F = fresnel_dielectric(wim, b->p.roughdielectric.ext_ior, b->p.roughdielectric.int_ior, &cos_t);
     float cc = fabs(wi.z * wo.z);
     if (reflect)
-        return (F * DG / (4.0f * cc)) * param_color(q, b->p.roughdielectric.specular_reflectance,
-                                                    b->p.roughdielectric.specular_reflectance_tex);
+        return vscale(param_color(q, b->p.roughdielectric.specular_reflectance,
+                                  b->p.roughdielectric.specular_reflectance_tex), F * DG / (4.0f * cc));
     float den = wim + eta * wom;
     float v = (1.0f - F) * DG * fabs(wim * wom) / (cc * den * den);
-    return v * param_color(q, b->p.roughdielectric.specular_transmittance,
-                           b->p.roughdielectric.specular_transmittance_tex);
+    return vscale(param_color(q, b->p.roughdielectric.specular_transmittance,
+                              b->p.roughdielectric.specular_transmittance_tex), v);
 }
 
 INLINE float roughdielectric_pdf(__global const Bsdf* b, const BsdfQuery* q) {
@@ -67,7 +67,7 @@ INLINE float roughdielectric_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     bool reflect;
     if (!roughdielectric_half(b, wi, wo, &m, &eta, &reflect)) return 0.0f;
     MfDist d = roughdielectric_dist(b, q);
-    vec3 wi_up = wi.z > 0.0f ? wi : -wi;
+    vec3 wi_up = wi.z > 0.0f ? wi : vneg(wi);
     float pm = mf_pdf(d, wi_up, m);
     float wim = dot3(wi, m), wom = dot3(wo, m), cos_t;
     float F = fresnel_dielectric(wim, b->p.roughdielectric.ext_ior, b->p.roughdielectric.int_ior, &cos_t);
@@ -83,14 +83,14 @@ INLINE vec3 roughdielectric_sample(__global const Bsdf* b, BsdfQuery* q, float2 
     q->wo = v3(0.0f, 0.0f, 1.0f);
     if (wi.z == 0.0f) return v3s(0.0f);
     MfDist d = roughdielectric_dist(b, q);
-    vec3 wi_up = wi.z > 0.0f ? wi : -wi;
+    vec3 wi_up = wi.z > 0.0f ? wi : vneg(wi);
     vec3 m = mf_sample(d, wi_up, u);
     float wim = dot3(wi, m), cos_t;
     float ein = b->p.roughdielectric.int_ior, eex = b->p.roughdielectric.ext_ior;
     float F = fresnel_dielectric(wim, eex, ein, &cos_t);
     bool reflect = mf_extra_uniform(u) < F;
     if (reflect) {
-        q->wo = 2.0f * wim * m - wi;
+        q->wo = vsub(vscale(m, 2.0f * wim), wi);
     } else {
         /* wi.m > 0: wi is on the ext side of the microfacet, refraction enters the object */
         float ei = wim > 0.0f ? eex : ein, et = wim > 0.0f ? ein : eex;

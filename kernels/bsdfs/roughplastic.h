@@ -55,22 +55,23 @@ INLINE vec3 roughplastic_eval(__global const Bsdf* b, const BsdfQuery* q) {
     if (wi.z <= 0.0f || wo.z <= 0.0f) return v3s(0.0f);
     float eta = b->p.roughplastic.eta;
     MfDist dist = rp_dist(b);
-    vec3 h = normalize3(wi + wo);
+    vec3 h = normalize3(vadd(wi, wo));
     float cos_t;
     float F = fresnel_dielectric(dot3(wi, h), 1.0f, eta, &cos_t);
     float spec = mf_d(dist, h) * F * mf_g1(dist, wi, h) * mf_g1(dist, wo, h) / (4.0f * wi.z * wo.z);
     vec3 d = param_color(q, b->p.roughplastic.diffuse, b->p.roughplastic.diffuse_tex);
     float r = b->p.roughplastic.int_refl;
-    d = b->p.roughplastic.nonlinear ? d / (v3s(1.0f) - d * r) : d / (1.0f - r);
+    d = b->p.roughplastic.nonlinear ? vdiv(d, vsub(v3s(1.0f), vscale(d, r))) : vdivs(d, 1.0f - r);
     float diff = rp_trans(b, q, wi.z) * rp_trans(b, q, wo.z) * INV_PI / (eta * eta);
-    return param_color(q, b->p.roughplastic.specular, b->p.roughplastic.specular_tex) * spec + d * diff;
+    vec3 s = param_color(q, b->p.roughplastic.specular, b->p.roughplastic.specular_tex);
+    return vadd(vscale(s, spec), vscale(d, diff));
 }
 
 INLINE float roughplastic_pdf(__global const Bsdf* b, const BsdfQuery* q) {
     vec3 wi = q->wi, wo = q->wo;
     if (wi.z <= 0.0f || wo.z <= 0.0f) return 0.0f;
     float ps = rp_prob_specular(b, rp_trans(b, q, wi.z));
-    vec3 h = normalize3(wi + wo);
+    vec3 h = normalize3(vadd(wi, wo));
     /* dwo = 4 (wo.h) dh: the Jacobian of reflecting wi about h */
     float spec = mf_pdf(rp_dist(b), wi, h) / (4.0f * dot3(wo, h));
     return ps * spec + (1.0f - ps) * wo.z * INV_PI;
@@ -83,7 +84,7 @@ INLINE vec3 roughplastic_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) 
     float ps = rp_prob_specular(b, rp_trans(b, q, q->wi.z));
     if (u.x < ps) {
         vec3 m = rp_sample_normal(rp_dist(b), q->wi, (float2)(u.x / ps, u.y));
-        q->wo = 2.0f * dot3(q->wi, m) * m - q->wi;
+        q->wo = vsub(vscale(m, 2.0f * dot3(q->wi, m)), q->wi);
     } else {
         q->wo = square_to_cosine_hemisphere((float2)((u.x - ps) / (1.0f - ps), u.y));
     }

@@ -20,7 +20,7 @@ INLINE vec3 thindielectric_sample(__global const Bsdf* b, BsdfQuery* q, float2 u
         return param_color(q, b->p.thindielectric.specular_reflectance,
                            b->p.thindielectric.specular_reflectance_tex);
     }
-    q->wo = -q->wi;
+    q->wo = vneg(q->wi);
     return param_color(q, b->p.thindielectric.specular_transmittance, b->p.thindielectric.specular_transmittance_tex);
 }
 

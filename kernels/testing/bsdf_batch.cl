@@ -25,7 +25,7 @@ INLINE BsdfQuery batch_query(vec3 wi, vec3 wo, float2 uv, __global const Texture
     return q;
 }
 
-/* One bsdf_sample per work-item. args[i] = (vxyz(wi), bitcast row index); uvs[i] = uv. */
+/* One bsdf_sample per work-item. args[i] = (wi.xyz, bitcast row index); uvs[i] = uv. */
 __kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const Texture* textures,
                                 __global const BsdfTable* tables, __global const float4* args,
                                 __global const float2* uvs, __global const float4* geo, uint n, uint first, uint seed,
@@ -39,9 +39,9 @@ __kernel void bsdf_sample_batch(__global const Bsdf* rows, __global const Textur
     sampler_init(&s, seed, first + i, 0u);
     BsdfQuery q = batch_query(vxyz(a), v3s(0.0f), uvs[i], textures, tables, geo, i);
     vec3 w = bsdf_sample(b, &q, next2d(&s));
-    wo_out[i] = (float4)(q.wo, q.eta);
-    w_out[i] = (float4)(w, 0.0f);
-    f_out[i] = (float4)(bsdf_eval(b, &q), 0.0f);
+    wo_out[i] = vf4(q.wo, q.eta);
+    w_out[i] = vf4(w, 0.0f);
+    f_out[i] = vf4(bsdf_eval(b, &q), 0.0f);
     pdf_out[i] = bsdf_pdf(b, &q);
     measure_out[i] = q.measure;
 }
@@ -58,6 +58,6 @@ __kernel void bsdf_pdf_eval_batch(__global const Bsdf* rows, __global const Text
     __global const Bsdf* b = rows + as_uint(a.w);
     BsdfQuery q = batch_query(vxyz(a), vxyz(wo_in[i]), uvs[i], textures, tables, geo, i);
     pdf_out[i] = bsdf_pdf(b, &q);
-    f_out[i] = (float4)(bsdf_eval(b, &q), bsdf_is_delta(b) ? 1.0f : 0.0f);
-    alb_out[i] = (float4)(bsdf_albedo(b, &q), 0.0f);
+    f_out[i] = vf4(bsdf_eval(b, &q), bsdf_is_delta(b) ? 1.0f : 0.0f);
+    alb_out[i] = vf4(bsdf_albedo(b, &q), 0.0f);
 }

@@ -7,7 +7,8 @@
 
 INLINE vec3 tinted_eval(__global const Bsdf* b, const BsdfQuery* q) {
     if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return v3s(0.0f);
-    return vxyz(b->p.tinted.albedo) * b->p.tinted.tint * INV_PI;
+    vec3 albedo = vxyz(b->p.tinted.albedo);
+    return vscale(vscale(albedo, b->p.tinted.tint), INV_PI);
 }
 
 INLINE float tinted_pdf(__global const Bsdf* b, const BsdfQuery* q) {
@@ -20,7 +21,7 @@ INLINE vec3 tinted_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     q->eta = 1.0f;
     q->wo = square_to_cosine_hemisphere(u);
     if (q->wi.z <= 0.0f || q->wo.z <= 0.0f) return v3s(0.0f);
-    return vxyz(b->p.tinted.albedo) * b->p.tinted.tint;
+    return vscale(vxyz(b->p.tinted.albedo), b->p.tinted.tint);
 }
 
 #endif
