@@ -1,6 +1,8 @@
 /* Kernels of benchmarks/profile_pass.py: one path tracing pass recorded ray by ray, the recorded rays cast
    again on their own, and the pass without its integrator. Built over the render program's headers. */
 
+#include "math.h"   /* vec3, for record_ray below (li.h includes it too, after it) */
+
 /* The recording pass hands Li a pointer to this struct's first member, so scene.h's queries (whose argument
    is called sd) reach the record through BVH_RECORD (kernels/bvh_queries.h) without any change to them. */
 typedef struct {
@@ -14,8 +16,8 @@ static inline void record_ray(const SceneData* sd, uint kind, vec3 o, vec3 d, fl
     RecordScene* r = (RecordScene*)sd;
     if (r->n >= r->cap) { r->dropped += 1u; return; }
     uint i = r->base + r->n++;
-    r->rec[2 * i] = (float4)(o, tmin);
-    r->rec[2 * i + 1] = (float4)(d, tmax);
+    r->rec[2 * i] = vf4(o, tmin);
+    r->rec[2 * i + 1] = vf4(d, tmax);
     r->kind[i] = kind;
 }
 #define BVH_RECORD(kind, o, d, tmin, tmax) record_ray(sd, kind, o, d, tmin, tmax)
@@ -279,8 +281,8 @@ __kernel void setup_pass(__global const Camera* cam, __global const float* filte
     float w;
     Ray ray;
     if (!camera_sample(cam, filter_cdf, px, py, &smp, &w, &ray)) return;   /* render.cl's step */
-    vec3 wl = (ray.d + ray.o * next1d(&smp)) * w;   /* keeps the sampling alive without tracing */
+    vec3 wl = vscale(vmad(ray.o, next1d(&smp), ray.d), w);   /* keeps the sampling alive without tracing */
     float4 a0 = acc0[pix], a1 = acc1[pix];
-    acc0[pix] = (float4)(vxyz(a0) + wl, a0.w + w);
-    acc1[pix] = (float4)(vxyz(a1) + wl * wl, a1.w + 1.0f);
+    acc0[pix] = vf4(vadd(vxyz(a0), wl), a0.w + w);
+    acc1[pix] = vf4(vadd(vxyz(a1), vmul(wl, wl)), a1.w + 1.0f);
 }

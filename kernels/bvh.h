@@ -1,8 +1,8 @@
 /* BVH traversal: closest hit and any hit against triangles and analytic spheres (OpenCL C 1.2).
 
    Node table (built by clrender/accel/bvh.py): 2-wide nodes of 4 float4 (64 B); node k is nodes[4k..4k+3]:
-       [4k+0] = vxyz(A.lo), as_float(A.ref)      [4k+2] = vxyz(B.lo), as_float(B.ref)
-       [4k+1] = vxyz(A.hi), as_float(A.count)    [4k+3] = vxyz(B.hi), as_float(B.count)
+       [4k+0] = A.lo.xyz, as_float(A.ref)      [4k+2] = B.lo.xyz, as_float(B.ref)
+       [4k+1] = A.hi.xyz, as_float(A.count)    [4k+3] = B.hi.xyz, as_float(B.count)
    A and B are the two children. Interior child: ref = node index (bit 31 clear), count = 0. Leaf child:
    ref = 0x80000000 | first, count = primitives (0 only for an empty slot); its primitives are rows
    first .. first+count-1 of the primitive table. Node 0 is the root; even a one-leaf or empty scene has it.

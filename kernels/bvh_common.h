@@ -3,10 +3,10 @@
 
    Primitive table: 10 words per primitive in leaf order, each leaf cut into blocks of up to 4 primitives
    stored structure of arrays (clrender/accel/primitives.py pack_leaf_blocks; bvh_isect_leaf reads it):
-       triangle:   vxyz(v0), vxyz(v1), vxyz(v2), id = its leaf reference (pack_scene: pos << 4 | lane << 2 | (c - 1),
+       triangle:   v0.xyz, v1.xyz, v2.xyz, id = its leaf reference (pack_scene: pos << 4 | lane << 2 | (c - 1),
                    clrender/accel/primitives.py leaf_refs; kernels/shapes/mesh.h finds its vertices from it:
                    this table is their only copy) or, in tables that the tests pack, its triangle number
-       sphere j:   vxyz(centre), radius, 0 x 5, id = j | 0x80000000
+       sphere j:   centre.xyz, radius, 0 x 5, id = j | 0x80000000
 
    Hits count for tmin < t < tmax, both sides of triangles. Ray directions need not be normalised.
    Plain arithmetic instead of fmin/fmax/dot/cross: on PoCL 3.0 the builtins were 1.2-2.4x slower here. */

@@ -24,15 +24,15 @@ INLINE void feature_sample(const SceneData* sd, Ray ray, Sampler* smp, vec3* alb
             *position = its.p;
         }
         __global const Bsdf* b = bsdf_at(sd, &its);
-        BsdfQuery q = bsdf_query(sd, &its, -ray.d);
+        BsdfQuery q = bsdf_query(sd, &its, vneg(ray.d));
         vec3 w = bsdf_sample(b, &q, next2d(smp));
         if (!bsdf_is_delta(b)) {
-            *albedo = thr * w;
+            *albedo = vmul(thr, w);
             *normal = its.sh.n;
             return;
         }
         if (is_black(w)) return;
-        thr *= w;
+        thr = vmul(thr, w);
         ray = spawn_ray_from(&its, to_world(&its.sh, q.wo));
     }
 }
@@ -58,9 +58,9 @@ __kernel void feature_pass(SCENE_ARGS, __global const Camera* cam, __global cons
         feature_sample(&sd, ray, &smp, &albedo, &normal, &depth, &position);
         if (!all_finite(albedo) || !all_finite(normal) || !all_finite(position) || !isfinite(depth) || !isfinite(w))
             continue;
-        a0 += (float4)(w * albedo, w * depth);
-        a1 += (float4)(w * normal, w);
-        a2 += (float4)(w * position, 0.0f);
+        a0 += vf4(vscale(albedo, w), w * depth);
+        a1 += vf4(vscale(normal, w), w);
+        a2 += vf4(vscale(position, w), 0.0f);
     }
     aov[3u * pix] += a0;
     aov[3u * pix + 1u] += a1;

@@ -14,5 +14,5 @@ __kernel void image_samples(SCENE_ARGS, __global const Camera* cam, __global flo
     float2 u = next2d(&smp);
     Ray ray = camera_ray(cam, u.x * (float)cam->width, u.y * (float)cam->height);
     vec3 L = Li(&sd, ray, &smp);
-    out[i] = (float4)(L, 0.0f);
+    out[i] = vf4(L, 0.0f);
 }

@@ -44,14 +44,14 @@ inline void render_pixel(SceneData* sd, __global const Camera* cam, __global con
         else if (si % 7u == 0u) L.y = INFINITY;
 #endif
         if (!all_finite(L) || !isfinite(w)) { nbad += 1u; continue; }
-        vec3 wl = L * w;
-        swl += wl;
-        swl2 += wl * wl;
+        vec3 wl = vscale(L, w);
+        swl = vadd(swl, wl);
+        swl2 = vadd(swl2, vmul(wl, wl));
         sw += w;
     }
     float4 a0 = acc0[pix], a1 = acc1[pix];
-    acc0[pix] = (float4)(vxyz(a0) + swl, a0.w + sw);
-    acc1[pix] = (float4)(vxyz(a1) + swl2, a1.w + (float)(spp - nbad));
+    acc0[pix] = vf4(vadd(vxyz(a0), swl), a0.w + sw);
+    acc1[pix] = vf4(vadd(vxyz(a1), swl2), a1.w + (float)(spp - nbad));
     bad[pix] += nbad;
 #ifdef CLRENDER_COUNT_RAYS
     rays[pix] += (uint4)(n_camera, n_closest, n_shadow, 0u);

@@ -40,12 +40,12 @@
 #endif
 
 typedef struct {
-    vec3 p;        /* hit point */
-    vec3 ng;       /* geometric normal (triangle winding / sphere outward) */
+    vec3 p;          /* hit point */
+    vec3 ng;         /* geometric normal (triangle winding / sphere outward) */
     Frame sh;        /* shading frame, z = interpolated shading normal */
     float2 uv;       /* spheres: (0, 0) unless the shape's BSDF has a texture (the only reader of uv) */
     float t;
-    vec3 po;       /* where rays leaving the surface start from, before the offset along ng (spawn_origin) */
+    vec3 po;         /* where rays leaving the surface start from, before the offset along ng (spawn_origin) */
     float off;       /* how far they are pushed off the surface along ng */
     uint shape;
     uint tri;        /* the triangle's leaf reference (Hit.prim, see kernels/shapes/mesh.h), or NONE for spheres */
@@ -110,8 +110,8 @@ INLINE bool scene_occluded(const SceneData* sd, vec3 o, vec3 d, float tmin, floa
 
 /* The origin of a ray leaving the surface hit at `its` along d (see SPAWN_OFFSET). */
 INLINE vec3 spawn_origin(const Intersection* its, vec3 d) {
-    vec3 o = its->ng * its->off;
-    return dot3(d, its->ng) < 0.0f ? its->po - o : its->po + o;
+    vec3 o = vscale(its->ng, its->off);
+    return dot3(d, its->ng) < 0.0f ? vsub(its->po, o) : vadd(its->po, o);
 }
 
 /* A ray leaving the surface hit at `its` along d. */

@@ -117,13 +117,13 @@ __kernel void wf_finish(SCENE_ARGS, __global const PathState* paths, __global co
         PathState ps = paths[slot];
         vec3 L = path_result(&sd, &ps);
         if (!all_finite(L) || !isfinite(w.x)) { bad += 1u; continue; }
-        vec3 wl = L * w.x;
-        swl += wl;
-        swl2 += wl * wl;
+        vec3 wl = vscale(L, w.x);
+        swl = vadd(swl, wl);
+        swl2 = vadd(swl2, vmul(wl, wl));
         sw += w.x;
     }
-    sum0[gid] = (float4)(swl, sw);
-    sum1[gid] = (float4)(swl2, 0.0f);
+    sum0[gid] = vf4(swl, sw);
+    sum1[gid] = vf4(swl2, 0.0f);
     nbad[gid] = bad;
 }
 
@@ -137,8 +137,8 @@ __kernel void wf_flush(__global float4* sum0, __global float4* sum1, __global ui
     float4 s0 = sum0[gid], s1 = sum1[gid];
     uint nb = nbad[gid];
     float4 a0 = acc0[pix], a1 = acc1[pix];
-    acc0[pix] = (float4)(vxyz(a0) + vxyz(s0), a0.w + s0.w);
-    acc1[pix] = (float4)(vxyz(a1) + vxyz(s1), a1.w + (float)(spp - nb));
+    acc0[pix] = vf4(vadd(vxyz(a0), vxyz(s0)), a0.w + s0.w);
+    acc1[pix] = vf4(vadd(vxyz(a1), vxyz(s1)), a1.w + (float)(spp - nb));
     bad[pix] += nb;
     sum0[gid] = (float4)(0.0f);
     sum1[gid] = (float4)(0.0f);

@@ -164,11 +164,12 @@ __kernel void k(SCENE_ARGS, __global const Camera* cam, __global float4* out) {
     SCENE_INIT(sd);
     BsdfQuery q; q.wi = v3(0.0f, 0.0f, 1.0f); q.wo = q.wi; q.uv = (float2)(0.5f); q.textures = sd.textures; q.tables = sd.bsdf_tables;
     q.eta = 1.0f; q.measure = MEASURE_SOLID_ANGLE;
-    vec3 r = bsdf_sample(sd.bsdfs, &q, (float2)(0.5f)) + bsdf_eval(sd.bsdfs, &q) + bsdf_albedo(sd.bsdfs, &q);
+    vec3 r = vadd(bsdf_sample(sd.bsdfs, &q, (float2)(0.5f)), bsdf_eval(sd.bsdfs, &q));
+    r = vadd(r, bsdf_albedo(sd.bsdfs, &q));
     EmitterQuery e; e.ref = v3s(0.0f);
-    r += emitter_row_sample(&sd, sd.emitters, &e, (float2)(0.5f));
-    out[0] = (float4)(r, bsdf_pdf(sd.bsdfs, &q) + filter_profile_eval(cam, 0.1f)
-                         + texture_eval(sd.textures, (float2)(0.5f)).x);
+    r = vadd(r, emitter_row_sample(&sd, sd.emitters, &e, (float2)(0.5f)));
+    out[0] = vf4(r, bsdf_pdf(sd.bsdfs, &q) + filter_profile_eval(cam, 0.1f)
+                    + texture_eval(sd.textures, (float2)(0.5f)).x);
 }
 """
     for kind in (dispatch.BSDF, dispatch.EMITTER, dispatch.TEXTURE, dispatch.RFILTER, dispatch.SHAPE):

@@ -13,7 +13,7 @@ INLINE vec3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     case 2u: return its.ng;
     default: {
         /* the normal the BSDF shades with: a normalmap's or bumpmap's (seen from the camera), else the surface's */
-        BsdfQuery q = bsdf_query(sd, &its, -ray.d);
+        BsdfQuery q = bsdf_query(sd, &its, vneg(ray.d));
         return to_world(&its.sh, bsdf_normal(bsdf_at(sd, &its), &q));
     }
     }

@@ -6,5 +6,5 @@ INLINE vec3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     vec3 L = hit_emission(sd, &its, ray.d);
     __global const Bsdf* b = bsdf_at(sd, &its);
     if (bsdf_is_delta(b)) return L;
-    return L + sample_light(sd, &its, b, to_local(&its.sh, -ray.d), smp, false);
+    return vadd(L, sample_light(sd, &its, b, to_local(&its.sh, vneg(ray.d)), smp, false));
 }

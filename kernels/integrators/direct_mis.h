@@ -7,9 +7,9 @@ INLINE vec3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     vec3 L = hit_emission(sd, &its, ray.d);
     __global const Bsdf* b = bsdf_at(sd, &its);
     bool delta = bsdf_is_delta(b);
-    vec3 wi = to_local(&its.sh, -ray.d);
-    if (!delta) L += sample_light(sd, &its, b, wi, smp, true);
-    BsdfQuery bq = bsdf_query(sd, &its, -ray.d);
+    vec3 wi = to_local(&its.sh, vneg(ray.d));
+    if (!delta) L = vadd(L, sample_light(sd, &its, b, wi, smp, true));
+    BsdfQuery bq = bsdf_query(sd, &its, vneg(ray.d));
     vec3 w = bsdf_sample(b, &bq, next2d(smp));
     if (is_black(w)) return L;
     vec3 d = to_world(&its.sh, bq.wo);
@@ -21,10 +21,10 @@ INLINE vec3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
         vec3 le = escaped(sd, d);
         if (is_black(le)) return L;
         float wb = discrete ? 1.0f : mis_balance(pb, scene_environment_pdf(sd, d));
-        return L + w * le * wb;
+        return vadd(L, vscale(vmul(w, le), wb));
     }
     vec3 le = hit_emission(sd, &h, d);
     if (is_black(le)) return L;
     float wb = discrete ? 1.0f : mis_balance(pb, hit_emitter_pdf(sd, its.p, &h));
-    return L + w * le * wb;
+    return vadd(L, vscale(vmul(w, le), wb));
 }

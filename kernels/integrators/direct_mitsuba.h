@@ -14,7 +14,7 @@ INLINE vec3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     vec3 L = hide ? v3s(0.0f) : hit_emission(sd, &its, ray.d);
     __global const Bsdf* b = bsdf_at(sd, &its);
     float frac_e = (float)ne / (float)(ne + nb), frac_b = (float)nb / (float)(ne + nb);
-    vec3 wi = to_local(&its.sh, -ray.d);
+    vec3 wi = to_local(&its.sh, vneg(ray.d));
 
     if (bsdf_is_smooth(b)) {
         for (uint i = 0u; i < ne; ++i) {
@@ -24,18 +24,19 @@ INLINE vec3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
             float2 u = next2d(smp);
             vec3 le = scene_sample_emitter(sd, &q, v3(a, u.x, u.y));
             if (is_black(le) || !(q.pdf > 0.0f)) continue;
-            BsdfQuery bq = bsdf_query(sd, &its, -ray.d);
+            BsdfQuery bq = bsdf_query(sd, &its, vneg(ray.d));
             bq.wi = wi;
             bq.wo = to_local(&its.sh, q.wi);
             vec3 f = bsdf_eval(b, &bq);
             if (is_black(f) || light_occluded(sd, &its, &q)) continue;
             float w = q.delta ? 1.0f : mis_power(q.pdf * frac_e, bsdf_pdf(b, &bq) * frac_b) / (float)ne;
-            L += f * fabs(bq.wo.z) * le * w;
+            vec3 fle = vmul(vscale(f, fabs(bq.wo.z)), le);
+            L = vadd(L, vscale(fle, w));
         }
     }
 
     for (uint i = 0u; i < nb; ++i) {
-        BsdfQuery bq = bsdf_query(sd, &its, -ray.d);
+        BsdfQuery bq = bsdf_query(sd, &its, vneg(ray.d));
         vec3 w = bsdf_sample(b, &bq, next2d(smp));
         if (is_black(w)) continue;
         vec3 d = to_world(&its.sh, bq.wo);
@@ -50,7 +51,7 @@ INLINE vec3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
             float pe = found ? hit_emitter_pdf(sd, its.p, &h) : scene_environment_pdf(sd, d);
             wb = mis_power(bsdf_pdf(b, &bq) * frac_b, pe * frac_e);
         }
-        L += w * le * (wb / (float)nb);
+        L = vadd(L, vscale(vmul(w, le), wb / (float)nb));
     }
     return L;
 }

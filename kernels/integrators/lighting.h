@@ -51,7 +51,7 @@ INLINE BsdfQuery bsdf_query(const SceneData* sd, const Intersection* its, vec3 w
 /* Radiance an emitter sends from the hit `its` back along -d (0 if the surface does not emit). */
 INLINE vec3 hit_emission(const SceneData* sd, const Intersection* its, vec3 d) {
     if (sd->shapes[its->shape].emitter == NONE) return v3s(0.0f);
-    return area_emitter_Le(sd, its, -d);
+    return area_emitter_Le(sd, its, vneg(d));
 }
 
 /* The light-selection pdf of having reached emitter hit `its` from `ref` (for MIS of BSDF samples). */
@@ -75,9 +75,9 @@ INLINE Ray light_shadow_ray(const Intersection* its, const EmitterQuery* q) {
         r.tmax = INFINITY;
         return r;
     }
-    vec3 d = q->p - r.o;
+    vec3 d = vsub(q->p, r.o);
     float len = len3(d);
-    r.d = d * (1.0f / len);
+    r.d = vscale(d, 1.0f / len);
     r.tmax = len * (1.0f - 1e-4f) - ray_eps(q->p);
     return r;
 }
@@ -98,7 +98,7 @@ INLINE bool light_occluded(const SceneData* sd, const Intersection* its, const E
    them), and the shadow ray that decides whether it counts. 0 (and no ray to trace) when it cannot contribute. The
    trace is the caller's, so that a wavefront driver can run all shadow rays in a kernel of their own. */
 INLINE vec3 sample_light_unshadowed(const SceneData* sd, const Intersection* its, __global const Bsdf* b,
-                                      vec3 wi_local, Sampler* smp, bool mis, Ray* shadow) {
+                                    vec3 wi_local, Sampler* smp, bool mis, Ray* shadow) {
     EmitterQuery q;
     q.ref = its->p;
     float a = next1d(smp);
@@ -113,12 +113,13 @@ INLINE vec3 sample_light_unshadowed(const SceneData* sd, const Intersection* its
     *shadow = light_shadow_ray(its, &q);
     float w = 1.0f;
     if (mis && !q.delta) w = LIGHTING_MIS(q.pdf, bsdf_pdf(b, &bq));
-    return f * fabs(bq.wo.z) * le * w;
+    vec3 fle = vmul(vscale(f, fabs(bq.wo.z)), le);
+    return vscale(fle, w);
 }
 
 /* The same with its shadow ray traced. */
 INLINE vec3 sample_light(const SceneData* sd, const Intersection* its, __global const Bsdf* b,
-                           vec3 wi_local, Sampler* smp, bool mis) {
+                         vec3 wi_local, Sampler* smp, bool mis) {
     Ray shadow;
     vec3 c = sample_light_unshadowed(sd, its, b, wi_local, smp, mis, &shadow);
     if (is_black(c) || shadow_occluded(sd, &shadow)) return v3s(0.0f);

@@ -4,7 +4,7 @@
 INLINE vec3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     Intersection its;
     if (!scene_intersect(sd, &ray, &its)) return v3s(0.0f);
-    BsdfQuery bq = bsdf_query(sd, &its, -ray.d);
+    BsdfQuery bq = bsdf_query(sd, &its, vneg(ray.d));
     bq.wo = v3(0.0f, 0.0f, 1.0f);
     return bsdf_eval(bsdf_at(sd, &its), &bq);
 }

@@ -2,5 +2,5 @@
 INLINE vec3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     Intersection its;
     if (!scene_intersect(sd, &ray, &its)) return v3s(0.0f);
-    return fabs(its.sh.n);
+    return vabs(its.sh.n);
 }

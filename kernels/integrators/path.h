@@ -24,10 +24,10 @@
 typedef struct {
     Ray ray;            /* the segment to trace next */
     Ray shadow;         /* the shadow ray of a pending emitter sample (shadow_pending) */
-    vec3 L;           /* radiance gathered so far */
-    vec3 beta;        /* path throughput */
-    vec3 prev_p;      /* where `ray` starts */
-    vec3 shadow_L;    /* what the pending emitter sample adds to L if `shadow` is not blocked */
+    vec3 L;             /* radiance gathered so far */
+    vec3 beta;          /* path throughput */
+    vec3 prev_p;        /* where `ray` starts */
+    vec3 shadow_L;      /* what the pending emitter sample adds to L if `shadow` is not blocked */
     float eta;          /* product of the relative IORs crossed (Russian roulette uses beta * eta^2) */
     float prev_pdf;     /* solid-angle pdf of the BSDF sample that made `ray` */
     uint depth;         /* segments traced so far */
@@ -72,7 +72,7 @@ INLINE bool path_emission(const SceneData* sd, PathState* ps, bool hit, const In
 #else
         else w = 0.0f;
 #endif
-        ps->L += ps->beta * le * w;
+        ps->L = vadd(ps->L, vscale(vmul(ps->beta, le), w));
     }
     if (!hit || (!no_limit && ps->depth + 1u >= sd->info->max_depth)) ps->alive = 0u;
     return ps->alive != 0u;
@@ -84,14 +84,14 @@ INLINE void path_sample_lights(const SceneData* sd, PathState* ps, const Interse
                                Sampler* smp) {
 #if defined(PATH_USE_EMS)
     if (PATH_SAMPLES_LIGHTS(b) && ps->depth + 2u <= sd->info->max_depth) {
-        vec3 wi = to_local(&its->sh, -ps->ray.d);
+        vec3 wi = to_local(&its->sh, vneg(ps->ray.d));
 #if defined(PATH_USE_MATS)
         vec3 c = sample_light_unshadowed(sd, its, b, wi, smp, true, &ps->shadow);
 #else
         vec3 c = sample_light_unshadowed(sd, its, b, wi, smp, false, &ps->shadow);
 #endif
         if (!is_black(c)) {
-            ps->shadow_L = ps->beta * c;
+            ps->shadow_L = vmul(ps->beta, c);
             ps->shadow_pending = 1u;
         }
     }
@@ -100,7 +100,7 @@ INLINE void path_sample_lights(const SceneData* sd, PathState* ps, const Interse
 
 /* Stage 2b: the pending emitter sample counts unless its shadow ray was blocked. */
 INLINE void path_shadow_done(PathState* ps, bool occluded) {
-    if (ps->shadow_pending && !occluded) ps->L += ps->shadow_L;
+    if (ps->shadow_pending && !occluded) ps->L = vadd(ps->L, ps->shadow_L);
     ps->shadow_pending = 0u;
 }
 
@@ -112,13 +112,13 @@ INLINE void path_continue(const SceneData* sd, PathState* ps, const Intersection
     if (ps->depth >= sd->info->rr_depth) {
         float q = minf(max3(ps->beta) * ps->eta * ps->eta, 0.99f);
         if (!(next1d(smp) < q)) { ps->alive = 0u; return; }
-        ps->beta /= q;
+        ps->beta = vdivs(ps->beta, q);
     }
 #endif
-    BsdfQuery bq = bsdf_query(sd, its, -ps->ray.d);
+    BsdfQuery bq = bsdf_query(sd, its, vneg(ps->ray.d));
     vec3 w = bsdf_sample(b, &bq, next2d(smp));
     if (is_black(w)) { ps->alive = 0u; return; }
-    ps->beta *= w;
+    ps->beta = vmul(ps->beta, w);
     ps->eta *= bq.eta;
     ps->after_delta = bq.measure == MEASURE_DISCRETE;
     ps->prev_pdf = ps->after_delta ? 0.0f : bsdf_pdf(b, &bq);
@@ -129,7 +129,7 @@ INLINE void path_continue(const SceneData* sd, PathState* ps, const Intersection
     if (ps->depth >= sd->info->rr_depth) {
         float q = minf(max3(ps->beta) * ps->eta * ps->eta, 0.95f);
         if (!(next1d(smp) < q)) { ps->alive = 0u; return; }
-        ps->beta /= q;
+        ps->beta = vdivs(ps->beta, q);
     }
 #endif
 }
