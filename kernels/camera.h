@@ -18,9 +18,10 @@ INLINE Ray camera_ray_lens(__global const Camera* cam, float sx, float sy, float
            (its x and y axes scaled by to_world: the visible area), along z, for far - near */
         vec3 X = vxyz(cam->to_world[0]), Y = vxyz(cam->to_world[1]), Z = vxyz(cam->to_world[2]);
         Ray r;
-        r.o = vxyz(cam->to_world[3]) + X * (2.0f * nx - 1.0f) + Y * ((1.0f - 2.0f * ny) * cam->inv_aspect)
-              + Z * cam->near_clip;
-        r.d = Z * (1.0f / len3(Z));
+        vec3 o = vmad(X, 2.0f * nx - 1.0f, vxyz(cam->to_world[3]));
+        o = vmad(Y, (1.0f - 2.0f * ny) * cam->inv_aspect, o);
+        r.o = vmad(Z, cam->near_clip, o);
+        r.d = vscale(Z, 1.0f / len3(Z));
         r.tmin = 0.0f;
         r.tmax = cam->far_clip - cam->near_clip;
         return r;
@@ -32,16 +33,16 @@ INLINE Ray camera_ray_lens(__global const Camera* cam, float sx, float sy, float
         /* thin lens: the ray through the lens point aims at where the pinhole ray meets the plane in focus */
         float2 p = square_to_uniform_disk(lens) * cam->lens_radius;
         oc = v3(p.x, p.y, 0.0f);
-        dc = dc * cam->focus_distance - oc;
+        dc = vmad(dc, cam->focus_distance, vneg(oc));
     }
     float inv_len = 1.0f / len3(dc);
-    dc *= inv_len;
+    dc = vscale(dc, inv_len);
     vec3 X = vxyz(cam->to_world[0]), Y = vxyz(cam->to_world[1]), Z = vxyz(cam->to_world[2]);
-    vec3 dw = X * dc.x + Y * dc.y + Z * dc.z;
+    vec3 dw = vmad(Z, dc.z, vmad(X, dc.x, vscale(Y, dc.y)));
     float scale = len3(dw); /* a scaled toWorld stretches distances: keep the clip planes where Nori has them */
     Ray r;
-    r.o = vxyz(cam->to_world[3]) + X * oc.x + Y * oc.y;
-    r.d = dw * (1.0f / scale);
+    r.o = vmad(Y, oc.y, vmad(X, oc.x, vxyz(cam->to_world[3])));
+    r.d = vscale(dw, 1.0f / scale);
     r.tmin = cam->near_clip / dc.z * scale;
     r.tmax = cam->far_clip / dc.z * scale;
     return r;

@@ -28,10 +28,10 @@ INLINE void emitter_query_from_hit(EmitterQuery* q, vec3 ref, const Intersection
     q->p = its->p;
     q->n = its->sh.n;
     q->ng = its->ng;
-    vec3 d = its->p - ref;
+    vec3 d = vsub(its->p, ref);
     float l = len3(d);
     q->dist = l;
-    q->wi = l > 0.0f ? d * (1.0f / l) : v3(0.0f, 0.0f, 1.0f);
+    q->wi = l > 0.0f ? vscale(d, 1.0f / l) : v3(0.0f, 0.0f, 1.0f);
     q->pdf = 0.0f;
     q->delta = 0u;
     q->emitter = NONE;
@@ -42,9 +42,9 @@ INLINE void emitter_query_from_hit(EmitterQuery* q, vec3 ref, const Intersection
 INLINE void emitter_query_from_direction(const SceneData* sd, EmitterQuery* q, vec3 ref, vec3 d) {
     q->ref = ref;
     q->wi = d;
-    q->p = ref + d * emitter_far(sd, ref);
-    q->n = -d;
-    q->ng = -d;
+    q->p = vmad(d, emitter_far(sd, ref), ref);
+    q->n = vneg(d);
+    q->ng = vneg(d);
     q->dist = INFINITY;
     q->pdf = 0.0f;
     q->delta = 0u;
@@ -114,7 +114,7 @@ INLINE vec3 scene_sample_emitter(const SceneData* sd, EmitterQuery* q, vec3 u3) 
     }
     vec3 w = emitter_sample(sd, e, q, (float2)(u3.y, u3.z));
     q->pdf *= prob;
-    return w * (1.0f / prob);
+    return vscale(w, 1.0f / prob);
 }
 
 INLINE float scene_emitter_pdf(const SceneData* sd, uint e, const EmitterQuery* q) {
@@ -129,7 +129,7 @@ INLINE vec3 scene_eval_environment(const SceneData* sd, vec3 d) {
     vec3 L = v3s(0.0f);
     EmitterQuery q;
     q.wi = d;  /* all an infinite emitter's eval reads */
-    for (uint i = 0u; i < n; ++i) L += emitter_row_eval(sd, &sd->emitters[sd->infinite[i]], &q);
+    for (uint i = 0u; i < n; ++i) L = vadd(L, emitter_row_eval(sd, &sd->emitters[sd->infinite[i]], &q));
     return L;
 }
 
@@ -156,7 +156,7 @@ INLINE vec3 area_emitter_Le(const SceneData* sd, const Intersection* its, vec3 w
     if (!(em->flags & EMITTER_SURFACE)) return v3s(0.0f);
     EmitterQuery q;
     q.n = its->sh.n;
-    q.wi = -wo_world;
+    q.wi = vneg(wo_world);
     q.uv = its->uv;
     return emitter_row_eval(sd, em, &q);
 }

@@ -68,12 +68,12 @@ __kernel void sample_em(SCENE_ARGS, uint e, uint n, __global const float4* refs,
             }
         }
     }
-    wi_pdf[i] = (float4)(q.wi, q.pdf);
-    w_dist[i] = (float4)(w, q.dist);
-    p_delta[i] = (float4)(q.p, (float)q.delta);
-    n_em[i] = (float4)(q.n, chosen == NONE ? -1.0f : (float)chosen);
+    wi_pdf[i] = vf4(q.wi, q.pdf);
+    w_dist[i] = vf4(w, q.dist);
+    p_delta[i] = vf4(q.p, (float)q.delta);
+    n_em[i] = vf4(q.n, chosen == NONE ? -1.0f : (float)chosen);
     chk[i] = (float4)(pdf_again, pdf_one, occl, pdf_hit);
-    ev[i] = (float4)(L, t_hit);
+    ev[i] = vf4(L, t_hit);
 }
 
 /* Density of directions of emitter e at ref, for each direction. mode 0: every point the ray meets on the
@@ -116,7 +116,7 @@ __kernel void environment(SCENE_ARGS, uint n, __global const float4* dirs, __glo
     if (i >= n) return;
     SCENE_INIT(sd);
     vec3 d = vxyz(dirs[i]);
-    out[i] = (float4)(scene_eval_environment(&sd, d), scene_environment_pdf(&sd, d));
+    out[i] = vf4(scene_eval_environment(&sd, d), scene_environment_pdf(&sd, d));
 }
 
 /* Camera-style rays: (area_emitter_Le toward the ray origin, 1 if hit). */
@@ -127,7 +127,7 @@ __kernel void hit_le(SCENE_ARGS, uint n, __global const float4* org, __global co
     SCENE_INIT(sd);
     Ray r = spawn_ray(vxyz(org[i]), vxyz(dirs[i]));
     Intersection its;
-    if (scene_intersect(&sd, &r, &its)) out[i] = (float4)(area_emitter_Le(&sd, &its, -vxyz(dirs[i])), 1.0f);
+    if (scene_intersect(&sd, &r, &its)) out[i] = vf4(area_emitter_Le(&sd, &its, vneg(vxyz(dirs[i]))), 1.0f);
     else out[i] = (float4)(0.0f);
 }
 """

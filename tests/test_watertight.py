@@ -186,15 +186,15 @@ __kernel void spawn(SCENE_ARGS, uint n, __global const float4* org, __global con
     Ray r = spawn_ray(vxyz(org[i]), vxyz(dir[i]));
     Intersection its;
     if (!scene_intersect(&sd, &r, &its)) { out0[i] = (float4)(0.0f, 0.0f, 0.0f, as_float(NONE)); return; }
-    Frame f = frame_from_normal(dot3(its.ng, r.d) < 0.0f ? its.ng : -its.ng);
+    Frame f = frame_from_normal(dot3(its.ng, r.d) < 0.0f ? its.ng : vneg(its.ng));
     vec3 d = to_world(&f, vxyz(frame_dir[i]));
     Ray s = spawn_ray_from(&its, d);
     Intersection h;
     bool hit = scene_intersect(&sd, &s, &h);
     bool occ = scene_occluded(&sd, s.o, d, s.tmin, s.tmax);
-    out0[i] = (float4)(its.p, as_float(its.tri));
-    out1[i] = hit ? (float4)(h.p, as_float(h.tri)) : (float4)(0.0f, 0.0f, 0.0f, as_float(NONE));
-    out2[i] = (float4)(d, occ ? 1.0f : 0.0f);
+    out0[i] = vf4(its.p, as_float(its.tri));
+    out1[i] = hit ? vf4(h.p, as_float(h.tri)) : (float4)(0.0f, 0.0f, 0.0f, as_float(NONE));
+    out2[i] = vf4(d, occ ? 1.0f : 0.0f);
 }
 """
 

@@ -27,7 +27,7 @@ INLINE vec3 area_sample(const SceneData* sd, __global const Emitter* em, Emitter
     q->dist = ss.dist;
     q->pdf = pdf;
     q->uv = ss.uv;
-    return (pdf > 0.0f && dot3(ss.n, ss.wi) < 0.0f) ? area_radiance(sd, em, ss.uv) * (1.0f / pdf) : v3s(0.0f);
+    return (pdf > 0.0f && dot3(ss.n, ss.wi) < 0.0f) ? vscale(area_radiance(sd, em, ss.uv), 1.0f / pdf) : v3s(0.0f);
 }
 
 INLINE float area_pdf(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {

@@ -9,12 +9,12 @@
 INLINE vec3 constant_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
     vec3 wi = square_to_uniform_sphere(u);
     q->wi = wi;
-    q->p = q->ref + wi * emitter_far(sd, q->ref);
-    q->n = -wi;
-    q->ng = -wi;
+    q->p = vmad(wi, emitter_far(sd, q->ref), q->ref);
+    q->n = vneg(wi);
+    q->ng = vneg(wi);
     q->dist = INFINITY;
     q->pdf = INV_FOURPI;
-    return vxyz(em->p.constant_.radiance) * (4.0f * M_PI_F_);
+    return vscale(vxyz(em->p.constant_.radiance), 4.0f * M_PI_F_);
 }
 
 INLINE float constant_pdf(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {

@@ -9,11 +9,11 @@
 #include "common.h"
 
 INLINE vec3 distant_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
-    vec3 wi = -vxyz(em->p.distant.direction);
+    vec3 wi = vneg(vxyz(em->p.distant.direction));
     q->wi = wi;
-    q->p = q->ref + wi * emitter_far(sd, q->ref);
-    q->n = -wi;
-    q->ng = -wi;
+    q->p = vmad(wi, emitter_far(sd, q->ref), q->ref);
+    q->n = vneg(wi);
+    q->ng = vneg(wi);
     q->dist = INFINITY;
     q->pdf = 1.0f;
     q->delta = 1u;

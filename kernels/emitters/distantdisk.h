@@ -30,16 +30,17 @@ INLINE vec3 distantdisk_sample(const SceneData* sd, __global const Emitter* em, 
     float sin_t = safe_sqrt(omc * (2.0f - omc));
     float phi = 2.0f * M_PI_F_ * u.y;
     float2 sc = sin_cos(phi);
-    vec3 wi = vxyz(em->p.distantdisk.frame[0]) * (sin_t * sc.y) + vxyz(em->p.distantdisk.frame[1]) * (sin_t * sc.x)
-              + vxyz(em->p.distantdisk.frame[2]) * cos_t;
+    vec3 fx = vxyz(em->p.distantdisk.frame[0]), fy = vxyz(em->p.distantdisk.frame[1]);
+    vec3 fz = vxyz(em->p.distantdisk.frame[2]);
+    vec3 wi = vmad(fz, cos_t, vmad(fx, sin_t * sc.y, vscale(fy, sin_t * sc.x)));
     wi = normalize3(wi);
     q->wi = wi;
-    q->p = q->ref + wi * emitter_far(sd, q->ref);
-    q->n = -wi;
-    q->ng = -wi;
+    q->p = vmad(wi, emitter_far(sd, q->ref), q->ref);
+    q->n = vneg(wi);
+    q->ng = vneg(wi);
     q->dist = INFINITY;
     q->pdf = em->p.distantdisk.pdf;
-    return vxyz(em->p.distantdisk.radiance) * (1.0f / q->pdf);
+    return vscale(vxyz(em->p.distantdisk.radiance), 1.0f / q->pdf);
 }
 
 INLINE float distantdisk_pdf(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {

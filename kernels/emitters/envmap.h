@@ -11,7 +11,7 @@
 
 INLINE vec3 envmap_to_local(__global const Emitter* em, vec3 d) {
     return v3(dot3(vxyz(em->p.envmap.inv[0]), d), dot3(vxyz(em->p.envmap.inv[1]), d),
-                    dot3(vxyz(em->p.envmap.inv[2]), d));
+              dot3(vxyz(em->p.envmap.inv[2]), d));
 }
 
 /* Grid coordinates of a local unit direction: x in [0, W) (shifted by half a texel), y in [0, H-1]. */
@@ -51,9 +51,10 @@ INLINE vec3 envmap_lookup(const SceneData* sd, __global const Emitter* em, vec3 
     uint ix = min((uint)g.x, dims.y - 1u), iy = min((uint)g.y, dims.z - 2u);
     float fx = g.x - (float)ix, fy = g.y - (float)iy;
     uint w1 = dims.y + 1u, i = iy * w1 + ix;
-    vec3 top = vxyz(px[i]) * (1.0f - fx) + vxyz(px[i + 1u]) * fx;
-    vec3 bot = vxyz(px[i + w1]) * (1.0f - fx) + vxyz(px[i + w1 + 1u]) * fx;
-    return (top * (1.0f - fy) + bot * fy) * em->p.envmap.inv[0].w;
+    vec3 top = vmad(vxyz(px[i]), 1.0f - fx, vscale(vxyz(px[i + 1u]), fx));
+    vec3 bot = vmad(vxyz(px[i + w1]), 1.0f - fx, vscale(vxyz(px[i + w1 + 1u]), fx));
+    vec3 mid = vmad(top, 1.0f - fy, vscale(bot, fy));
+    return vscale(mid, em->p.envmap.inv[0].w);
 }
 
 INLINE vec3 envmap_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
@@ -72,17 +73,17 @@ INLINE vec3 envmap_sample(const SceneData* sd, __global const Emitter* em, Emitt
     float vv = ((float)iy + fy) / (float)rows;
     float2 sp = sin_cos(M_PI_F_ * vv), sc = sin_cos(2.0f * M_PI_F_ * uu);
     vec3 v = v3(sc.x * sp.x, sp.y, -sc.y * sp.x);
-    vec3 wi = normalize3(vxyz(em->p.envmap.inv[0]) * v.x + vxyz(em->p.envmap.inv[1]) * v.y
-                           + vxyz(em->p.envmap.inv[2]) * v.z);
+    vec3 r0 = vxyz(em->p.envmap.inv[0]), r1 = vxyz(em->p.envmap.inv[1]), r2 = vxyz(em->p.envmap.inv[2]);
+    vec3 wi = normalize3(vmad(r2, v.z, vmad(r0, v.x, vscale(r1, v.y))));
     q->wi = wi;
-    q->p = q->ref + wi * emitter_far(sd, q->ref);
-    q->n = -wi;
-    q->ng = -wi;
+    q->p = vmad(wi, emitter_far(sd, q->ref), q->ref);
+    q->n = vneg(wi);
+    q->ng = vneg(wi);
     q->dist = INFINITY;
     /* the density of the direction as pdf() will see it, so that sample and pdf agree exactly */
     float pdf = envmap_local_pdf(sd, em, envmap_to_local(em, wi));
     q->pdf = pdf;
-    return pdf > 0.0f ? envmap_lookup(sd, em, envmap_to_local(em, wi)) * (1.0f / pdf) : v3s(0.0f);
+    return pdf > 0.0f ? vscale(envmap_lookup(sd, em, envmap_to_local(em, wi)), 1.0f / pdf) : v3s(0.0f);
 }
 
 INLINE float envmap_pdf(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {

@@ -18,7 +18,7 @@ typedef struct {
 /* Solid-angle density at ref of a point p with area density `inv_area` (dist^2 / (area |cos at p|)); 0 when
    degenerate (grazing, coincident). cos is taken against the geometric normal: the true change of measure. */
 INLINE float shape_solid_angle_pdf(float inv_area, vec3 ref, vec3 p, vec3 ng, vec3 wi) {
-    vec3 d = p - ref;
+    vec3 d = vsub(p, ref);
     float d2 = dot3(d, d);
     float c = fabs(dot3(ng, wi));
     if (c <= 0.0f || d2 <= 0.0f) return 0.0f;
@@ -27,9 +27,9 @@ INLINE float shape_solid_angle_pdf(float inv_area, vec3 ref, vec3 p, vec3 ng, ve
 
 /* Complete a sample at p (normals n, ng) drawn with area density inv_area; returns its solid-angle density. */
 INLINE float shape_point_sample(ShapeSample* ss, vec3 ref, vec3 p, vec3 n, vec3 ng, float inv_area) {
-    vec3 d = p - ref;
+    vec3 d = vsub(p, ref);
     float l = len3(d);
-    ss->wi = l > 0.0f ? d * (1.0f / l) : ng;
+    ss->wi = l > 0.0f ? vscale(d, 1.0f / l) : ng;
     ss->p = p;
     ss->n = n;
     ss->ng = ng;

@@ -42,6 +42,12 @@ INLINE float mesh_half(uint h) {
     return (h & 0x8000u) ? -mag : mag;
 }
 
+/* p0 w0 + p1 w1 + p2 w2: vertex values interpolated with barycentric weights, rounded as that expression in float3
+   was (p1 w1 on its own, the other two products fused into the sums). */
+INLINE vec3 mesh_bary(vec3 p0, vec3 p1, vec3 p2, float w0, float w1, float w2) {
+    return vmad(p2, w2, vmad(p0, w0, vscale(p1, w1)));
+}
+
 /* Per-vertex normal i (3 halves a row: the table has no padding). */
 INLINE vec3 mesh_normal(const SceneData* sd, uint i) {
     __global const ushort* n = sd->normals + 3u * i;
@@ -50,25 +56,25 @@ INLINE vec3 mesh_normal(const SceneData* sd, uint i) {
 
 /* The shading normal at barycentrics (b0, b1, b2) of triangle t: interpolated vertex normals, or ng. */
 INLINE vec3 mesh_shading_normal(const SceneData* sd, __global const Shape* s, const MeshTriangle* t, float b0,
-                                  float b1, float b2, vec3 ng) {
+                                float b1, float b2, vec3 ng) {
     if (!(s->flags & SHAPE_HAS_NORMALS)) return ng;
-    vec3 n = mesh_normal(sd, t->i0) * b0 + mesh_normal(sd, t->i1) * b1 + mesh_normal(sd, t->i2) * b2;
+    vec3 n = mesh_bary(mesh_normal(sd, t->i0), mesh_normal(sd, t->i1), mesh_normal(sd, t->i2), b0, b1, b2);
     float l2 = dot3(n, n);
-    return l2 > 0.0f ? n * (1.0f / sqrt(l2)) : ng;
+    return l2 > 0.0f ? vscale(n, 1.0f / sqrt(l2)) : ng;
 }
 
 /* Mitsuba's dp/du and dp/dv of triangle t: from its uvs, or where it has none (or they are degenerate) its first
    and second edges. */
 INLINE vec3 mesh_dpduv(const SceneData* sd, __global const Shape* s, const MeshTriangle* t, vec3* dpdv) {
-    vec3 dp0 = t->p1 - t->p0, dp1 = t->p2 - t->p0;
+    vec3 dp0 = vsub(t->p1, t->p0), dp1 = vsub(t->p2, t->p0);
     *dpdv = dp1;
     if (!(s->flags & SHAPE_HAS_UVS)) return dp0;
     float2 uv0 = sd->uvs[t->i0], duv0 = sd->uvs[t->i1] - uv0, duv1 = sd->uvs[t->i2] - uv0;
     float det = duv0.x * duv1.y - duv0.y * duv1.x;
     if (det == 0.0f) return dp0;
     float inv = 1.0f / det;
-    *dpdv = (dp1 * duv0.x - dp0 * duv1.x) * inv;
-    return (dp0 * duv1.y - dp1 * duv0.y) * inv;
+    *dpdv = vscale(vmad(dp1, duv0.x, vscale(dp0, -duv1.x)), inv);
+    return vscale(vmad(dp0, duv1.y, vscale(dp1, -duv0.y)), inv);
 }
 
 INLINE vec3 mesh_dpdu(const SceneData* sd, __global const Shape* s, const MeshTriangle* t) {
@@ -81,20 +87,21 @@ INLINE bool mesh_surface(const SceneData* sd, __global const Shape* s, const Ray
     MeshTriangle tri = mesh_triangle(sd, h->prim);
     float b0 = 1.0f - h->u - h->v;
     vec3 p0 = tri.p0, p1 = tri.p1, p2 = tri.p2;
-    its->p = p0 * b0 + p1 * h->u + p2 * h->v;
-    vec3 c = cross3(p1 - p0, p2 - p0);
+    its->p = mesh_bary(p0, p1, p2, b0, h->u, h->v);
+    vec3 c = cross3(vsub(p1, p0), vsub(p2, p0));
     float a2 = len3(c);                          /* twice the area */
-    vec3 ng = c * (1.0f / a2);
+    vec3 ng = vscale(c, 1.0f / a2);
     its->ng = ng;
-    float off = SPAWN_OFFSET * maxf(max3(fabs(p0)), maxf(max3(fabs(p1)), max3(fabs(p2))));
+    float off = SPAWN_OFFSET * maxf(max3(vabs(p0)), maxf(max3(vabs(p1)), max3(vabs(p2))));
     its->off = off;
     /* The spawn base: p moved into the triangle until it is `off` or more from every edge (barycentric
        off * |edge| / a2 for the vertex across that edge), so that near a concave edge the origin is not on
        or behind the neighbouring wall's plane, where p's rounding error alone can put it. */
     float k = off / a2;
-    float w0 = maxf(b0, k * len3(p2 - p1)), w1 = maxf(h->u, k * len3(p0 - p2)), w2 = maxf(h->v, k * len3(p1 - p0));
+    float w0 = maxf(b0, k * len3(vsub(p2, p1))), w1 = maxf(h->u, k * len3(vsub(p0, p2))),
+          w2 = maxf(h->v, k * len3(vsub(p1, p0)));
     float ws = w0 + w1 + w2;
-    its->po = ws > 0.0f && ws < INFINITY ? (p0 * w0 + p1 * w1 + p2 * w2) * (1.0f / ws) : its->p;
+    its->po = ws > 0.0f && ws < INFINITY ? vscale(mesh_bary(p0, p1, p2, w0, w1, w2), 1.0f / ws) : its->p;
     vec3 n = mesh_shading_normal(sd, s, &tri, b0, h->u, h->v, ng);
     if (s->flags & SHAPE_HAS_UVS)
         its->uv = sd->uvs[tri.i0] * b0 + sd->uvs[tri.i1] * h->u + sd->uvs[tri.i2] * h->v;
@@ -120,8 +127,8 @@ INLINE float mesh_sample(const SceneData* sd, __global const Shape* s, vec3 ref,
     vec3 p0 = tri.p0, p1 = tri.p1, p2 = tri.p2;
     float2 b = square_to_uniform_triangle((float2)(ux, u.y));
     float b0 = 1.0f - b.x - b.y;
-    vec3 p = p0 * b0 + p1 * b.x + p2 * b.y;
-    vec3 ng = normalize3(cross3(p1 - p0, p2 - p0));
+    vec3 p = mesh_bary(p0, p1, p2, b0, b.x, b.y);
+    vec3 ng = normalize3(cross3(vsub(p1, p0), vsub(p2, p0)));
     vec3 n = mesh_shading_normal(sd, s, &tri, b0, b.x, b.y, ng);
     float pdf = shape_point_sample(ss, ref, p, n, ng, 1.0f / s->area);
     /* the uv mesh_surface gives at this point (textured emission) */

@@ -23,8 +23,8 @@ INLINE float sphere_one_minus_cos(float r2, float d2) {
 /* v turned by the sphere's rotation rot (inverse: backwards), mirrored where w's sign bit says so. */
 INLINE vec3 sphere_turn(float4 q, vec3 v, float inverse) {
     vec3 c = cross3(vxyz(q), v);
-    v = v + 2.0f * inverse * fabs(q.w) * c + 2.0f * cross3(vxyz(q), c);
-    return (as_uint(q.w) >> 31) ? -v : v;
+    v = vadd(vmad(c, 2.0f * inverse * fabs(q.w), v), vscale(cross3(vxyz(q), c), 2.0f));
+    return (as_uint(q.w) >> 31) ? vneg(v) : v;
 }
 
 /* Mitsuba's dp/du at the unit normal n (direction only): along phi in the sphere's own frame. */
@@ -42,8 +42,8 @@ INLINE void sphere_derivatives(__global const Shape* s, float r, vec3 n, vec3* d
     vec3 l = sphere_turn(q, n, -1.0f);
     float rd = sqrt(l.x * l.x + l.y * l.y);
     vec3 dv = rd > 0.0f ? v3(l.z * l.x / rd, l.z * l.y / rd, -rd) : v3(1.0f, 0.0f, 0.0f);
-    *dpdu = sphere_turn(q, v3(-l.y, l.x, 0.0f), 1.0f) * (2.0f * M_PI_F_ * r);
-    *dpdv = sphere_turn(q, dv, 1.0f) * (M_PI_F_ * r);
+    *dpdu = vscale(sphere_turn(q, v3(-l.y, l.x, 0.0f), 1.0f), 2.0f * M_PI_F_ * r);
+    *dpdv = vscale(sphere_turn(q, dv, 1.0f), M_PI_F_ * r);
 }
 #endif
 
@@ -59,12 +59,12 @@ INLINE float2 sphere_uv(__global const Shape* s, vec3 n) {
 INLINE bool sphere_surface(const SceneData* sd, __global const Shape* s, const Ray* r, const Hit* h,
                            Intersection* its) {
     float4 sp = sd->spheres[s->first];
-    vec3 p = r->o + r->d * h->t;
-    vec3 n = normalize3(p - vxyz(sp));
-    its->p = vxyz(sp) + n * sp.w; /* re-project: the hit point lies on the sphere to float precision */
-    its->off = SPAWN_OFFSET * (max3(fabs(vxyz(sp))) + sp.w);
+    vec3 p = vmad(r->d, h->t, r->o);
+    vec3 n = normalize3(vsub(p, vxyz(sp)));
+    its->p = vmad(n, sp.w, vxyz(sp)); /* re-project: the hit point lies on the sphere to float precision */
+    its->off = SPAWN_OFFSET * (max3(vabs(vxyz(sp))) + sp.w);
     its->po = its->p;
-    vec3 nf = (s->flags & SHAPE_FLIP_NORMALS) ? -n : n;
+    vec3 nf = (s->flags & SHAPE_FLIP_NORMALS) ? vneg(n) : n;
     its->ng = nf;
     its->sh = (s->flags & SHAPE_NEEDS_UV) ? frame_from_tangent(nf, sphere_dpdu(s, n)) : frame_from_normal(nf);
     its->uv = sphere_uv(s, n);
@@ -78,13 +78,13 @@ INLINE bool sphere_surface(const SceneData* sd, __global const Shape* s, const R
 
 INLINE float sphere_sample(const SceneData* sd, __global const Shape* s, vec3 ref, float2 u, ShapeSample* ss) {
     float4 sp = sd->spheres[s->first];
-    vec3 oc = vxyz(sp) - ref;
+    vec3 oc = vsub(vxyz(sp), ref);
     float d2 = dot3(oc, oc), r2 = sp.w * sp.w;
     if (d2 > r2) {
         /* Cone sampling about the axis toward the centre; 1 - cos theta is formed directly (no cancellation for
            distant spheres). */
         float d = sqrt(d2);
-        vec3 axis = oc * (1.0f / d);
+        vec3 axis = vscale(oc, 1.0f / d);
         float omc_max = sphere_one_minus_cos(r2, d2);
         float omc = u.x * omc_max;
         float cos_t = 1.0f - omc;
@@ -96,28 +96,28 @@ INLINE float sphere_sample(const SceneData* sd, __global const Shape* s, vec3 re
         vec3 wi = normalize3(to_world(&f, v3(sin_t * sc.y, sin_t * sc.x, cos_t)));
         /* near intersection: t = d cos - sqrt(r^2 - d^2 sin^2) */
         float t = d * cos_t - safe_sqrt(r2 - d2 * sin2);
-        vec3 n = normalize3(ref + wi * t - vxyz(sp));
-        vec3 p = vxyz(sp) + n * sp.w;
+        vec3 n = normalize3(vsub(vmad(wi, t, ref), vxyz(sp)));
+        vec3 p = vmad(n, sp.w, vxyz(sp));
         ss->uv = sphere_uv(s, n);
-        if (s->flags & SHAPE_FLIP_NORMALS) n = -n;
+        if (s->flags & SHAPE_FLIP_NORMALS) n = vneg(n);
         ss->wi = wi;
         ss->p = p;
         ss->n = n;
         ss->ng = n;
-        ss->dist = len3(p - ref);
+        ss->dist = len3(vsub(p, ref));
         return 1.0f / (2.0f * M_PI_F_ * omc_max);
     }
     /* inside: uniform on the sphere */
     vec3 n = square_to_uniform_sphere(u);
-    vec3 nf = (s->flags & SHAPE_FLIP_NORMALS) ? -n : n;
-    float pdf = shape_point_sample(ss, ref, vxyz(sp) + n * sp.w, nf, nf, 1.0f / s->area);
+    vec3 nf = (s->flags & SHAPE_FLIP_NORMALS) ? vneg(n) : n;
+    float pdf = shape_point_sample(ss, ref, vmad(n, sp.w, vxyz(sp)), nf, nf, 1.0f / s->area);
     ss->uv = sphere_uv(s, n);
     return pdf;
 }
 
 INLINE float sphere_pdf(const SceneData* sd, __global const Shape* s, vec3 ref, vec3 p, vec3 ng, vec3 wi) {
     float4 sp = sd->spheres[s->first];
-    vec3 oc = vxyz(sp) - ref;
+    vec3 oc = vsub(vxyz(sp), ref);
     float d2 = dot3(oc, oc), r2 = sp.w * sp.w;
     if (d2 > r2) {
         /* the direction must meet the sphere: in front, closest approach within r (relative slack for rays that

@@ -12,5 +12,5 @@ __kernel void emitter_sample_batch(SCENE_ARGS, uint e, float4 ref, uint n, uint 
     EmitterQuery q;
     q.ref = vxyz(ref);
     vec3 w = emitter_sample(&sd, e, &q, next2d(&s));
-    out[i] = (float4)(w, q.pdf);
+    out[i] = vf4(w, q.pdf);
 }

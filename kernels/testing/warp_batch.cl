@@ -10,12 +10,12 @@ INLINE float4 warp_point(uint kind, float param, float2 u) {
         case 0: return (float4)(square_to_uniform_square(u), 0.0f, 0.0f);
         case 1: return (float4)(square_to_tent(u), 0.0f, 0.0f);
         case 2: return (float4)(square_to_uniform_disk(u), 0.0f, 0.0f);
-        case 3: return (float4)(square_to_uniform_sphere(u), 0.0f);
-        case 4: return (float4)(square_to_uniform_hemisphere(u), 0.0f);
-        case 5: return (float4)(square_to_cosine_hemisphere(u), 0.0f);
-        case 6: return (float4)(square_to_uniform_cone(u, param), 0.0f);
+        case 3: return vf4(square_to_uniform_sphere(u), 0.0f);
+        case 4: return vf4(square_to_uniform_hemisphere(u), 0.0f);
+        case 5: return vf4(square_to_cosine_hemisphere(u), 0.0f);
+        case 6: return vf4(square_to_uniform_cone(u, param), 0.0f);
         case 7: return (float4)(square_to_uniform_triangle(u), 0.0f, 0.0f);
-        default: return (float4)(square_to_beckmann(u, param), 0.0f);
+        default: return vf4(square_to_beckmann(u, param), 0.0f);
     }
 }
 INLINE float warp_density(uint kind, float param, float4 p) {

@@ -51,9 +51,9 @@ INLINE vec3 bitmap_eval(__global const Texture* t, float2 uv) {
         return bitmap_texel(t, bitmap_wrap(bitmap_floor(s * (float)w), w, d.w),
                             bitmap_wrap(bitmap_floor(tt * (float)h), h, d.w));
     BitmapTaps k = bitmap_taps(d, s, tt);
-    vec3 top = bitmap_texel(t, k.xa, k.ya) * (1.0f - k.a) + bitmap_texel(t, k.xb, k.ya) * k.a;
-    vec3 bot = bitmap_texel(t, k.xa, k.yb) * (1.0f - k.a) + bitmap_texel(t, k.xb, k.yb) * k.a;
-    return top * (1.0f - k.b) + bot * k.b;
+    vec3 top = vmad(bitmap_texel(t, k.xa, k.ya), 1.0f - k.a, vscale(bitmap_texel(t, k.xb, k.ya), k.a));
+    vec3 bot = vmad(bitmap_texel(t, k.xa, k.yb), 1.0f - k.a, vscale(bitmap_texel(t, k.xb, k.yb), k.a));
+    return vmad(top, 1.0f - k.b, vscale(bot, k.b));
 }
 
 /* The uv gradient of the first channel as Mitsuba 3.9's eval_1_grad takes it (bumpmap's height): the derivative of

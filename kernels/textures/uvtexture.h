@@ -7,7 +7,7 @@ INLINE vec3 uvtexture_eval(__global const Texture* t, float2 uv) {
     /* sinpi/cospi keep the phase exact where 16πu would round */
     float su = sinpi(16.0f * uv.x), cu = cospi(16.0f * uv.x), sv = sinpi(16.0f * uv.y);
     return v3(fabs(fmod(uv.x, 1.0f)) * (1.0f - 0.2f * su * sv), fabs(fmod(uv.y, 1.0f)) * (1.0f - 0.2f * cu * sv),
-                    0.5f);
+              0.5f);
 }
 
 #endif

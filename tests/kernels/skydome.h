@@ -8,12 +8,12 @@ INLINE vec3 skydome_sample(const SceneData* sd, __global const Emitter* em, Emit
     vec3 h = square_to_uniform_hemisphere(u);           /* about +z */
     vec3 wi = v3(h.x, h.z, h.y);                    /* about +y */
     q->wi = wi;
-    q->p = q->ref + wi * emitter_far(sd, q->ref);
-    q->n = -wi;
-    q->ng = -wi;
+    q->p = vmad(wi, emitter_far(sd, q->ref), q->ref);
+    q->n = vneg(wi);
+    q->ng = vneg(wi);
     q->dist = INFINITY;
     q->pdf = 0.5f * INV_PI;
-    return vxyz(em->p.skydome.radiance) * (2.0f * M_PI_F_);
+    return vscale(vxyz(em->p.skydome.radiance), 2.0f * M_PI_F_);
 }
 
 INLINE float skydome_pdf(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
