@@ -98,7 +98,7 @@ class WavefrontExecutor:
     for the device: for benchmarks/profile_wavefront.py, not for renders)."""
 
     name = "wavefront"
-    STAGES = ("camera", "trace", "shade", "shadow", "finish", "flush")
+    STAGES = ("camera", "trace", "shade", "shadow", "compact", "finish", "flush")
 
     def __init__(self, ctx, queue, program, scene_bufs, camera, filter_cdf, launch_pixels, timed: bool = False):
         import numpy as np
@@ -129,6 +129,7 @@ class WavefrontExecutor:
         self.hits = cl.Buffer(ctx, rw, n * hit_bytes)
         self.wt = cl.Buffer(ctx, rw, n * 8)
         self.queues = [cl.Buffer(ctx, rw, n * 4) for _ in range(3)]   # trace now, trace next, shadow
+        self.flags = cl.Buffer(ctx, rw, n * 4)   # what each path needs next (wf_compact queues it)
         self.counts = cl.Buffer(ctx, rw, 16)
         self._no_list = cl.Buffer(ctx, rw, 4)   # bound to pixel_list when a launch runs over a range
         self._counts = np.zeros(4, np.uint32)
@@ -136,10 +137,11 @@ class WavefrontExecutor:
         self.sum0 = cl.Buffer(ctx, rw | mf.COPY_HOST_PTR, hostbuf=zeros)
         self.sum1 = cl.Buffer(ctx, rw | mf.COPY_HOST_PTR, hostbuf=zeros)
         self.nbad = cl.Buffer(ctx, rw | mf.COPY_HOST_PTR, hostbuf=np.zeros(launch_pixels, np.uint32))
-        self.device_bytes = n * (path_bytes + sampler_bytes + hit_bytes + 8 + 12) + launch_pixels * 36
-        self.a["camera"].set(paths=self.paths, samplers=self.samplers, wt=self.wt, counts=self.counts)
+        self.device_bytes = n * (path_bytes + sampler_bytes + hit_bytes + 8 + 16) + launch_pixels * 36
+        self.a["camera"].set(paths=self.paths, samplers=self.samplers, wt=self.wt, flags=self.flags)
         self.a["trace"].set(paths=self.paths, hits=self.hits)
-        self.a["shade"].set(paths=self.paths, samplers=self.samplers, hits=self.hits, counts=self.counts)
+        self.a["shade"].set(paths=self.paths, samplers=self.samplers, hits=self.hits, flags=self.flags)
+        self.a["compact"].set(flags=self.flags, shadow_queue=self.queues[2], counts=self.counts)
         self.a["shadow"].set(paths=self.paths, queue=self.queues[2])
         self.a["finish"].set(paths=self.paths, wt=self.wt, sum0=self.sum0, sum1=self.sum1, nbad=self.nbad)
         self.a["flush"].set(sum0=self.sum0, sum1=self.sum1, nbad=self.nbad)
@@ -155,11 +157,11 @@ class WavefrontExecutor:
         import pyopencl as cl
 
         zero = np.uint32(0)
-        self.a["camera"].set(queue=self.queues[0], pixel_list=self._no_list, listed=zero, pixel_offset=zero,
-                             n_slots=zero, k=np.uint32(1),
+        self.a["camera"].set(pixel_list=self._no_list, listed=zero, pixel_offset=zero, n_slots=zero, k=np.uint32(1),
                              sample_offset=zero, seed=zero)
         self.a["trace"].set(queue=self.queues[0], n=zero)
-        self.a["shade"].set(queue=self.queues[0], n=zero, next_queue=self.queues[1], shadow_queue=self.queues[2])
+        self.a["shade"].set(queue=self.queues[0], n=zero)
+        self.a["compact"].set(queue=self.queues[0], identity=zero, n=zero, next_queue=self.queues[1])
         self.a["shadow"].set(n=zero)
         self.a["finish"].set(n_pixels=zero, k=np.uint32(1))
         self.a["flush"].set(pixel_list=self._no_list, listed=zero, pixel_offset=zero, n_pixels=zero, spp=zero)
@@ -211,16 +213,20 @@ class WavefrontExecutor:
             k = min(k_max, spp - done)
             n_slots = count * k
             q_now, q_next = self.queues[0], self.queues[1]
-            self.a["camera"].set(queue=q_now, pixel_offset=np.uint32(off), n_slots=np.uint32(n_slots),
+            self.a["camera"].set(pixel_offset=np.uint32(off), n_slots=np.uint32(n_slots),
                                  k=np.uint32(k), sample_offset=np.uint32(sample_offset + done),
                                  seed=np.uint32(seed))
             self._run("camera", n_slots)
+            self.a["compact"].set(queue=q_next, identity=np.uint32(1), n=np.uint32(n_slots), next_queue=q_now)
+            self._run("compact", n_slots)
             n, _ = self._take_counts()
             while n > 0:
                 self.a["trace"].set(queue=q_now, n=np.uint32(n))
                 self._run("trace", n)
-                self.a["shade"].set(queue=q_now, n=np.uint32(n), next_queue=q_next, shadow_queue=self.queues[2])
+                self.a["shade"].set(queue=q_now, n=np.uint32(n))
                 self._run("shade", n)
+                self.a["compact"].set(queue=q_now, identity=np.uint32(0), n=np.uint32(n), next_queue=q_next)
+                self._run("compact", n)
                 n_next, n_shadow = self._take_counts()
                 if n_shadow:
                     self.a["shadow"].set(n=np.uint32(n_shadow))

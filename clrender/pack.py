@@ -57,6 +57,14 @@ class SceneBuffers:
             return tables[name]
         raise AttributeError(name)
 
+    @property
+    def search_steps(self) -> int:
+        """Halvings that find any entry of the tables the kernels search (the CDFs, the mesh table, the filter's
+        table): 2^steps exceeds the longest. The render program's CLR_SEARCH_STEPS (kernels/math.h)."""
+        longest = max(len(self.tables["cdf"]), len(self.tables["mesh_vertices"]),
+                      int(self.camera["filter_bins"][0]) + 1, 1)
+        return int(longest).bit_length()
+
     def scene_arrays(self):
         """The tables in kernel-argument order (SCENE_ARGS)."""
         return list(self.tables.values())

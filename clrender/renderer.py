@@ -39,6 +39,11 @@ def render_defines(scene, buffers, extra: dict | None = None) -> dict:
         defines["CLR_SAMPLER_SOBOL"] = 1
     if getattr(buffers, "plugins", None) is not None:
         defines.update(buffers.plugins.defines())
+    if isinstance(getattr(buffers, "tables", None), dict) and "info" in buffers.tables:
+        # fixed trip counts for the searches and the loops over infinite emitters (kernels/math.h, emitter.h):
+        # no per-item loop is left in a stage kernel for them
+        defines["CLR_SEARCH_STEPS"] = buffers.search_steps
+        defines["CLR_N_INFINITE"] = int(buffers.tables["info"]["n_infinite"][0])
     return {**defines, **(extra or {})}
 
 

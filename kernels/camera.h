@@ -16,9 +16,9 @@ INLINE Ray camera_ray_lens(__global const Camera* cam, float sx, float sy, float
     if (cam->ortho != 0u) {
         /* Mitsuba's orthographic sensor: from the point (2nx - 1, (1 - 2ny) height/width, near) of camera space
            (its x and y axes scaled by to_world: the visible area), along z, for far - near */
-        vec3 X = vxyz(cam->to_world[0]), Y = vxyz(cam->to_world[1]), Z = vxyz(cam->to_world[2]);
+        vec3 X = vrow(cam->to_world[0]), Y = vrow(cam->to_world[1]), Z = vrow(cam->to_world[2]);
         Ray r;
-        vec3 o = vmad(X, 2.0f * nx - 1.0f, vxyz(cam->to_world[3]));
+        vec3 o = vmad(X, 2.0f * nx - 1.0f, vrow(cam->to_world[3]));
         o = vmad(Y, (1.0f - 2.0f * ny) * cam->inv_aspect, o);
         r.o = vmad(Z, cam->near_clip, o);
         r.d = vscale(Z, 1.0f / len3(Z));
@@ -37,11 +37,11 @@ INLINE Ray camera_ray_lens(__global const Camera* cam, float sx, float sy, float
     }
     float inv_len = 1.0f / len3(dc);
     dc = vscale(dc, inv_len);
-    vec3 X = vxyz(cam->to_world[0]), Y = vxyz(cam->to_world[1]), Z = vxyz(cam->to_world[2]);
+    vec3 X = vrow(cam->to_world[0]), Y = vrow(cam->to_world[1]), Z = vrow(cam->to_world[2]);
     vec3 dw = vmad(Z, dc.z, vmad(X, dc.x, vscale(Y, dc.y)));
     float scale = len3(dw); /* a scaled toWorld stretches distances: keep the clip planes where Nori has them */
     Ray r;
-    r.o = vmad(Y, oc.y, vmad(X, oc.x, vxyz(cam->to_world[3])));
+    r.o = vmad(Y, oc.y, vmad(X, oc.x, vrow(cam->to_world[3])));
     r.d = vscale(dw, 1.0f / scale);
     r.tmin = cam->near_clip / dc.z * scale;
     r.tmax = cam->far_clip / dc.z * scale;

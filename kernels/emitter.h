@@ -122,10 +122,18 @@ INLINE float scene_emitter_pdf(const SceneData* sd, uint e, const EmitterQuery* 
     return prob > 0.0f ? emitter_pdf(sd, e, q) * prob : 0.0f;
 }
 
+/* The number of infinite emitters: the scene's, fixed when the host builds the program for it (CLR_N_INFINITE),
+   so that the loops below have a constant trip count (0 or 1 in most scenes: unrolled, no per-item loop left). */
+#ifdef CLR_N_INFINITE
+#define N_INFINITE(sd) ((uint)CLR_N_INFINITE)
+#else
+#define N_INFINITE(sd) ((sd)->info->n_infinite)
+#endif
+
 /* Radiance of an escaping ray (direction d): the sum over the infinite emitters (an index list, so an escaped
    ray visits only those). */
 INLINE vec3 scene_eval_environment(const SceneData* sd, vec3 d) {
-    uint n = sd->info->n_infinite;
+    uint n = N_INFINITE(sd);
     vec3 L = v3s(0.0f);
     EmitterQuery q;
     q.wi = d;  /* all an infinite emitter's eval reads */
@@ -135,7 +143,7 @@ INLINE vec3 scene_eval_environment(const SceneData* sd, vec3 d) {
 
 /* Light-selection pdf of an escaping direction: sum over infinite emitters of P(e) pdf_e(d). */
 INLINE float scene_environment_pdf(const SceneData* sd, vec3 d) {
-    uint n = sd->info->n_infinite;
+    uint n = N_INFINITE(sd);
     float pdf = 0.0f;
     EmitterQuery q;
     q.wi = d;  /* all an infinite emitter's pdf reads */

@@ -34,17 +34,24 @@ INLINE float filter_in_bin(__global const Camera* cam, __global const float* cdf
    Returns x; *pdf receives its density. */
 INLINE float filter_sample_1d(__global const Camera* cam, __global const float* cdf, float u, float* pdf) {
     uint n = cam->filter_bins;
+#ifdef CLR_SEARCH_STEPS
+    return filter_in_bin(cam, cdf, table_count_le(cdf, n, u) - 1u, u, pdf);   /* cdf[0] = 0 <= u: at least 1 */
+#else
     uint lo = 0u, hi = n; /* find the bin i with cdf[i] <= u < cdf[i+1] */
     while (hi - lo > 1u) {
         uint mid = (lo + hi) >> 1;
         if (cdf[mid] <= u) lo = mid; else hi = mid;
     }
     return filter_in_bin(cam, cdf, lo, u, pdf);
+#endif
 }
 
 /* filter_sample_1d for a table followed by its guide (clrender/filters/filter.py, with_guide): the same bin,
    found from guide[floor(u * bins)] in about one step instead of a bisection. */
 INLINE float filter_sample_1d_guided(__global const Camera* cam, __global const float* cdf, float u, float* pdf) {
+#ifdef CLR_SEARCH_STEPS
+    return filter_sample_1d(cam, cdf, u, pdf);   /* the same bin, in fixed steps (no per-item loop) */
+#else
     uint n = cam->filter_bins;
     uint k = (uint)(u * (float)n);
     k = k < n ? k : n - 1u;
@@ -52,6 +59,7 @@ INLINE float filter_sample_1d_guided(__global const Camera* cam, __global const 
     while (lo > 0u && cdf[lo] > u) --lo;              /* only if u * n rounded up */
     while (lo + 1u < n && cdf[lo + 1u] <= u) ++lo;
     return filter_in_bin(cam, cdf, lo, u, pdf);
+#endif
 }
 
 /* f(dx) f(dy) / (p(dx) p(dy)): the weight of an offset drawn with densities px, py. */

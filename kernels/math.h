@@ -14,12 +14,25 @@
    kernel across work-items (16 per AVX-512 instruction) only when no OpenCL vector type (float3/float4) is left in
    the code it inlines: the same stage in this struct ran at 501 M items/s against 160 M in float3
    (benchmarks/pocl_vectorise.py). float4 stays for loads of packed rows only (vxyz takes their xyz). Colours are
-   vec3 too. */
+   vec3 too.
+   On x86-64 a struct of three floats is passed to and returned from functions as {<2 x float>, float} (the SysV
+   ABI's SSE classes), and those vector pieces survive inlining (wf_shade's IR for the Cornell twin: 248
+   vector-typed instructions); a struct larger than 16 bytes is passed in memory and leaves none (0). The padded
+   form is the one a vectorising build needs; it is opt-in (-DCLR_VEC3_PASS_IN_MEMORY) until a stage vectorises,
+   because it costs the scalar megakernel a few per cent (benchmarks/README.md). */
+#ifdef CLR_VEC3_PASS_IN_MEMORY
+typedef struct { float x, y, z; float abi_pad_[2]; } vec3;
+#else
 typedef struct { float x, y, z; } vec3;
+#endif
 
 INLINE vec3 v3(float x, float y, float z) { vec3 r; r.x = x; r.y = y; r.z = z; return r; }
 INLINE vec3 v3s(float s) { return v3(s, s, s); }
 INLINE vec3 vxyz(float4 v) { return v3(v.x, v.y, v.z); }
+/* xyz of a float4 row in __global memory, as three float loads: reading the float4 itself is a vector-typed load,
+   and one vector-typed instruction keeps PoCL's work-item loop scalar */
+INLINE vec3 vrow_at(__global const float* p) { return v3(p[0], p[1], p[2]); }
+#define vrow(lvalue) vrow_at((__global const float*)&(lvalue))
 INLINE float4 vf4(vec3 v, float w) { return (float4)(v.x, v.y, v.z, w); }
 INLINE vec3 vadd(vec3 a, vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
 INLINE vec3 vsub(vec3 a, vec3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
@@ -42,6 +55,24 @@ INLINE vec3 vclamp(vec3 a, float lo, float hi) {
               a.z < lo ? lo : (a.z > hi ? hi : a.z));
 }
 INLINE float vcomp(vec3 a, uint i) { return i == 0u ? a.x : (i == 1u ? a.y : a.z); }
+
+/* Searches of sorted tables with a fixed trip count. A `while` bisection runs a per-item number of steps, and
+   one such loop anywhere in a stage kernel keeps PoCL's work-item loop scalar; CLR_SEARCH_STEPS halvings (the host
+   sets it from the scene's largest searched table, so that 2^steps exceeds every count: clrender/pack.py
+   SceneBuffers.search_steps) unroll into straight code with masked loads. Programs built without a scene keep the
+   bisection. */
+#ifdef CLR_SEARCH_STEPS
+/* How many of the non-decreasing values t[0..count) are <= u. */
+INLINE uint table_count_le(__global const float* t, uint count, float u) {
+    uint n = 0u;
+#pragma unroll
+    for (int s = CLR_SEARCH_STEPS - 1; s >= 0; --s) {
+        uint next = n + (1u << s);
+        if (next <= count && t[next - 1u] <= u) n = next;
+    }
+    return n;
+}
+#endif
 
 INLINE float dot3(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 INLINE vec3 cross3(vec3 a, vec3 b) { return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x); }

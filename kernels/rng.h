@@ -116,7 +116,9 @@ INLINE float next1d(Sampler* s) {
        reloads the counter as 64-bit words just after 32-bit stores to it, a store-forwarding stall (perf: 9 % of
        the furnace twin's time; this is x1.10 there, x1.00 on the Cornell twin) */
     uint u = s->used;
-    uint x = u == 0u ? s->out.v[0] : (u == 1u ? s->out.v[1] : (u == 2u ? s->out.v[2] : s->out.v[3]));
+    /* and as masks, not a chain of ?: (LLVM turns that into a switch, which PoCL's vectoriser refuses) */
+    uint x = (s->out.v[0] & (0u - (uint)(u == 0u))) | (s->out.v[1] & (0u - (uint)(u == 1u)))
+           | (s->out.v[2] & (0u - (uint)(u == 2u))) | (s->out.v[3] & (0u - (uint)(u >= 3u)));
     s->used += 1u;
     return (float)(x >> 8) * (1.0f / 16777216.0f);
 }

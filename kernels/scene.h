@@ -74,12 +74,23 @@ typedef struct {
    (mesh_vertices rows: (first vertex, shape), ascending; a binary search over a table of one row per mesh). */
 INLINE uint scene_triangle_shape(const SceneData* sd, uint pos) {
     uint i0 = sd->tri_index[3u * pos];
+#ifdef CLR_SEARCH_STEPS
+    /* the last row whose first vertex is <= i0, in the fixed steps of math.h's table_count_le */
+    uint n = 0u, count = sd->info->n_meshes;
+#pragma unroll
+    for (int s = CLR_SEARCH_STEPS - 1; s >= 0; --s) {
+        uint next = n + (1u << s);
+        if (next <= count && sd->mesh_vertices[next - 1u].x <= i0) n = next;
+    }
+    return sd->mesh_vertices[n - 1u].y;
+#else
     uint lo = 0u, hi = sd->info->n_meshes - 1u;
     while (lo < hi) {
         uint mid = (lo + hi + 1u) >> 1;
         if (sd->mesh_vertices[mid].x <= i0) lo = mid; else hi = mid - 1u;
     }
     return sd->mesh_vertices[lo].y;
+#endif
 }
 
 /* A closest-hit query is two steps, so that a wavefront driver can run them as kernels of their own: the trace

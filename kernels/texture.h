@@ -7,9 +7,11 @@
 #include "gen/texture_dispatch.h"
 #include "bsdfs/common.h"
 
-INLINE vec3 param_color(const BsdfQuery* q, float4 value, uint tex) {
-    return tex == NONE ? vxyz(value) : texture_eval(q->textures + tex, q->uv);
+/* value: the parameter's float4 field of a __global row (read as three floats: kernels/math.h vrow) */
+INLINE vec3 param_color_at(const BsdfQuery* q, __global const float* value, uint tex) {
+    return tex == NONE ? v3(value[0], value[1], value[2]) : texture_eval(q->textures + tex, q->uv);
 }
+#define param_color(q, value, tex) param_color_at(q, (__global const float*)&(value), tex)
 
 /* The host gives a float parameter the texture's float view (Texture.float_view), whose first channel it is. */
 INLINE float param_float(const BsdfQuery* q, float value, uint tex) {

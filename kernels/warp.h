@@ -20,12 +20,14 @@ INLINE float square_to_tent_pdf(float2 p) {
 /* Concentric (Shirley-Chiu) map: low distortion, so stratification survives. */
 INLINE float2 square_to_uniform_disk(float2 u) {
     float a = 2.0f * u.x - 1.0f, b = 2.0f * u.y - 1.0f;
-    if (a == 0.0f && b == 0.0f) return (float2)(0.0f, 0.0f);
     float r, phi;
     if (a * a > b * b) { r = a; phi = (M_PI_F_ / 4.0f) * (b / a); }
     else { r = b; phi = (M_PI_F_ / 2.0f) - (M_PI_F_ / 4.0f) * (a / b); }
-    float2 sc = sin_cos(phi);
-    return (float2)(r * sc.y, r * sc.x);
+    /* the centre by selects, not an early return: two float2 results merged after a branch stay a vector-typed
+       phi, which keeps a stage kernel's work-item loop scalar (kernels/math.h) */
+    bool centre = a == 0.0f && b == 0.0f;
+    float2 sc = sin_cos(centre ? 0.0f : phi);
+    return (float2)(centre ? 0.0f : r * sc.y, centre ? 0.0f : r * sc.x);
 }
 INLINE float square_to_uniform_disk_pdf(float2 p) { return (p.x * p.x + p.y * p.y <= 1.0f) ? INV_PI : 0.0f; }
 

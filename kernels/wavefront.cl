@@ -15,6 +15,10 @@
 #error "the wavefront driver runs the path integrators only (kernels/integrators/path_loop.h)"
 #endif
 
+/* What a path needs next, in the flags the camera and shade stages write (wf_compact reads them). */
+#define QUEUE_TRACE 1u
+#define QUEUE_SHADOW 2u
+
 /* The pixel of launch index i: i itself over a range of pixels, or pixel_list[i] when the launch runs over a list
    (adaptive sampling's rounds; `listed` != 0). */
 inline uint listed_pixel(__global const uint* pixel_list, uint listed, uint i) {
@@ -31,10 +35,11 @@ __kernel void wf_sizes(__global uint* out) {
 
 /* Camera stage: the camera sample of every slot (sample_offset + slot % k of pixel pixel_offset + slot / k, or of
    the list's entry at that index), its filter weight in wt[slot].x (wt[slot].y = 0 for a sample outside the window:
-   it counts, but adds nothing) and the path's first segment queued for tracing (counts[0]). */
+   it counts, but adds nothing) and flags[slot] = QUEUE_TRACE when the path's first segment is to be traced
+   (wf_compact queues it). */
 __kernel void wf_camera(SCENE_ARGS, __global const Camera* cam, __global const float* filter_cdf,
                         __global PathState* paths, __global Sampler* samplers, __global float2* wt,
-                        __global uint* queue, __global uint* counts, __global const uint* pixel_list, uint listed,
+                        __global uint* flags, __global const uint* pixel_list, uint listed,
                         uint pixel_offset, uint n_slots, uint k, uint sample_offset, uint seed) {
     uint slot = get_global_id(0);
     if (slot >= n_slots) return;
@@ -54,7 +59,7 @@ __kernel void wf_camera(SCENE_ARGS, __global const Camera* cam, __global const f
     }
     paths[slot] = ps;
     samplers[slot] = smp;
-    if (ps.alive) queue[atomic_inc(&counts[0])] = slot;
+    flags[slot] = ps.alive ? QUEUE_TRACE : 0u;
 }
 
 /* Trace stage: the closest hit of each queued path's segment (t < 0: it hit nothing). */
@@ -70,11 +75,10 @@ __kernel void wf_trace(SCENE_ARGS, __global const PathState* paths, __global Hit
     hits[slot] = h;
 }
 
-/* Shade stage: surface reconstruction, emission and its MIS weight, the emitter sample (its shadow ray queued,
-   counts[1]), roulette and the BSDF sample (the next segment queued, counts[0]). */
+/* Shade stage: surface reconstruction, emission and its MIS weight, the emitter sample (a shadow ray to trace:
+   QUEUE_SHADOW in flags[i]), roulette and the BSDF sample (the next segment to trace: QUEUE_TRACE). */
 __kernel void wf_shade(SCENE_ARGS, __global PathState* paths, __global Sampler* samplers, __global const Hit* hits,
-                       __global const uint* queue, uint n, __global uint* next_queue, __global uint* shadow_queue,
-                       __global uint* counts) {
+                       __global const uint* queue, uint n, __global uint* flags) {
     uint i = get_global_id(0);
     if (i >= n) return;
     SCENE_INIT(sd);
@@ -85,8 +89,21 @@ __kernel void wf_shade(SCENE_ARGS, __global PathState* paths, __global Sampler* 
     path_vertex(&sd, &ps, h.t >= 0.0f, &h, &smp);
     paths[slot] = ps;
     samplers[slot] = smp;
-    if (ps.alive) next_queue[atomic_inc(&counts[0])] = slot;
-    if (ps.shadow_pending) shadow_queue[atomic_inc(&counts[1])] = slot;
+    flags[i] = (ps.alive ? QUEUE_TRACE : 0u) | (ps.shadow_pending ? QUEUE_SHADOW : 0u);
+}
+
+/* The queues of the next stages from the flags the camera or shade stage left, one per launch index i (the
+   slot is i itself after the camera stage, queue[i] after a shade stage): the paths to trace in next_queue
+   (counts[0]), the shadow rays in shadow_queue (counts[1]). A kernel of its own so that the stages themselves hold
+   no atomic (a call PoCL's vectoriser cannot widen); it is a few instructions per path. */
+__kernel void wf_compact(__global const uint* flags, __global const uint* queue, uint identity, uint n,
+                         __global uint* next_queue, __global uint* shadow_queue, __global uint* counts) {
+    uint i = get_global_id(0);
+    if (i >= n) return;
+    uint f = flags[i];
+    uint slot = identity ? i : queue[i];
+    if (f & QUEUE_TRACE) next_queue[atomic_inc(&counts[0])] = slot;
+    if (f & QUEUE_SHADOW) shadow_queue[atomic_inc(&counts[1])] = slot;
 }
 
 /* Shadow stage: the pending emitter samples count where their shadow rays reach the light. */
@@ -107,7 +124,7 @@ __kernel void wf_finish(SCENE_ARGS, __global const PathState* paths, __global co
     uint gid = get_global_id(0);
     if (gid >= n_pixels) return;
     SCENE_INIT(sd);
-    vec3 swl = vxyz(sum0[gid]), swl2 = vxyz(sum1[gid]);
+    vec3 swl = vrow(sum0[gid]), swl2 = vrow(sum1[gid]);
     float sw = sum0[gid].w;
     uint bad = nbad[gid];
     for (uint j = 0u; j < k; ++j) {

@@ -11,7 +11,7 @@ INLINE vec3 conductor_sample(__global const Bsdf* b, BsdfQuery* q, float2 u) {
     q->eta = 1.0f;
     q->wo = reflect_local(q->wi);
     if (q->wi.z <= 0.0f) return v3s(0.0f);
-    vec3 F = fresnel_conductor(q->wi.z, vxyz(b->p.conductor.eta), vxyz(b->p.conductor.k));
+    vec3 F = fresnel_conductor(q->wi.z, vrow(b->p.conductor.eta), vrow(b->p.conductor.k));
     return vmul(F, param_color(q, b->p.conductor.specular_reflectance, b->p.conductor.specular_reflectance_tex));
 }
 

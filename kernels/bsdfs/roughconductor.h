@@ -22,7 +22,7 @@ INLINE vec3 roughconductor_eval(__global const Bsdf* b, const BsdfQuery* q) {
     vec3 h = normalize3(vadd(wi, wo));
     float s = mf_d(d, h) * mf_g1(d, wi, h) * mf_g1(d, wo, h) / (4.0f * wi.z * wo.z);
     if (!(s > 0.0f)) return v3s(0.0f);
-    vec3 F = fresnel_conductor(dot3(wi, h), vxyz(b->p.roughconductor.eta), vxyz(b->p.roughconductor.k));
+    vec3 F = fresnel_conductor(dot3(wi, h), vrow(b->p.roughconductor.eta), vrow(b->p.roughconductor.k));
     vec3 r = param_color(q, b->p.roughconductor.specular_reflectance, b->p.roughconductor.specular_reflectance_tex);
     return vmul(vscale(F, s), r);
 }

@@ -12,7 +12,7 @@
 
 INLINE vec3 area_radiance(const SceneData* sd, __global const Emitter* em, float2 uv) {
     uint tex = em->p.area.radiance_tex;
-    return tex == NONE ? vxyz(em->p.area.radiance) : texture_eval(sd->textures + tex, uv);
+    return tex == NONE ? vrow(em->p.area.radiance) : texture_eval(sd->textures + tex, uv);
 }
 
 /* Complete the query from the emitting shape's sample (solid-angle density pdf at ref); returns L/pdf, or 0 when

@@ -14,7 +14,7 @@ INLINE vec3 constant_sample(const SceneData* sd, __global const Emitter* em, Emi
     q->ng = vneg(wi);
     q->dist = INFINITY;
     q->pdf = INV_FOURPI;
-    return vscale(vxyz(em->p.constant_.radiance), 4.0f * M_PI_F_);
+    return vscale(vrow(em->p.constant_.radiance), 4.0f * M_PI_F_);
 }
 
 INLINE float constant_pdf(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
@@ -22,7 +22,7 @@ INLINE float constant_pdf(const SceneData* sd, __global const Emitter* em, const
 }
 
 INLINE vec3 constant_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
-    return vxyz(em->p.constant_.radiance);
+    return vrow(em->p.constant_.radiance);
 }
 
 #endif

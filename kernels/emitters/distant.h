@@ -9,7 +9,7 @@
 #include "common.h"
 
 INLINE vec3 distant_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
-    vec3 wi = vneg(vxyz(em->p.distant.direction));
+    vec3 wi = vneg(vrow(em->p.distant.direction));
     q->wi = wi;
     q->p = vmad(wi, emitter_far(sd, q->ref), q->ref);
     q->n = vneg(wi);
@@ -17,7 +17,7 @@ INLINE vec3 distant_sample(const SceneData* sd, __global const Emitter* em, Emit
     q->dist = INFINITY;
     q->pdf = 1.0f;
     q->delta = 1u;
-    return vxyz(em->p.distant.irradiance);
+    return vrow(em->p.distant.irradiance);
 }
 
 #endif

@@ -12,7 +12,7 @@
 
 /* 1 - cos(angle between wi and the axis) >= 0, accurate for small angles (via |wi x axis|). */
 INLINE bool distantdisk_inside(__global const Emitter* em, vec3 wi) {
-    vec3 z = vxyz(em->p.distantdisk.frame[2]);
+    vec3 z = vrow(em->p.distantdisk.frame[2]);
     float c = dot3(wi, z);
     float omc_max = em->p.distantdisk.one_minus_cos;
     if (omc_max >= 2.0f) return true;
@@ -30,8 +30,8 @@ INLINE vec3 distantdisk_sample(const SceneData* sd, __global const Emitter* em, 
     float sin_t = safe_sqrt(omc * (2.0f - omc));
     float phi = 2.0f * M_PI_F_ * u.y;
     float2 sc = sin_cos(phi);
-    vec3 fx = vxyz(em->p.distantdisk.frame[0]), fy = vxyz(em->p.distantdisk.frame[1]);
-    vec3 fz = vxyz(em->p.distantdisk.frame[2]);
+    vec3 fx = vrow(em->p.distantdisk.frame[0]), fy = vrow(em->p.distantdisk.frame[1]);
+    vec3 fz = vrow(em->p.distantdisk.frame[2]);
     vec3 wi = vmad(fz, cos_t, vmad(fx, sin_t * sc.y, vscale(fy, sin_t * sc.x)));
     wi = normalize3(wi);
     q->wi = wi;
@@ -40,7 +40,7 @@ INLINE vec3 distantdisk_sample(const SceneData* sd, __global const Emitter* em, 
     q->ng = vneg(wi);
     q->dist = INFINITY;
     q->pdf = em->p.distantdisk.pdf;
-    return vscale(vxyz(em->p.distantdisk.radiance), 1.0f / q->pdf);
+    return vscale(vrow(em->p.distantdisk.radiance), 1.0f / q->pdf);
 }
 
 INLINE float distantdisk_pdf(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
@@ -48,7 +48,7 @@ INLINE float distantdisk_pdf(const SceneData* sd, __global const Emitter* em, co
 }
 
 INLINE vec3 distantdisk_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
-    return distantdisk_inside(em, q->wi) ? vxyz(em->p.distantdisk.radiance) : v3s(0.0f);
+    return distantdisk_inside(em, q->wi) ? vrow(em->p.distantdisk.radiance) : v3s(0.0f);
 }
 
 #endif

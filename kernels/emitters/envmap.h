@@ -10,8 +10,8 @@
 #include "../shapes/common.h"   /* shape_cdf_search */
 
 INLINE vec3 envmap_to_local(__global const Emitter* em, vec3 d) {
-    return v3(dot3(vxyz(em->p.envmap.inv[0]), d), dot3(vxyz(em->p.envmap.inv[1]), d),
-              dot3(vxyz(em->p.envmap.inv[2]), d));
+    return v3(dot3(vrow(em->p.envmap.inv[0]), d), dot3(vrow(em->p.envmap.inv[1]), d),
+              dot3(vrow(em->p.envmap.inv[2]), d));
 }
 
 /* Grid coordinates of a local unit direction: x in [0, W) (shifted by half a texel), y in [0, H-1]. */
@@ -51,8 +51,8 @@ INLINE vec3 envmap_lookup(const SceneData* sd, __global const Emitter* em, vec3 
     uint ix = min((uint)g.x, dims.y - 1u), iy = min((uint)g.y, dims.z - 2u);
     float fx = g.x - (float)ix, fy = g.y - (float)iy;
     uint w1 = dims.y + 1u, i = iy * w1 + ix;
-    vec3 top = vmad(vxyz(px[i]), 1.0f - fx, vscale(vxyz(px[i + 1u]), fx));
-    vec3 bot = vmad(vxyz(px[i + w1]), 1.0f - fx, vscale(vxyz(px[i + w1 + 1u]), fx));
+    vec3 top = vmad(vrow(px[i]), 1.0f - fx, vscale(vrow(px[i + 1u]), fx));
+    vec3 bot = vmad(vrow(px[i + w1]), 1.0f - fx, vscale(vrow(px[i + w1 + 1u]), fx));
     vec3 mid = vmad(top, 1.0f - fy, vscale(bot, fy));
     return vscale(mid, em->p.envmap.inv[0].w);
 }
@@ -73,7 +73,7 @@ INLINE vec3 envmap_sample(const SceneData* sd, __global const Emitter* em, Emitt
     float vv = ((float)iy + fy) / (float)rows;
     float2 sp = sin_cos(M_PI_F_ * vv), sc = sin_cos(2.0f * M_PI_F_ * uu);
     vec3 v = v3(sc.x * sp.x, sp.y, -sc.y * sp.x);
-    vec3 r0 = vxyz(em->p.envmap.inv[0]), r1 = vxyz(em->p.envmap.inv[1]), r2 = vxyz(em->p.envmap.inv[2]);
+    vec3 r0 = vrow(em->p.envmap.inv[0]), r1 = vrow(em->p.envmap.inv[1]), r2 = vrow(em->p.envmap.inv[2]);
     vec3 wi = normalize3(vmad(r2, v.z, vmad(r0, v.x, vscale(r1, v.y))));
     q->wi = wi;
     q->p = vmad(wi, emitter_far(sd, q->ref), q->ref);

@@ -8,7 +8,7 @@
 #include "common.h"
 
 INLINE vec3 point_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
-    return vscale(vxyz(em->p.point.intensity), emitter_point_query(q, vxyz(em->p.point.position)));
+    return vscale(vrow(em->p.point.intensity), emitter_point_query(q, vrow(em->p.point.position)));
 }
 
 #endif

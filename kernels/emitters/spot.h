@@ -12,8 +12,8 @@
 #include "gen/texture_dispatch.h"
 
 INLINE vec3 spot_local(__global const Emitter* em, vec3 d) {
-    return normalize3(v3(dot3(vxyz(em->p.spot.inv[0]), d), dot3(vxyz(em->p.spot.inv[1]), d),
-                         dot3(vxyz(em->p.spot.inv[2]), d)));
+    return normalize3(v3(dot3(vrow(em->p.spot.inv[0]), d), dot3(vrow(em->p.spot.inv[1]), d),
+                         dot3(vrow(em->p.spot.inv[2]), d)));
 }
 
 /* Falloff of the local direction ld leaving the light. */
@@ -25,12 +25,12 @@ INLINE float spot_falloff(__global const Emitter* em, vec3 ld) {
 }
 
 INLINE vec3 spot_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
-    float inv_d2 = emitter_point_query(q, vxyz(em->p.spot.position));
+    float inv_d2 = emitter_point_query(q, vrow(em->p.spot.position));
     if (!(inv_d2 > 0.0f)) return v3s(0.0f);
     vec3 ld = spot_local(em, vneg(q->wi));
     float falloff = spot_falloff(em, ld);
     if (!(falloff > 0.0f)) return v3s(0.0f);   /* outside the cone: no texture lookup (Mitsuba's too) */
-    vec3 I = vxyz(em->p.spot.intensity);
+    vec3 I = vrow(em->p.spot.intensity);
     uint tex = em->p.spot.texture_tex;
     if (tex != NONE) {
         float k = 0.5f * em->p.spot.intensity.w / ld.z;

@@ -3,7 +3,7 @@
 INLINE vec3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
     Intersection its;
     if (!scene_intersect(sd, &ray, &its)) return v3s(0.0f);
-    vec3 pos = vxyz(sd->info->p.simple.position), energy = vxyz(sd->info->p.simple.energy);
+    vec3 pos = vrow(sd->info->p.simple.position), energy = vrow(sd->info->p.simple.energy);
     vec3 v = vsub(pos, its.p);
     float d2 = dot3(v, v), d = sqrt(d2);
     vec3 wi = vscale(v, 1.0f / d);

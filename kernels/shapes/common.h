@@ -40,12 +40,16 @@ INLINE float shape_point_sample(ShapeSample* ss, vec3 ref, vec3 p, vec3 n, vec3 
 
 /* First index i in cdf[0..count) with cdf[i] > u (the CDF ends with 1, u < 1). */
 INLINE uint shape_cdf_search(__global const float* cdf, uint count, float u) {
+#ifdef CLR_SEARCH_STEPS
+    return min(table_count_le(cdf, count, u), count - 1u);
+#else
     uint lo = 0u, hi = count - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) >> 1;
         if (cdf[mid] > u) hi = mid; else lo = mid + 1u;
     }
     return lo;
+#endif
 }
 
 #endif

@@ -63,18 +63,29 @@ INLINE vec3 mesh_shading_normal(const SceneData* sd, __global const Shape* s, co
     return l2 > 0.0f ? vscale(n, 1.0f / sqrt(l2)) : ng;
 }
 
+/* Component c (0: u, 1: v) of the uv interpolated with weights b0, b1, b2 at vertices i0, i1, i2: read and summed as
+   floats, since float2 loads and arithmetic are vector-typed instructions, which keep a stage kernel's work-item
+   loop scalar (kernels/math.h) */
+INLINE float mesh_uv(const SceneData* sd, uint c, uint i0, uint i1, uint i2, float b0, float b1, float b2) {
+    __global const float* uv = (__global const float*)sd->uvs + c;
+    return uv[2u * i0] * b0 + uv[2u * i1] * b1 + uv[2u * i2] * b2;
+}
+
 /* Mitsuba's dp/du and dp/dv of triangle t: from its uvs, or where it has none (or they are degenerate) its first
    and second edges. */
 INLINE vec3 mesh_dpduv(const SceneData* sd, __global const Shape* s, const MeshTriangle* t, vec3* dpdv) {
     vec3 dp0 = vsub(t->p1, t->p0), dp1 = vsub(t->p2, t->p0);
     *dpdv = dp1;
     if (!(s->flags & SHAPE_HAS_UVS)) return dp0;
-    float2 uv0 = sd->uvs[t->i0], duv0 = sd->uvs[t->i1] - uv0, duv1 = sd->uvs[t->i2] - uv0;
-    float det = duv0.x * duv1.y - duv0.y * duv1.x;
+    __global const float* uv = (__global const float*)sd->uvs;
+    float u0 = uv[2u * t->i0], v0 = uv[2u * t->i0 + 1u];
+    float du0 = uv[2u * t->i1] - u0, dv0 = uv[2u * t->i1 + 1u] - v0;
+    float du1 = uv[2u * t->i2] - u0, dv1 = uv[2u * t->i2 + 1u] - v0;
+    float det = du0 * dv1 - dv0 * du1;
     if (det == 0.0f) return dp0;
     float inv = 1.0f / det;
-    *dpdv = vscale(vmad(dp1, duv0.x, vscale(dp0, -duv1.x)), inv);
-    return vscale(vmad(dp0, duv1.y, vscale(dp1, -duv0.y)), inv);
+    *dpdv = vscale(vmad(dp1, du0, vscale(dp0, -du1)), inv);
+    return vscale(vmad(dp0, dv1, vscale(dp1, -dv0)), inv);
 }
 
 INLINE vec3 mesh_dpdu(const SceneData* sd, __global const Shape* s, const MeshTriangle* t) {
@@ -103,10 +114,9 @@ INLINE bool mesh_surface(const SceneData* sd, __global const Shape* s, const Ray
     float ws = w0 + w1 + w2;
     its->po = ws > 0.0f && ws < INFINITY ? vscale(mesh_bary(p0, p1, p2, w0, w1, w2), 1.0f / ws) : its->p;
     vec3 n = mesh_shading_normal(sd, s, &tri, b0, h->u, h->v, ng);
-    if (s->flags & SHAPE_HAS_UVS)
-        its->uv = sd->uvs[tri.i0] * b0 + sd->uvs[tri.i1] * h->u + sd->uvs[tri.i2] * h->v;
-    else
-        its->uv = (float2)(h->u, h->v);
+    bool has_uv = (s->flags & SHAPE_HAS_UVS) != 0u;
+    its->uv = (float2)(has_uv ? mesh_uv(sd, 0u, tri.i0, tri.i1, tri.i2, b0, h->u, h->v) : h->u,
+                       has_uv ? mesh_uv(sd, 1u, tri.i0, tri.i1, tri.i2, b0, h->u, h->v) : h->v);
     its->sh = (s->flags & SHAPE_NEEDS_UV) ? frame_from_tangent(n, mesh_dpdu(sd, s, &tri)) : frame_from_normal(n);
 #ifdef CLR_SURFACE_DERIVATIVES
     bool uv = (s->flags & SHAPE_NEEDS_UV) != 0u;
@@ -132,7 +142,9 @@ INLINE float mesh_sample(const SceneData* sd, __global const Shape* s, vec3 ref,
     vec3 n = mesh_shading_normal(sd, s, &tri, b0, b.x, b.y, ng);
     float pdf = shape_point_sample(ss, ref, p, n, ng, 1.0f / s->area);
     /* the uv mesh_surface gives at this point (textured emission) */
-    ss->uv = (s->flags & SHAPE_HAS_UVS) ? sd->uvs[tri.i0] * b0 + sd->uvs[tri.i1] * b.x + sd->uvs[tri.i2] * b.y : b;
+    bool has_uv = (s->flags & SHAPE_HAS_UVS) != 0u;
+    ss->uv = (float2)(has_uv ? mesh_uv(sd, 0u, tri.i0, tri.i1, tri.i2, b0, b.x, b.y) : b.x,
+                      has_uv ? mesh_uv(sd, 1u, tri.i0, tri.i1, tri.i2, b0, b.x, b.y) : b.y);
     return pdf;
 }
 

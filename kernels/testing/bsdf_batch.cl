@@ -17,10 +17,10 @@ INLINE BsdfQuery batch_query(vec3 wi, vec3 wo, float2 uv, __global const Texture
     q.textures = textures;
     q.tables = tables;
 #ifdef CLR_SURFACE_DERIVATIVES
-    q.dpdu = vxyz(geo[4u * i]);
-    q.dpdv = vxyz(geo[4u * i + 1u]);
-    q.ng = vxyz(geo[4u * i + 2u]);
-    q.dpdu_world = vxyz(geo[4u * i + 3u]);
+    q.dpdu = vrow(geo[4u * i]);
+    q.dpdv = vrow(geo[4u * i + 1u]);
+    q.ng = vrow(geo[4u * i + 2u]);
+    q.dpdu_world = vrow(geo[4u * i + 3u]);
 #endif
     return q;
 }

@@ -21,7 +21,7 @@ INLINE int bitmap_floor(float x) { return (int)floor(clampf(x, -1.0e8f, 1.0e8f))
 
 INLINE vec3 bitmap_texel(__global const Texture* t, int x, int y) {
     __global const float4* px = (__global const float4*)(t + 1);
-    return vxyz(px[y * (int)t->p.bitmap.dims.x + x]);
+    return vrow(px[y * (int)t->p.bitmap.dims.x + x]);
 }
 
 /* The four texels around a (bilinear) lookup at texture coordinates (s, tt) and their weights a (along x) and b. */

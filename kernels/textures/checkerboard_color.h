@@ -10,7 +10,7 @@ INLINE vec3 checkerboard_color_eval(__global const Texture* t, float2 uv) {
     float cv = floor(uv.y / ds.w - ds.y);
     /* parity of a sum of floats that are integers: fmod keeps it exact for any magnitude */
     float s = fabs(fmod(cu + cv, 2.0f));
-    return s < 0.5f ? vxyz(t->p.checkerboard_color.value1) : vxyz(t->p.checkerboard_color.value2);
+    return s < 0.5f ? vrow(t->p.checkerboard_color.value1) : vrow(t->p.checkerboard_color.value2);
 }
 
 #endif

@@ -4,7 +4,7 @@
 #define CLRENDER_TEXTURES_RAWCONSTANT_H
 
 INLINE vec3 rawconstant_eval(__global const Texture* t, float2 uv) {
-    return vxyz(t->p.rawconstant.value);
+    return vrow(t->p.rawconstant.value);
 }
 
 #endif
