@@ -63,7 +63,18 @@ class EnvMap(Emitter):
         if not np.allclose(m @ m.T, np.eye(3), atol=1e-5):
             raise SceneError("an environment map's to_world must be a rotation (no scale or shear)",
                              props.location("to_world"))
-        self.to_world = m
+        self._setup(self.image, self.scale, m)
+
+    @classmethod
+    def from_image(cls, image: np.ndarray, to_world: np.ndarray, scale: float = 1.0) -> "EnvMap":
+        """An environment map made by code rather than read from a file (the sunsky's sky): `image` (H, W, 3),
+        non-negative; `to_world` a 3x3 rotation."""
+        em = cls.__new__(cls)
+        em._setup(pad_to(np.asarray(image, np.float32), 2, 3), float(scale), np.asarray(to_world, np.float64))
+        return em
+
+    def _setup(self, image: np.ndarray, scale: float, to_world: np.ndarray) -> None:
+        self.image, self.scale, self.to_world = image, scale, to_world
         self.data = np.concatenate([self.image, self.image[:, :1]], axis=1)   # periodic in u: W+1 columns
         self.marginal, self.conditional = self._distribution()
 
