@@ -123,10 +123,13 @@ class EnvMap(Emitter):
         flux = (lum * band[:, None]).sum() / (band.sum() * lum.shape[1]) * 4.0 * np.pi
         return np.pi * radius ** 2 * self.scale * flux
 
-    def fill(self, p, row, ctx, shape):
+    def fill(self, p, row, ctx, shape, extra_texels=None):
+        """`extra_texels` (N, 4): rows stored right after the map's texels (the sunsky's model coefficients)."""
         h, w1 = self.data.shape[:2]
         px = np.zeros((h * w1, 4), np.float32)
         px[:, :3] = self.data.reshape(-1, 3)
+        if extra_texels is not None:
+            px = np.concatenate([px, np.asarray(extra_texels, np.float32).reshape(-1, 4)])
         first = ctx.textures.add_texels(px)
         cdf = ctx.add_table("cdf", "float", np.concatenate([self.marginal, self.conditional.reshape(-1)]))
         p["dims"] = (first, w1 - 1, h, cdf)

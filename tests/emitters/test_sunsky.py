@@ -1,7 +1,9 @@
-"""Mitsuba 3.9's `sunsky` (clrender/emitters/sunsky.py): a sky map and a sun disk made on the host from Mitsuba's
-tables, rendered by the `envmap` and `distantdisk` kernels.
+"""Mitsuba 3.9's `sunsky` (clrender/emitters/sunsky.py, kernels/emitters/sunsky.h): the sky evaluated on the device
+from coefficients the host interpolates in Mitsuba's tables, importance sampled through envmap's functions by a map
+of it, and the sun as a `distantdisk` row.
 
-* the sky as the device renders it, against the Hosek-Wilkie formula evaluated here, written afresh from the
+* the sky as the device renders it (and black below the horizon, with no sampling density there), against the
+  Hosek-Wilkie formula evaluated here, written afresh from the
   published model (scalar loops over the tables: turbidity and albedo lerps, the quintic Bézier in elevation);
   the sun's radiance likewise from the irradiance table and the CIE matching functions;
 * the sun's position from a date: solstice noons, whose elevation is 90° − latitude ± 23.44° by astronomy;
@@ -137,17 +139,27 @@ def test_device_sky_and_sun_match_the_formula(tmp_path, ctx, queue, kernels, cas
     expect = formula_sky(coefs, mean, local[:, 2], np.arccos(np.clip(local @ sun, -1, 1)))
     d = device(tmp_path, ctx, queue, kernels, em)
     got = d.environment((local @ rot.T).astype(np.float32))[:, :3]
-    # the map's bilinear interpolation between texel centres (0.35 degrees apart) and float32
-    np.testing.assert_allclose(got, expect, rtol=3e-3, atol=1e-6)
-    # below the horizon: nothing (away from the half-row band the map blends across)
-    below = local.copy()[:200]
-    below[:, 2] = -np.maximum(below[:, 2], 0.05)
-    assert np.all(d.environment((unit(below) @ rot.T).astype(np.float32))[:, :3] == 0)
+    # the model evaluated on the device in single precision
+    np.testing.assert_allclose(got, expect, rtol=1e-4, atol=1e-8)
+    # at the horizon: the sky just above it, nothing just below it (where the map's last lit row would blend
+    # into the black one below), and no sampling density there either
+    phi = rng.uniform(0, 2 * math.pi, 200)
+    for elev, lit in ((0.05, True), (-0.05, False), (-0.3, False), (-20.0, False)):
+        e = math.radians(elev)
+        edge = np.stack([np.cos(e) * np.cos(phi), np.cos(e) * np.sin(phi), np.full_like(phi, math.sin(e))], axis=1)
+        out = d.environment((edge @ rot.T).astype(np.float32))
+        if lit:
+            expect = formula_sky(coefs, mean, np.maximum(edge[:, 2], 0), np.arccos(np.clip(edge @ sun, -1, 1)))
+            np.testing.assert_allclose(out[:, :3], expect, rtol=1e-4)
+            assert np.all(d.pdf_dirs(0, np.zeros(3), (edge @ rot.T).astype(np.float32)) > 0)
+        else:
+            assert np.all(out[:, :3] == 0), (elev, out[:, :3].max())
+            assert np.all(d.pdf_dirs(0, np.zeros(3), (edge @ rot.T).astype(np.float32)) == 0)
     # the sun: its disk adds the uniform solar radiance to the sky there
     centre = d.environment((rot @ sun)[None].astype(np.float32))[0, :3]
     sky_there = formula_sky(coefs, mean, np.array([sun[2]]), np.array([0.0]))[0]
     np.testing.assert_allclose(centre - sky_there, formula_sun(em.turbidity, elevation, em.half_aperture),
-                               rtol=2e-3)
+                               rtol=1e-4)
     outside = rot @ unit(sun + 1.5 * em.half_aperture * unit(np.cross(sun, [0, 0, 1])))
     assert np.all(d.environment(outside[None].astype(np.float32))[0, :3] < 0.01 * centre)
 
@@ -177,6 +189,14 @@ def test_chi2_sky_and_sun_sampling(tmp_path, ctx, queue, kernels, part):
     r = run_chi2(d, part, np.zeros(3), 0, 300_000, 16, seed=300 + part, n_tests=2)
     assert r.passed, r.message
     assert r.dof >= 10, r.dof
+    # each sample's weight is eval / pdf, and pdf() agrees with the sample's pdf
+    s = d.sample(part, np.zeros(3), np.random.default_rng(7).random((20_000, 2), dtype=np.float32))
+    ok = s["pdf"] > 0
+    assert ok.mean() > 0.999
+    if part == 0:   # the sky's samples never go below the horizon (this wide sun's cone does: see the docstring)
+        assert np.all(s["wi"][ok] @ (em.to_world @ [0, 0, 1]) >= -1e-6)
+    np.testing.assert_allclose(s["pdf_again"][ok], s["pdf"][ok], rtol=1e-5)
+    np.testing.assert_allclose(s["w"][ok] * s["pdf"][ok, None], s["eval"][ok], rtol=2e-4, atol=1e-7)
 
 
 # -------------------------------------------------------------------------------------------------- render
@@ -257,6 +277,17 @@ def test_refusals_are_located(tmp_path, body, name, line_of):
     err = load_error(tmp_path, body)
     assert name in err.message
     assert err.location is not None and err.location.line >= 1 and str(err.location).startswith(str(tmp_path))
+
+
+def test_the_sky_row_is_laid_out_as_an_envmap_row():
+    """kernels/emitters/sunsky.h hands its row to envmap.h's functions, which read the union's envmap member."""
+    from clrender.device import layout
+    from clrender.emitters.envmap import EnvMap
+
+    row = layout.zeros("Emitter")[0]
+    assert sunsky.Sunsky.PARAMS == EnvMap.PARAMS
+    assert row["sunsky"].dtype == row["envmap"].dtype
+    assert row.dtype.fields["sunsky"][1] == row.dtype.fields["envmap"][1]     # both at the union's start
 
 
 def test_without_the_extra_the_error_names_it(tmp_path, monkeypatch, capsys):
