@@ -263,8 +263,7 @@ def load_error(tmp_path, body):
     return e.value
 
 
-@needs_tables
-@pytest.mark.parametrize("body, name, line_of", [
+@pytest.mark.parametrize("body, name, line_of", [   # checked before the tables are read: runs without the extra
     ('<float name="turbidity" value="11"/>', "turbidity", "turbidity"),
     ('<rgb name="albedo" value="0.2, 1.5, 0.2"/>', "albedo", "albedo"),
     ('<float name="sun_scale" value="-1"/>', "sun_scale", "sun_scale"),
