@@ -302,3 +302,20 @@ def test_without_the_extra_the_error_names_it(tmp_path, monkeypatch, capsys):
     assert main(["render", str(xml), "-o", str(tmp_path / "x.exr"), "-q"]) == 2
     out = capsys.readouterr().err
     assert "clrender[sunsky]" in out and "plane.xml:" in out and "Traceback" not in out
+
+
+@needs_tables
+def test_clean_under_oclgrind(tmp_path):
+    """The sky row's coefficient reads after its map's texels, and the rest of a sunsky render, under Oclgrind's
+    out-of-bounds and data-race checks (tests/test_oclgrind.py's harness)."""
+    from test_oclgrind import _run_under_oclgrind, needs_oclgrind
+
+    if needs_oclgrind.args[0]:
+        pytest.skip(needs_oclgrind.kwargs["reason"])
+    xml = plane_scene(tmp_path, '<emitter type="sunsky"><float name="hour" value="17"/></emitter>'
+                      '<shape type="sphere"><point name="center" value="0, 0, 0.2"/><float name="radius" '
+                      'value="0.1"/></shape>')
+    proc, report = _run_under_oclgrind(tmp_path, [str(xml), ""])
+    assert proc.returncode == 0, proc.stderr
+    assert "rendered 2" in proc.stdout
+    assert report == "", report[:4000]
