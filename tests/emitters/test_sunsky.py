@@ -9,12 +9,14 @@ of it, and the sun as a `distantdisk` row.
 * the sun's position from a date: solstice noons, whose elevation is 90° − latitude ± 23.44° by astronomy;
 * chi-square of the sky's and the sun's sampling against their pdfs (the machinery of tests/test_emitters.py);
 * a render: a diffuse plane under the sun and sky, whose radiance is ρ/π times the irradiance integrated here;
+* a twin scene of our own against Mitsuba 3.9.1's render of it (sunsky_twin.xml / .npz, make_sunsky_ref.py);
 * refusals: located errors naming the parameter, and without the `sunsky` extra one naming the extra.
 
 Everything but the last needs the tables (the `sunsky` extra); without them it is skipped saying so.
 """
 import importlib.metadata
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -250,6 +252,25 @@ def test_plane_under_sun_and_sky(tmp_path, up, emitter_xml):
     film = clrender.render(scene, spp=64, seed=5)
     r = compare_mean_to_value(film, expect, 0.01)
     assert r.passed, (r.message, film.image.reshape(-1, 3).mean(0), expect)
+
+
+@needs_tables
+def test_twin_matches_mitsuba():
+    """sunsky_twin.xml (a floor, two spheres, the bare horizon in view), read unchanged by Mitsuba 3.9.1, which
+    rendered sunsky_twin.npz (make_sunsky_ref.py: 16 seeds x 256 spp): pixel by pixel and in the image mean,
+    as tests/test_mitsuba_twins.py compares its twins."""
+    from clrender.testing.stats import compare_image_means, compare_to_reference
+
+    here = Path(__file__).resolve().parent
+    with np.load(here / "sunsky_twin.npz") as z:
+        mean, stderr, ref_spp = z["mean"], z["stderr"], int(z["spp"])
+    scene = load_scene(here / "sunsky_twin.xml")
+    film = clrender.render(scene, seed=7)
+    result = compare_to_reference(film, mean, stderr, ref_samples=ref_spp, rfilter=scene.camera.filter)
+    means = f"means: clrender {film.image.mean(axis=(0, 1)).round(4)}, Mitsuba {mean.mean(axis=(0, 1)).round(4)}"
+    assert result.passed, f"{result.message}; {means}"
+    overall = compare_image_means(film, mean, stderr, ref_spp, rfilter=scene.camera.filter)
+    assert overall.passed, f"{overall.message}; {means}"
 
 
 # ---------------------------------------------------------------------------------------------------- errors
