@@ -282,8 +282,17 @@ class Sunsky(Emitter):
             raise SceneError("the sunsky's to_world must be a rotation (no scale or shear)",
                              props.location("to_world"))
         self.to_world = m
+        given = [n for n in _TIME_PLACE if props.has(n)]
+        # read whether used or not, so that an unknown parameter's error lists them all
+        ints = {}
+        for n, default, lo in (("year", 2010, None), ("month", 7, 0), ("day", 10, 0)):
+            ints[n] = props.get_int(n, default)
+            if lo is not None and ints[n] < lo:
+                raise SceneError(f"{n} must be a non-negative integer, got {ints[n]}", props.location(n))
+        floats = {n: props.get_float(n, dflt) for n, dflt in (
+            ("latitude", 35.6894), ("longitude", 139.6917), ("timezone", 9.0), ("hour", 15.0), ("minute", 0.0),
+            ("second", 0.0))}
         if props.has("sun_direction"):
-            given = [n for n in _TIME_PLACE if props.has(n)]
             if given:
                 raise SceneError(f"sun_direction and the time/place parameters ({', '.join(given)}) cannot both be "
                                  "given: the sun's position comes from one or the other", props.location(given[0]))
@@ -292,14 +301,6 @@ class Sunsky(Emitter):
                 raise SceneError("sun_direction must not be zero", props.location("sun_direction"))
             local = m.T @ (d / np.linalg.norm(d))
         else:
-            ints = {}
-            for n, default, lo in (("year", 2010, None), ("month", 7, 0), ("day", 10, 0)):
-                ints[n] = props.get_int(n, default)
-                if lo is not None and ints[n] < lo:
-                    raise SceneError(f"{n} must be a non-negative integer, got {ints[n]}", props.location(n))
-            floats = {n: props.get_float(n, dflt) for n, dflt in (
-                ("latitude", 35.6894), ("longitude", 139.6917), ("timezone", 9.0), ("hour", 15.0), ("minute", 0.0),
-                ("second", 0.0))}
             local = sph_to_dir(*sun_coordinates(**ints, **floats))
         self.sun_local = local / np.linalg.norm(local)
         self.sun_direction = m @ self.sun_local

@@ -310,6 +310,22 @@ def test_the_sky_row_is_laid_out_as_an_envmap_row():
     assert row.dtype.fields["sunsky"][1] == row.dtype.fields["envmap"][1]     # both at the union's start
 
 
+@needs_tables
+def test_old_files_and_unknown_parameters(tmp_path):
+    """A Mitsuba 0.6 file's camelCase names are upgraded as Mitsuba 3.9.1 upgrades them (sunDirection, skyScale);
+    a parameter Mitsuba 3's sunsky does not have (0.6's sunRadiusScale) is an error naming the ones it has."""
+    old = ('<scene version="0.6.0"><emitter type="sunsky"><vector name="sunDirection" x="0" y="0.6" z="0.8"/>'
+           '<float name="skyScale" value="2"/>{}</emitter></scene>')
+    (tmp_path / "old.xml").write_text(old.format(""))
+    # the sunsky loads, both names used (else: "not used"); then the scene stops for its missing sensor
+    with pytest.raises(SceneError, match="no sensor"):
+        load_scene(tmp_path / "old.xml")
+    (tmp_path / "old.xml").write_text(old.format('<float name="sunRadiusScale" value="2"/>'))
+    with pytest.raises(SceneError, match=r"sun_radius_scale.*it takes .*sun_direction") as e:
+        load_scene(tmp_path / "old.xml")
+    assert "hour" in e.value.message and e.value.location.line == 1
+
+
 def test_without_the_extra_the_error_names_it(tmp_path, monkeypatch, capsys):
     def missing(name):
         raise importlib.metadata.PackageNotFoundError(name)
