@@ -3,16 +3,19 @@ from coefficients the host interpolates in Mitsuba's tables, importance sampled 
 of it, and the sun as a `distantdisk` row.
 
 * the sky as the device renders it (and black below the horizon, with no sampling density there), against the
-  Hosek-Wilkie formula evaluated here, written afresh from the
-  published model (scalar loops over the tables: turbidity and albedo lerps, the quintic Bézier in elevation);
-  the sun's radiance likewise from the irradiance table and the CIE matching functions;
+  Hosek-Wilkie formula evaluated here, written afresh from the published model (scalar loops over the tables:
+  turbidity and albedo lerps, the quintic Bézier in elevation); the sun's radiance likewise from the irradiance
+  table and the CIE matching functions;
 * the sun's position from a date: solstice noons, whose elevation is 90° − latitude ± 23.44° by astronomy;
 * chi-square of the sky's and the sun's sampling against their pdfs (the machinery of tests/test_emitters.py);
 * a render: a diffuse plane under the sun and sky, whose radiance is ρ/π times the irradiance integrated here;
 * a twin scene of our own against Mitsuba 3.9.1's render of it (sunsky_twin.xml / .npz, make_sunsky_ref.py);
-* refusals: located errors naming the parameter, and without the `sunsky` extra one naming the extra.
+* an Oclgrind run of a sunsky render (out-of-bounds reads of the sky's coefficient rows);
+* refusals: located errors naming the parameter (an old file's unknown one too), and without the `sunsky` extra
+  one naming the extra.
 
-Everything but the last needs the tables (the `sunsky` extra); without them it is skipped saying so.
+The refusals and the missing-extra error run without the tables; the rest needs the `sunsky` extra and is skipped
+without it, saying so.
 """
 import importlib.metadata
 import math
