@@ -267,14 +267,15 @@ def _pack_shapes(shapes, ctx: PackContext, bsdf_rows, bsdf_of_shape, flags) -> n
 
 def _pack_emitters(scene, ctx: PackContext, shape_rows) -> tuple[list, list]:
     """Emitter rows: area emitters in shape order (their shape rows point at them), then the scene-level ones in
-    document order; and (emitter, shape index or None) for each."""
+    document order (each as the rows of its parts(): a sunsky is a sky and a sun); and (emitter, shape index or None)
+    for each row."""
     emitter_rows, emitter_objs = [], []
     for i, sh in enumerate(scene.shapes):
         if sh.emitter is not None:
             shape_rows[i]["emitter"] = len(emitter_rows)
             emitter_rows.append(sh.emitter.pack(ctx, shape_index=i, shape=sh, shape_row=shape_rows[i]))
             emitter_objs.append((sh.emitter, i))
-    for em in scene.emitters:
+    for em in (part for e in scene.emitters for part in e.parts()):
         emitter_rows.append(em.pack(ctx, shape_index=NONE, shape=None, shape_row=None))
         emitter_objs.append((em, None))
     return emitter_rows, emitter_objs

@@ -51,6 +51,20 @@ class DistantDiskEmitter(Emitter):
         x = x / nx
         self.frame = np.stack([x, np.cross(z, x), z])   # rows: world x, y, z axes of the cone frame
 
+    @classmethod
+    def from_axis(cls, radiance, axis, theta_a: float) -> "DistantDiskEmitter":
+        """A disk made by code rather than read from a file (the sunsky's sun): `axis` toward the light (world),
+        half-angle `theta_a` in degrees."""
+        em = cls.__new__(cls)
+        em.radiance = np.asarray(radiance, np.float64)
+        em.theta_a = float(theta_a)
+        z = np.asarray(axis, np.float64) / np.linalg.norm(axis)
+        x = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        x = x - z * (x @ z)
+        x /= np.linalg.norm(x)
+        em.frame = np.stack([x, np.cross(z, x), z])
+        return em
+
     @property
     def axis(self) -> np.ndarray:
         """Unit direction from the scene toward the light (the cone's axis)."""

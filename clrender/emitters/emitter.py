@@ -38,6 +38,11 @@ class Emitter:
         self.fill(row[dispatch.member_of(cls)] if cls.PARAMS else None, row, ctx, shape)
         return row
 
+    def parts(self) -> list:
+        """The emitters this one packs as, one row each: itself, except for an emitter made of others (`sunsky`: a
+        sky envmap and a sun disk; none when it emits nothing)."""
+        return [self]
+
     def fill(self, p, row, ctx, shape) -> None:
         """Write the plugin's parameters into its member `p` of the row's union."""
 

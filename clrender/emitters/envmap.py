@@ -63,7 +63,18 @@ class EnvMap(Emitter):
         if not np.allclose(m @ m.T, np.eye(3), atol=1e-5):
             raise SceneError("an environment map's to_world must be a rotation (no scale or shear)",
                              props.location("to_world"))
-        self.to_world = m
+        self._setup(self.image, self.scale, m)
+
+    @classmethod
+    def from_image(cls, image: np.ndarray, to_world: np.ndarray, scale: float = 1.0) -> "EnvMap":
+        """An environment map made by code rather than read from a file (the sunsky's sky): `image` (H, W, 3),
+        non-negative; `to_world` a 3x3 rotation."""
+        em = cls.__new__(cls)
+        em._setup(pad_to(np.asarray(image, np.float32), 2, 3), float(scale), np.asarray(to_world, np.float64))
+        return em
+
+    def _setup(self, image: np.ndarray, scale: float, to_world: np.ndarray) -> None:
+        self.image, self.scale, self.to_world = image, scale, to_world
         self.data = np.concatenate([self.image, self.image[:, :1]], axis=1)   # periodic in u: W+1 columns
         self.marginal, self.conditional = self._distribution()
 
@@ -112,10 +123,13 @@ class EnvMap(Emitter):
         flux = (lum * band[:, None]).sum() / (band.sum() * lum.shape[1]) * 4.0 * np.pi
         return np.pi * radius ** 2 * self.scale * flux
 
-    def fill(self, p, row, ctx, shape):
+    def fill(self, p, row, ctx, shape, extra_texels=None):
+        """`extra_texels` (N, 4): rows stored right after the map's texels (the sunsky's model coefficients)."""
         h, w1 = self.data.shape[:2]
         px = np.zeros((h * w1, 4), np.float32)
         px[:, :3] = self.data.reshape(-1, 3)
+        if extra_texels is not None:
+            px = np.concatenate([px, np.asarray(extra_texels, np.float32).reshape(-1, 4)])
         first = ctx.textures.add_texels(px)
         cdf = ctx.add_table("cdf", "float", np.concatenate([self.marginal, self.conditional.reshape(-1)]))
         p["dims"] = (first, w1 - 1, h, cdf)
