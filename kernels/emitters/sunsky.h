@@ -16,33 +16,35 @@
 #include "common.h"
 #include "envmap.h"
 
-INLINE float3 sunsky_radiance(const SceneData* sd, __global const Emitter* em, float3 wi) {
-    float3 v = envmap_to_local(em, wi);
+INLINE vec3 sunsky_radiance(const SceneData* sd, __global const Emitter* em, vec3 wi) {
+    vec3 v = envmap_to_local(em, wi);
     float ct = v.y;
-    if (ct < 0.0f) return (float3)(0.0f);
+    if (ct < 0.0f) return v3s(0.0f);
     uint4 dims = em->p.envmap.dims;
     __global const float4* c = (__global const float4*)(sd->textures + dims.x) + dims.z * (dims.y + 1u);
-    float cg = clampf(dot3(v, c[10].xyz), -1.0f, 1.0f);
+    float cg = clampf(dot3(v, vrow(c[10])), -1.0f, 1.0f);
     float g = acos(cg);
-    float3 i = c[8].xyz;
-    float3 b = 1.0f + i * i - 2.0f * i * cg;
-    float3 chi = (1.0f + cg * cg) / (b * sqrt(b));
-    float3 c1 = 1.0f + c[0].xyz * exp(c[1].xyz / (ct + 0.01f));
-    float3 c2 = c[2].xyz + c[3].xyz * exp(c[4].xyz * g) + c[5].xyz * (cg * cg) + c[6].xyz * chi
-              + c[7].xyz * sqrt(ct);
-    return c1 * c2 * c[9].xyz;
+    vec3 i = vrow(c[8]);
+    vec3 b = vsub(vadds(vmul(i, i), 1.0f), vscale(vscale(i, 2.0f), cg));
+    vec3 chi = vdiv(v3s(1.0f + cg * cg), vmul(b, vsqrt(b)));
+    vec3 c1 = vadds(vmul(vrow(c[0]), vexp(vdivs(vrow(c[1]), ct + 0.01f))), 1.0f);
+    vec3 c2 = vadd(vrow(c[2]), vmul(vrow(c[3]), vexp(vscale(vrow(c[4]), g))));
+    c2 = vadd(c2, vscale(vrow(c[5]), cg * cg));
+    c2 = vadd(c2, vmul(vrow(c[6]), chi));
+    c2 = vadd(c2, vscale(vrow(c[7]), sqrt(ct)));
+    return vmul(vmul(c1, c2), vrow(c[9]));
 }
 
-INLINE float3 sunsky_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
+INLINE vec3 sunsky_sample(const SceneData* sd, __global const Emitter* em, EmitterQuery* q, float2 u) {
     envmap_sample(sd, em, q, u);
-    return q->pdf > 0.0f ? sunsky_radiance(sd, em, q->wi) * (1.0f / q->pdf) : (float3)(0.0f);
+    return q->pdf > 0.0f ? vscale(sunsky_radiance(sd, em, q->wi), 1.0f / q->pdf) : v3s(0.0f);
 }
 
 INLINE float sunsky_pdf(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
     return envmap_pdf(sd, em, q);
 }
 
-INLINE float3 sunsky_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
+INLINE vec3 sunsky_eval(const SceneData* sd, __global const Emitter* em, const EmitterQuery* q) {
     return sunsky_radiance(sd, em, q->wi);
 }
 
