@@ -1,0 +1,353 @@
+"""The checks every plugin's tests run, one set per kind, parametrised by the plugin (from XML or a Mitsuba dict).
+
+A BSDF plugin's test file (tests/bsdfs/test_<name>.py) states its cases (the plugin, wi, the lobe widths) and runs:
+
+- `bsdf_chi2`: samples on the device binned over Nori's (RES cos theta x 2 RES phi) cells against the integral of
+  the plugin's own pdf over them (`lobe_grid` refines the quadrature around the specular peaks), then
+  `chi2.chi2_test` with a Šidák correction over the file's cases (`BsdfRuns` computes each case once, when a test
+  first asks for it);
+- `chi2.check_pdf_integral`: the pdf integrates to the fraction of samples that survive (at most 1);
+- `check_weights` / `chi2.check_sample_weights`: every kept sample's weight is f cos / pdf;
+- `mean_agrees` / `mean_le`: energy, a white furnace (the mean weight against a reference or a bound);
+- `fresnel`: the dielectric Fresnel reflectance in float64, the reference several plugins are checked against.
+
+Rows are always built by the plugins themselves (`bsdf_from_xml`, `mitsuba_bsdf`), never by hand.
+
+Tests declare which plugin and which aspect they cover with the `plugin` marker (registered in tests/conftest.py):
+``@pytest.mark.plugin("roughplastic", "sampling")``; tests/test_plugin_coverage.py reads these markers to check
+that every registered plugin has its test file, a sampling (or, for textures, evaluation) test and a render test.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .chi2 import (bin_directions, check_pdf_integral, check_sample_weights, chi2_test,  # noqa: F401 (re-exported)
+                   expected_from_grid, refined_direction_grid, sidak)
+from .kernels import bsdf_pdf_eval_batch, bsdf_sample_batch
+
+ALPHA = 0.01                  # overall significance level of a test file's family of statistical tests
+RES = 10                      # Nori's chi2test: 10 cos(theta) bins x 20 phi bins
+N_SAMPLES = 5000 * RES * RES  # Nori/Mitsuba use 5000 res^2 samples (Nori's default doubles it)
+SUB = 8                       # midpoint sub-cells per cell and axis (plus refinement around peaks)
+
+#: what a test may declare it covers (the `plugin` marker's second argument)
+ASPECTS = ("sampling", "eval", "render")
+
+
+# ------------------------------------------------------------------------------------------ plugins
+def bsdf_from_xml(xml: str, filename: str = "row.xml"):
+    """The first BSDF of a Nori XML fragment (wrapped in <scene> unless it is a whole scene), as the loader makes it."""
+    from .. import plugins  # noqa: F401
+    from ..scene.registry import create
+    from ..scene.xmlparser import parse_string
+
+    text = xml if xml.lstrip().startswith("<scene") else f"<scene>{xml}</scene>"
+    spec = parse_string(text, filename)
+    return create(next(s for s in spec.walk() if s.tag == "bsdf"))
+
+
+def plugin_row(xml: str):
+    """The packed row of the first BSDF of a Nori XML fragment."""
+    return bsdf_from_xml(xml).pack()
+
+
+def mitsuba_props(**kw) -> dict:
+    """{name: (property tag, value)} from Python values: str -> string, bool -> boolean, tuple -> color, else float."""
+    out = {}
+    for k, v in kw.items():
+        if isinstance(v, str):
+            out[k] = ("string", v)
+        elif isinstance(v, bool):
+            out[k] = ("boolean", v)
+        elif isinstance(v, tuple):
+            out[k] = ("color", v)
+        else:
+            out[k] = ("float", float(v))
+    return out
+
+
+def mitsuba_bsdf(kind: str, props: dict | None = None, **kw):
+    """The BSDF as a Mitsuba file would give it: `props` ({name: (tag, value)}) or keywords (`mitsuba_props`)."""
+    from .. import plugins  # noqa: F401
+    from ..scene.registry import instantiate
+
+    return instantiate("bsdf", kind, props if props is not None else mitsuba_props(**kw), fmt="mitsuba")
+
+
+def mitsuba_row(kind: str, **kw):
+    return mitsuba_bsdf(kind, **kw).pack()
+
+
+def wi_at(theta_deg: float, side: int = 1) -> np.ndarray:
+    """The direction at polar angle theta (degrees) in the xz plane, above (side +1) or below (-1) the surface."""
+    t = np.radians(theta_deg)
+    return np.array([np.sin(t), 0.0, side * np.cos(t)])
+
+
+def refracted(wi, eta_ext, eta_int):
+    """The macro-surface refraction direction of wi (None under total internal reflection)."""
+    ei, et = (eta_ext, eta_int) if wi[2] > 0 else (eta_int, eta_ext)
+    r = ei / et
+    s2 = r * r * (1 - wi[2] ** 2)
+    if s2 >= 1:
+        return None
+    return np.array([-r * wi[0], -r * wi[1], -np.sign(wi[2]) * np.sqrt(1 - s2)])
+
+
+# ------------------------------------------------------------------------------- host references (f64)
+def fresnel(cos_i, eta_ext, eta_int):
+    """Unpolarised dielectric Fresnel reflectance; cos_i < 0 arrives from inside (eta_int's side)."""
+    with np.errstate(all="ignore"):
+        cos_i = np.asarray(cos_i, np.float64)
+        inside = cos_i < 0
+        ei = np.where(inside, eta_int, eta_ext)
+        et = np.where(inside, eta_ext, eta_int)
+        c = np.abs(cos_i)
+        sin2_t = (ei / et) ** 2 * np.maximum(0, 1 - c * c)
+        tir = sin2_t >= 1
+        ct = np.sqrt(np.maximum(0, 1 - sin2_t))
+        rs = (ei * c - et * ct) / (ei * c + et * ct)
+        rp = (et * c - ei * ct) / (et * c + ei * ct)
+        return np.where(tir, 1.0, 0.5 * (rs * rs + rp * rp))
+
+
+# ------------------------------------------------------------------------------------ chi-square runs
+def lobe_grid(wi, alpha, targets=None, width: float = 12.0, floor: float = 0.02, squeeze: bool = False,
+              n_fine: int = 400):
+    """Integration points for the chi-square's cells, refined around specular peaks: `targets` (default: the
+    mirror direction of wi). A lobe of roughness alpha spreads by about `width` alpha in the plane of incidence
+    but only by `width` alpha |cos theta_i| across it (narrow at grazing angles, `floor` at least): refine at both
+    scales; `squeeze`: also at 1.2 alpha, refraction out of air squeezing the lobe by about (1 - ext/int).
+    No refinement for alpha None (no peak) or rough lobes (alpha >= 0.6)."""
+    peaks = []
+    if alpha is not None and alpha < 0.6:
+        for d in (targets if targets is not None else [wi * np.array([-1, -1, 1])]):
+            peaks.append((d, min(width * alpha, np.pi)))
+            peaks.append((d, width * alpha * max(abs(wi[2]), floor)))
+            if squeeze:
+                peaks.append((d, 4 * alpha * 0.3))
+    return refined_direction_grid(RES, SUB, peaks, n_fine=n_fine)
+
+
+def bsdf_chi2(ctx, queue, row, wi, grid, n: int = N_SAMPLES, seed: int = 7, pdf_row=None, pdf_fn=None):
+    """Sample `row` n times at wi, bin the samples that carry weight (zero-weight samples dropped, as in Nori),
+    integrate pdf() of `pdf_row` (default the same row), or the host density `pdf_fn(dirs)`, over the cells with
+    `grid` (from `lobe_grid` or `refined_direction_grid`). Returns (samples, keep, observed, expected)."""
+    s = bsdf_sample_batch(ctx, queue, row, wi, n, seed)
+    keep = np.any(s.weight != 0, axis=1)
+    obs = bin_directions(s.wo[keep], RES)
+    dirs, w, cell = grid
+    if pdf_fn is not None:
+        pdf = pdf_fn(dirs)
+    else:
+        pdf, _ = bsdf_pdf_eval_batch(ctx, queue, row if pdf_row is None else pdf_row, wi, dirs)
+    exp = expected_from_grid(pdf, w, cell, (RES, 2 * RES), n)
+    return s, keep, obs, exp
+
+
+@dataclass
+class BsdfRun:
+    """One chi-square case's outcome: the samples, which carry weight, the test, the pdf's integral
+    (expected counts summed) and wi."""
+    samples: object
+    keep: np.ndarray
+    result: object
+    total: float
+    wi: np.ndarray
+
+
+class BsdfRuns(dict):
+    """Each case's run, computed when a test first asks for it. `case`: name -> (row, wi, grid) (rows and grids
+    made lazily); every test is corrected over `n_tests` cases. (tests/bsdfs/conftest.py's `chi2_runs` fixture
+    makes one per test file from its `chi2_case` and `CASES`.)"""
+
+    def __init__(self, ctx, queue, case, n_tests: int, seed: int = 7, n: int = N_SAMPLES):
+        super().__init__()
+        self.ctx, self.queue, self.case, self.n_tests, self.seed, self.n = ctx, queue, case, n_tests, seed, n
+
+    def __missing__(self, name):
+        row, wi, grid = self.case(name)
+        s, keep, obs, exp = bsdf_chi2(self.ctx, self.queue, row, wi, grid, self.n, self.seed)
+        self[name] = BsdfRun(s, keep, chi2_test(obs, exp, min_exp=5.0, alpha=ALPHA, n_tests=self.n_tests),
+                             exp.sum(), wi)
+        return self[name]
+
+    def check(self, name) -> None:
+        """The case's samples pass the chi-square test against its pdf."""
+        res = self[name].result
+        assert res.passed, f"{name}: {res.message}"
+
+
+def check_weights(s, keep) -> None:
+    """A reflecting BSDF's kept samples have weight f cos / pdf (with cos = wo.z > 0 and pdf > 0), and a
+    dropped (zero-weight) sample points below the surface or has f = 0."""
+    assert np.all(s.measure == 0)
+    assert np.all(np.isfinite(s.weight))
+    w, f, pdf, cos = s.weight[keep], s.f[keep], s.pdf[keep], s.wo[keep, 2]
+    assert np.all(pdf > 0), "a sample with weight has zero pdf"
+    assert np.all(cos > 0)
+    np.testing.assert_allclose(w, f * (cos / pdf)[:, None], rtol=2e-4, atol=1e-7)
+    drop = ~keep
+    assert np.all((s.wo[drop, 2] <= 0) | np.all(s.f[drop] == 0, axis=1))
+
+
+# ------------------------------------------------------------------------------------------- energy
+def mean_agrees(w, ref, a, rel=1e-3):
+    """Student's t-test of the mean of w against ref at level a, except that a relative difference below
+    `rel` (float32 arithmetic, quadrature) always passes: near-constant weights make the t-test too sharp."""
+    from scipy import stats
+
+    w = np.asarray(w, np.float64)
+    if abs(w.mean() - ref) <= rel * abs(ref):
+        return True, 1.0
+    p = stats.ttest_1samp(w, ref).pvalue
+    return p > a, p
+
+
+def mean_le(w, bound, a) -> bool:
+    """The mean of w is not significantly above bound (one-sided t-test at level a)."""
+    from scipy import stats
+
+    w = np.asarray(w, np.float64)
+    if w.mean() <= bound:
+        return True
+    return stats.ttest_1samp(w, bound, alternative="greater").pvalue > a
+
+
+def specular_grid(bsdf, wi, alphas):
+    """`lobe_grid` for one of Mitsuba's rough plugins (`alphas`: its roughness, or the anisotropic pair): around the
+    mirror direction and, for a dielectric (it has `int_ior`), the refracted one."""
+    targets = [wi * np.array([-1, -1, 1])]
+    if hasattr(bsdf, "int_ior"):
+        t = refracted(wi, bsdf.ext_ior, bsdf.int_ior)
+        if t is not None:
+            targets.append(t)
+    return lobe_grid(wi, max(alphas), targets, width=14.0, floor=0.03, squeeze=True, n_fine=300)
+
+
+def mitsuba_rough_cases(kind: str, cases):
+    """`chi2_case` for one of Mitsuba's rough plugins, `cases` a list of (name, keywords, wi, alphas)."""
+    def chi2_case(name):
+        _, kw, wi, alphas = next(c for c in cases if c[0] == name)
+        bsdf = mitsuba_bsdf(kind, **kw)
+        return bsdf.pack(), wi, specular_grid(bsdf, wi, alphas)
+
+    return chi2_case
+
+
+# ---------------------------------------------------------------------------------------- textured parameters
+CHECKER_VALUES = ((0.2, 0.4, 0.6), (0.7, 0.5, 0.3))
+UV1, UV2 = (0.1, 0.1), (0.6, 0.1)   # cells (0,0) and (1,0) of the default 0.5 grid: value1, value2
+
+
+def mitsuba_bsdf_with_checkers(kind: str, names, **kw):
+    """A Mitsuba-format BSDF with Nori checkerboard textures (CHECKER_VALUES) nested under `names` (any texture
+    plugin does); other parameters as keywords (`mitsuba_props`)."""
+    from .. import plugins  # noqa: F401
+    from ..scene.properties import PropertyList
+    from ..scene.registry import create
+    from ..scene.spec import PluginSpec
+
+    kids = []
+    for name in names:
+        tp = PropertyList('<texture type="checkerboard_color">')
+        tp.add("value1", "color", CHECKER_VALUES[0])
+        tp.add("value2", "color", CHECKER_VALUES[1])
+        kids.append(PluginSpec("texture", "checkerboard_color", name, tp, [], None, format="nori"))
+    pl = PropertyList(f'<bsdf type="{kind}">', fmt="mitsuba")
+    for k, (t, v) in mitsuba_props(**kw).items():
+        pl.add(k, t, v)
+    return create(PluginSpec("bsdf", kind, None, pl, kids, None, format="mitsuba"))
+
+
+def check_textured_like_constant(ctx, queue, kind: str, names, colour: str, transmit: bool = False) -> None:
+    """`kind` with its alpha and `colour` textured (`names`) evaluates, where the checkerboard shows value1, as
+    the constant plugin with alpha 0.2 and colour value1, elsewhere as alpha 0.7 and value2 (eval and pdf at 500
+    directions above the surface, or below it if `transmit`)."""
+    from ..device.dispatch import flag_defines
+
+    rng = np.random.default_rng(4)
+    wi = np.array([0.3, 0.2, 0.93])
+    wo = rng.normal(size=(500, 3))
+    wo[:, 2] = np.abs(wo[:, 2])
+    wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+    b = mitsuba_bsdf_with_checkers(kind, names)
+    r = b.pack()
+    assert r["flags"] & flag_defines()["BSDF_UV"]
+    tex = b.textures_table
+    for uv, a, c in ((UV1, 0.2, CHECKER_VALUES[0]), (UV2, 0.7, CHECKER_VALUES[1])):
+        ref = mitsuba_row(kind, alpha=a, **{colour: c})
+        wo_use = wo * np.array([1, 1, -1]) if transmit else wo
+        p1, f1 = bsdf_pdf_eval_batch(ctx, queue, r, wi, wo_use, uv=uv, textures=tex)
+        p2, f2 = bsdf_pdf_eval_batch(ctx, queue, ref, wi, wo_use, uv=uv)
+        assert f2.max() > 0
+        np.testing.assert_allclose(f1, f2, rtol=1e-5, atol=1e-7)
+        np.testing.assert_allclose(p1, p2, rtol=1e-5, atol=1e-7)
+
+
+# ------------------------------------------------------------------------------------------- renders
+#: the polar angle (degrees, from the plane's normal) the furnace render's camera sees its plane at
+FURNACE_THETA = 40.0
+
+
+def furnace_plane_scene(bsdf_xml: str, fmt: str = "mitsuba", theta: float = FURNACE_THETA, radiance: float = 1.0,
+                        size: int = 2) -> str:
+    """A scene (XML of format `fmt`, "nori" or "mitsuba") of one wide plane z = 0 (normal +z) made of the BSDF
+    `bsdf_xml`, inside a constant environment of `radiance`, seen by a narrow camera (size x size pixels) at polar
+    angle `theta` in the xz plane. Everything a ray leaving the plane meets is the environment, on either side, so
+    the path integrator's image is the radiance times the BSDF's directional albedo ∫ f(wi, wo) |cos theta_o| dwo at
+    wi = the direction to the camera (`furnace_wi`), reflection and transmission together."""
+    t = np.radians(theta)
+    o = ", ".join(f"{3 * v:.9g}" for v in (np.sin(t), 0.0, np.cos(t)))
+    if fmt == "nori":
+        return (f'<scene><integrator type="path_mis"/><camera type="perspective"><float name="fov" value="0.05"/>'
+                f'<integer name="width" value="{size}"/><integer name="height" value="{size}"/>'
+                f'<transform name="toWorld"><lookat origin="{o}" target="0, 0, 0" up="0, 0, 1"/></transform>'
+                f'<rfilter type="box"/></camera>'
+                f'<mesh type="obj"><string name="filename" value="plane.obj"/>{bsdf_xml}</mesh>'
+                f'<emitter type="constant"><color name="radiance" value="{radiance!r}"/></emitter></scene>')
+    return (f'<scene version="3.0.0"><integrator type="path"/><sensor type="perspective">'
+            f'<float name="fov" value="0.05"/><transform name="to_world"><lookat origin="{o}" target="0, 0, 0" '
+            f'up="0, 0, 1"/></transform><film type="hdrfilm"><integer name="width" value="{size}"/>'
+            f'<integer name="height" value="{size}"/><rfilter type="box"/></film></sensor>'
+            f'<shape type="rectangle"><transform name="to_world"><scale value="50"/></transform>{bsdf_xml}</shape>'
+            f'<emitter type="constant"><rgb name="radiance" value="{radiance!r}"/></emitter></scene>')
+
+
+def furnace_wi(theta: float = FURNACE_THETA) -> np.ndarray:
+    """The direction to the furnace render's camera in the plane's shading frame."""
+    return wi_at(theta)
+
+
+def render_furnace_plane(folder, bsdf_xml: str, fmt: str = "mitsuba", spp: int = 4096, seed: int = 1, **kw):
+    """Render `furnace_plane_scene` (written to `folder`, with its plane mesh for Nori) and return the Film."""
+    from pathlib import Path
+
+    from .. import load_scene, render
+
+    folder = Path(folder)
+    (folder / "plane.obj").write_text("v -50 -50 0\nv 50 -50 0\nv 50 50 0\nv -50 50 0\nf 1 2 3 4\n")
+    (folder / "furnace.xml").write_text(furnace_plane_scene(bsdf_xml, fmt, **kw))
+    return render(load_scene(folder / "furnace.xml"), spp=spp, seed=seed)
+
+
+def albedo_quadrature(ctx, queue, row, wi, grid) -> np.ndarray:
+    """∫ f(wi, wo) |cos theta_o| dwo over the sphere by quadrature of the plugin's eval on `grid` (`lobe_grid`,
+    `specular_grid`): independent of its sampling routine. RGB."""
+    dirs, w, _ = grid
+    _, f = bsdf_pdf_eval_batch(ctx, queue, row, wi, dirs)
+    return (f.astype(np.float64) * (np.abs(dirs[:, 2]) * w)[:, None]).sum(0)
+
+
+def check_render_value(film, reference, rel_tol: float = 0.0, alpha: float = ALPHA) -> None:
+    """The image's mean (per channel) equals `reference` up to its standard error and a relative tolerance `rel_tol`
+    of the reference itself (a quadrature's error), by a z-test at level alpha; a noiseless image to float
+    precision."""
+    from .stats import _ztest, mean_and_error
+
+    m, se = mean_and_error(film)
+    ref = np.broadcast_to(np.asarray(reference, np.float64), m.shape)
+    res = _ztest(m - ref, se * se + (rel_tol * ref) ** 2, alpha, "furnace image mean vs reference")
+    assert res.passed, f"{res.message}: image {m}, reference {ref}"
