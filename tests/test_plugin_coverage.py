@@ -33,8 +33,7 @@ _NOT_MOVED = "not yet moved to its own file (issue 26, point 3: the BSDFs first)
 _NO_RENDER = "no render test of this plugin yet (issue 26, point 3)"
 #: (folder, plugin, aspect) -> why it is missing today
 GAPS = {
-    **{("bsdfs", p, a): _NOT_MOVED for p in ("blendbsdf", "bumpmap", "mask", "normalmap", "null", "plastic",
-                                              "roughplastic", "twosided") for a in ("sampling", "render")},
+    **{("bsdfs", p, a): _NOT_MOVED for p in ("bumpmap", "normalmap") for a in ("sampling", "render")},
     **{("emitters", p, a): _NOT_MOVED for p in ("area", "constant", "distant", "distantdisk", "envmap", "point",
                                                  "spot") for a in ("sampling", "render")},
     **{("shapes", p, a): _NOT_MOVED for p in ("cube", "cylinder", "disk", "instance", "obj", "ply", "rectangle",

@@ -25,7 +25,7 @@ import numpy as np
 
 from .chi2 import (bin_directions, check_pdf_integral, check_sample_weights, chi2_test,  # noqa: F401 (re-exported)
                    expected_from_grid, refined_direction_grid, sidak)
-from .kernels import bsdf_pdf_eval_batch, bsdf_sample_batch
+from .kernels import bsdf_pdf_eval_batch, bsdf_sample_batch, pack_rows  # noqa: F401 (re-exported)
 
 ALPHA = 0.01                  # overall significance level of a test file's family of statistical tests
 RES = 10                      # Nori's chi2test: 10 cos(theta) bins x 20 phi bins
@@ -132,11 +132,12 @@ def lobe_grid(wi, alpha, targets=None, width: float = 12.0, floor: float = 0.02,
 
 
 def bsdf_chi2(ctx, queue, row, wi, grid, n: int = N_SAMPLES, seed: int = 7, pdf_row=None, pdf_fn=None):
-    """Sample `row` n times at wi, bin the samples that carry weight (zero-weight samples dropped, as in Nori),
+    """Sample `row` n times at wi, bin the smooth samples that carry weight (zero-weight samples dropped, as in Nori;
+    a delta lobe's samples, MEASURE_DISCRETE, are not in the pdf, which holds the smooth lobes' selection probability),
     integrate pdf() of `pdf_row` (default the same row), or the host density `pdf_fn(dirs)`, over the cells with
     `grid` (from `lobe_grid` or `refined_direction_grid`). Returns (samples, keep, observed, expected)."""
     s = bsdf_sample_batch(ctx, queue, row, wi, n, seed)
-    keep = np.any(s.weight != 0, axis=1)
+    keep = (s.measure == 0) & np.any(s.weight != 0, axis=1)
     obs = bin_directions(s.wo[keep], RES)
     dirs, w, cell = grid
     if pdf_fn is not None:
@@ -178,6 +179,20 @@ class BsdfRuns(dict):
         """The case's samples pass the chi-square test against its pdf."""
         res = self[name].result
         assert res.passed, f"{name}: {res.message}"
+
+
+def check_mixed_weights(s, keep, wi) -> None:
+    """A BSDF with smooth and delta lobes: its smooth samples (`keep`) have weight f |cos| / pdf; its delta samples
+    go to the mirror direction (a coating) or straight through (a mask's pass-through); every eta is 1."""
+    assert np.all(np.isfinite(s.weight)) and np.all(s.weight >= 0)
+    w, f, pdf, cos = s.weight[keep], s.f[keep], s.pdf[keep], np.abs(s.wo[keep, 2])
+    assert np.all(pdf > 0), "a smooth sample with weight has zero pdf"
+    np.testing.assert_allclose(w, f * (cos / pdf)[:, None], rtol=3e-4, atol=1e-7)
+    delta = s.measure == 1
+    mirror = np.all(np.abs(s.wo - wi * np.array([-1, -1, 1])) < 1e-5, axis=1)
+    through = np.all(np.abs(s.wo + wi) < 1e-5, axis=1)
+    assert np.all(mirror[delta] | through[delta])
+    assert np.all(s.eta == 1.0)
 
 
 def check_weights(s, keep) -> None:
