@@ -33,15 +33,16 @@ _NOT_MOVED = "not yet moved to its own file (issue 26, point 3: the BSDFs first)
 _NO_RENDER = "no render test of this plugin yet (issue 26, point 3)"
 #: (folder, plugin, aspect) -> why it is missing today
 GAPS = {
-    **{("bsdfs", p, a): _NOT_MOVED for p in ("bumpmap", "normalmap") for a in ("sampling", "render")},
+    ("bsdfs", "bumpmap", "render"): _NO_RENDER,
     **{("emitters", p, a): _NOT_MOVED for p in ("area", "constant", "distant", "distantdisk", "envmap", "point",
                                                  "spot") for a in ("sampling", "render")},
     **{("shapes", p, a): _NOT_MOVED for p in ("cube", "cylinder", "disk", "instance", "obj", "ply", "rectangle",
                                                "serialized", "sphere") for a in ("sampling", "render")},
     **{("filters", p, a): _NOT_MOVED for p in ("box", "gaussian", "lanczos", "mitchell", "tent")
        for a in ("sampling", "render")},
-    **{("textures", p, a): _NOT_MOVED for p in ("bitmap", "checkerboard", "mesh_attribute", "rawconstant",
-                                                 "uvtexture") for a in ("eval", "render")},
+    **{("textures", p, a): _NOT_MOVED for p in ("checkerboard", "mesh_attribute", "rawconstant", "uvtexture")
+       for a in ("eval", "render")},
+    ("textures", "bitmap", "render"): _NOT_MOVED,
     ("textures", "checkerboard_color", "render"): _NO_RENDER,
 }
 

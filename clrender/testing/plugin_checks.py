@@ -308,12 +308,14 @@ FURNACE_THETA = 40.0
 
 
 def furnace_plane_scene(bsdf_xml: str, fmt: str = "mitsuba", theta: float = FURNACE_THETA, radiance: float = 1.0,
-                        size: int = 2) -> str:
+                        size: int = 8) -> str:
     """A scene (XML of format `fmt`, "nori" or "mitsuba") of one wide plane z = 0 (normal +z) made of the BSDF
     `bsdf_xml`, inside a constant environment of `radiance`, seen by a narrow camera (size x size pixels) at polar
     angle `theta` in the xz plane. Everything a ray leaving the plane meets is the environment, on either side, so
     the path integrator's image is the radiance times the BSDF's directional albedo ∫ f(wi, wo) |cos theta_o| dwo at
-    wi = the direction to the camera (`furnace_wi`), reflection and transmission together."""
+    wi = the direction to the camera (`furnace_wi`), reflection and transmission together. (The camera is narrow
+    (0.05 degrees), so every pixel sees the same wi; many pixels of a few thousand samples rather than a few pixels
+    of many keep the film's float32 sums exact enough, while the image mean has the error of all their samples.)"""
     t = np.radians(theta)
     o = ", ".join(f"{3 * v:.9g}" for v in (np.sin(t), 0.0, np.cos(t)))
     if fmt == "nori":
@@ -357,12 +359,12 @@ def albedo_quadrature(ctx, queue, row, wi, grid) -> np.ndarray:
 
 
 def check_render_value(film, reference, rel_tol: float = 0.0, alpha: float = ALPHA) -> None:
-    """The image's mean (per channel) equals `reference` up to its standard error and a relative tolerance `rel_tol`
-    of the reference itself (a quadrature's error), by a z-test at level alpha; a noiseless image to float
-    precision."""
+    """The image's mean (per channel) equals `reference` up to its standard error, a relative tolerance `rel_tol`
+    of the reference itself (a quadrature's error) and the film's float32 sums (1e-4 relative: a pixel's sum of a
+    few thousand equal values drifts by about 2e-5), by a z-test at level alpha."""
     from .stats import _ztest, mean_and_error
 
     m, se = mean_and_error(film)
     ref = np.broadcast_to(np.asarray(reference, np.float64), m.shape)
-    res = _ztest(m - ref, se * se + (rel_tol * ref) ** 2, alpha, "furnace image mean vs reference")
+    res = _ztest(m - ref, se * se + ((rel_tol + 1e-4) * ref) ** 2, alpha, "furnace image mean vs reference")
     assert res.passed, f"{res.message}: image {m}, reference {ref}"
