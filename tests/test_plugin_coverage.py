@@ -34,12 +34,12 @@ _NO_RENDER = "no render test of this plugin yet (issue 26, point 3)"
 #: (folder, plugin, aspect) -> why it is missing today
 GAPS = {
     ("bsdfs", "bumpmap", "render"): _NO_RENDER,
+    **{("filters", p, a): _NOT_MOVED for p in ("box", "gaussian", "lanczos", "mitchell", "tent")
+       for a in ("sampling", "render")},
     **{("emitters", p, a): _NOT_MOVED for p in ("area", "constant", "distant", "distantdisk", "envmap", "point",
                                                  "spot") for a in ("sampling", "render")},
     **{("shapes", p, a): _NOT_MOVED for p in ("cube", "cylinder", "disk", "instance", "obj", "ply", "rectangle",
                                                "serialized", "sphere") for a in ("sampling", "render")},
-    **{("filters", p, a): _NOT_MOVED for p in ("box", "gaussian", "lanczos", "mitchell", "tent")
-       for a in ("sampling", "render")},
     **{("textures", p, a): _NOT_MOVED for p in ("checkerboard", "mesh_attribute", "rawconstant", "uvtexture")
        for a in ("eval", "render")},
     ("textures", "bitmap", "render"): _NOT_MOVED,
@@ -135,3 +135,18 @@ def test_the_check_finds_what_is_missing(tmp_path):
         "class TestC:\n    @pytest.mark.plugin('c', 'eval')\n    def test_two(self):\n        pass\n"
         "@pytest.mark.plugin('d', 'sampling')\ndef helper():\n    '''pytest.mark.plugin(\"e\", \"render\")'''\n")
     assert declared(tmp_path / "test_x.py") == {("a", "render"), ("b", "sampling"), ("c", "eval")}
+
+
+def test_sidak_families_count_their_files_cases():
+    """plugin_checks.FAMILIES keeps the chi-square families of the modules the BSDF files came from; each must still
+    count its files' cases (a case added to one file must grow its family, else the others' thresholds move)."""
+    import importlib
+
+    from clrender.testing.plugin_checks import FAMILIES
+
+    for family, files in (("nori-bsdf-chi2", ("diffuse", "microfacet")),
+                          ("mitsuba-rough-chi2", ("roughconductor", "roughdielectric")),
+                          ("coated-chi2", ("plastic", "roughplastic", "blendbsdf", "mask", "twosided")),
+                          ("principled-chi2", ("principled", "principledthin"))):
+        cases = sum(len(importlib.import_module(f"bsdfs.test_{name}").CASES) for name in files)
+        assert FAMILIES[family] == cases, (family, FAMILIES[family], cases)

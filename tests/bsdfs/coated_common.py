@@ -16,8 +16,9 @@ from clrender.scene.properties import PropertyList
 from clrender.scene.registry import create
 from clrender.scene.spec import PluginSpec
 from clrender.testing.mitsuba_dict import spec_from_dict
-from clrender.testing.plugin_checks import (ALPHA, bsdf_pdf_eval_batch, bsdf_sample_batch, check_mixed_weights,
-                                            check_pdf_integral, lobe_grid, pack_rows, refined_direction_grid, sidak)
+from clrender.testing.plugin_checks import (ALPHA, FAMILIES, bsdf_pdf_eval_batch, bsdf_sample_batch,
+                                            check_mixed_weights, check_pdf_integral, lobe_grid, pack_rows,
+                                            refined_direction_grid, sidak)
 
 VALUES = Path(__file__).resolve().parent.parent / "mitsuba" / "bsdf_values"
 FILES = ("plastic.json", "roughplastic.json", "composites.json")
@@ -69,13 +70,13 @@ def albedo_quadrature(ctx, queue, rows, wi):
     return (f * np.abs(dirs[:, 2])[:, None] * w[:, None]).sum(0)
 
 
-def check_energy(ctx, queue, d, n_family):
+def check_energy(ctx, queue, d):
     """The mean sample weight (the directional albedo, delta lobes included) is <= 1 and equals the quadrature of
     eval |cos| plus the delta lobes' expected weight (mask: 1 - opacity straight through; plastic: spec F); Šidák
-    over `n_family` plugins' three angles."""
+    over the coated family's plugins' three angles."""
     rows = rows_of(d)
     n = 300000
-    a = sidak(ALPHA, n_family * 3)
+    a = sidak(ALPHA, FAMILIES["coated-energy"] * 3)
     for th in (10.0, 60.0, 85.0):
         wi = wi_at(th)
         smp = bsdf_sample_batch(ctx, queue, rows, wi, n, 13)

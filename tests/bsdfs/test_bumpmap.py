@@ -6,6 +6,7 @@ bitmap's gradient is checked in tests/textures/test_bitmap.py)."""
 import pytest
 
 from clrender.errors import SceneError
+from clrender.testing.plugin_checks import FAMILIES
 from clrender.scene.registry import create
 
 from .perturbed_common import DATA, FLAT_CHILDREN, check_tilted_chi2, check_unperturbed_is_the_child, check_values, spec
@@ -32,7 +33,7 @@ def test_an_unperturbed_wrapper_is_its_child(ctx, queue, child, tmp_path):
 @pytest.mark.plugin("bumpmap", "sampling")
 @pytest.mark.parametrize("name", sorted(TILTED))
 def test_chi2_sample_vs_pdf_of_a_tilted_frame(ctx, queue, name):
-    check_tilted_chi2(ctx, queue, name, *TILTED[name], n_tests=len(TILTED))
+    check_tilted_chi2(ctx, queue, name, *TILTED[name], n_tests=FAMILIES["perturbed-tilted"])
 
 
 def test_a_height_texture_without_a_gradient_is_a_located_error():

@@ -8,10 +8,10 @@ All chi-square cases of this module share one Šidák correction (N_CHI2 tests a
 import numpy as np
 import pytest
 
-from clrender.testing.plugin_checks import (ALPHA, albedo_quadrature, bsdf_chi2, bsdf_from_xml, bsdf_pdf_eval_batch,
-                                            bsdf_sample_batch, check_render_value, check_weights, chi2_test, fresnel,
-                                            furnace_wi, lobe_grid, mean_agrees, plugin_row, refined_direction_grid,
-                                            render_furnace_plane, sidak, wi_at)
+from clrender.testing.plugin_checks import (ALPHA, FAMILIES, albedo_quadrature, bsdf_chi2, bsdf_from_xml,
+                                            bsdf_pdf_eval_batch, bsdf_sample_batch, check_render_value, check_weights,
+                                            chi2_test, fresnel, furnace_wi, lobe_grid, mean_agrees, plugin_row,
+                                            refined_direction_grid, render_furnace_plane, sidak, wi_at)
 
 from .test_diffuse import _c, row_diffuse
 
@@ -61,7 +61,7 @@ CASES = {f"microfacet-a{alpha:g}-{kdname}-{th:g}": (alpha, kd, th)
          for alpha in (0.01, 0.1, 0.5, 1.0)
          for kdname, kd in (("kd0", 0.0), ("kd05", 0.5), ("kdrgb", (0.1, 0.3, 0.6)))
          for th in ANGLES}
-N_CHI2 = len(CASES)
+N_CHI2 = FAMILIES["nori-bsdf-chi2"]
 
 
 def chi2_case(name):

@@ -11,8 +11,9 @@ import pytest
 from clrender.errors import SceneError
 from clrender.scene.registry import create
 from clrender.testing.mitsuba_dict import spec_from_dict
-from clrender.testing.plugin_checks import (ALPHA, FURNACE_THETA, bsdf_chi2, bsdf_pdf_eval_batch, bsdf_sample_batch,
-                                            check_render_value, chi2_test, fresnel, lobe_grid, render_furnace_plane)
+from clrender.testing.plugin_checks import (ALPHA, FAMILIES, FURNACE_THETA, bsdf_chi2, bsdf_pdf_eval_batch,
+                                            bsdf_sample_batch, check_render_value, chi2_test, fresnel, lobe_grid,
+                                            render_furnace_plane)
 
 from .coated_common import (CHI2_SEED, albedo_quadrature, check_energy, check_smooth_pdf_integral, check_textured,
                             check_values, check_weights, chi2_case_of, rgb, rows_of, value_cases, wi_at)
@@ -21,7 +22,7 @@ CASES = [(f"plastic-{th:g}", {"type": "plastic", "diffuse_reflectance": rgb(0.2,
          for th in (0.0, 40.0, 85.0)]
 CASES.append(("plastic-ior2.2-nonlinear-60", {"type": "plastic", "int_ior": 2.2, "nonlinear": True}, 60.0, False,
               None))
-N_CHI2 = len(CASES)
+N_CHI2 = FAMILIES["coated-chi2"]
 chi2_case = chi2_case_of(CASES)
 
 
@@ -84,7 +85,7 @@ ENERGY = [
 
 @pytest.mark.parametrize("name,d", ENERGY, ids=[e[0] for e in ENERGY])
 def test_energy(ctx, queue, name, d):
-    check_energy(ctx, queue, d, len(ENERGY))
+    check_energy(ctx, queue, d)
 
 
 def test_chi2_catches_a_wrong_pdf(ctx, queue):

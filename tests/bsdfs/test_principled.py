@@ -16,8 +16,8 @@ from clrender.scene.properties import PropertyList
 from clrender.scene.registry import create
 from clrender.scene.spec import PluginSpec
 from clrender.testing.directions import wi_at
-from clrender.testing.plugin_checks import (ALPHA, albedo_quadrature, bsdf_chi2, bsdf_sample_batch, check_pdf_integral,
-                                            check_render_value, chi2_test, furnace_wi, mean_le,
+from clrender.testing.plugin_checks import (ALPHA, FAMILIES, albedo_quadrature, bsdf_chi2, bsdf_sample_batch,
+                                            check_pdf_integral, check_render_value, chi2_test, furnace_wi, mean_le,
                                             mitsuba_bsdf_with_checkers, render_furnace_plane, sidak)
 
 from .principled_common import (check_albedo, check_eval_and_pdf, check_textured, check_weights, chi2_case_of,
@@ -42,7 +42,7 @@ CASES = {
                       clearcoat_gloss=0.3, main_specular_sampling_rate=0.7, clearcoat_sampling_rate=2.0,
                       diffuse_reflectance_sampling_rate=0.5), wi_at(70, phi_deg=-20)),
 }
-N_CHI2 = len(CASES)
+N_CHI2 = FAMILIES["principled-chi2"]
 # The default run samples a cross-section (every lobe, both sides, total internal reflection, the sampling rates);
 # the rest is marked slow.
 DEFAULT_CASES = {"diffuse-rough-flat-80", "metal-smooth-60", "glass-out-40", "glass-in-60-tir", "clearcoat-20",
@@ -98,7 +98,7 @@ def test_white_furnace(ctx, queue):
     """Energy <= 1 where the model conserves it: its metal and its glass. (Its diffuse base does not: Burley's
     diffuse, retro-reflection, sheen and clearcoat are added to the specular lobe, not weighted against it; a white
     base returns up to 1.31 of what arrives, in Mitsuba as here: test_albedo_matches_mitsuba, cases white-*.)"""
-    a_t = sidak(ALPHA, len(FURNACE))
+    a_t = sidak(ALPHA, FAMILIES["principled-furnace"])
     for kw, th, side in FURNACE:
         b = make(**kw)
         wi = wi_at(th, side)

@@ -13,9 +13,9 @@ import pytest
 from clrender.device.dispatch import flag_defines
 from clrender.errors import SceneError
 from clrender.testing.directions import wi_at
-from clrender.testing.plugin_checks import (ALPHA, albedo_quadrature, bsdf_chi2, bsdf_sample_batch, check_pdf_integral,
-                                            check_render_value, chi2_test, furnace_wi, mean_le, render_furnace_plane,
-                                            sidak)
+from clrender.testing.plugin_checks import (ALPHA, FAMILIES, albedo_quadrature, bsdf_chi2, bsdf_sample_batch,
+                                            check_pdf_integral, check_render_value, chi2_test, furnace_wi, mean_le,
+                                            render_furnace_plane, sidak)
 
 from .principled_common import (check_albedo, check_eval_and_pdf, check_textured, check_weights, chi2_case_of,
                                 grid_for, make, value_cases)
@@ -34,7 +34,7 @@ CASES = {
                                   diffuse_reflectance_sampling_rate=0.7, diffuse_transmittance_sampling_rate=1.5),
                              wi_at(20)),
 }
-N_CHI2 = len(CASES)
+N_CHI2 = FAMILIES["principled-chi2"]
 # The default run samples one (the back side, the transmission lobes); the rest is marked slow.
 DEFAULT_CASES = {"thin-back-60"}
 CASE_PARAMS = [pytest.param(c, marks=() if c in DEFAULT_CASES else pytest.mark.slow) for c in CASES]
@@ -81,7 +81,7 @@ FURNACE = [  # a white thin sheet's specular reflection and transmission
 def test_white_furnace(ctx, queue):
     """A white sheet's specular reflection and transmission return at most what arrives; a white sheet of pure
     diffuse transmission passes everything, exactly."""
-    a_t = sidak(ALPHA, len(FURNACE))
+    a_t = sidak(ALPHA, FAMILIES["principled-furnace"])
     for kw, th, side in FURNACE:
         b = make(**kw)
         wi = wi_at(th, side)

@@ -11,11 +11,12 @@ import pytest
 
 from clrender.device.dispatch import flag_defines
 from clrender.errors import SceneError
-from clrender.testing.plugin_checks import (ALPHA, UV1, UV2, albedo_quadrature, bsdf_chi2, bsdf_pdf_eval_batch,
-                                            bsdf_sample_batch, check_pdf_integral, check_render_value,
-                                            check_sample_weights, check_textured_like_constant, chi2_test, furnace_wi,
-                                            mean_le, mitsuba_bsdf, mitsuba_bsdf_with_checkers, mitsuba_rough_cases,
-                                            mitsuba_row, render_furnace_plane, sidak, specular_grid, wi_at)
+from clrender.testing.plugin_checks import (ALPHA, FAMILIES, UV1, UV2, albedo_quadrature, bsdf_chi2,
+                                            bsdf_pdf_eval_batch, bsdf_sample_batch, check_pdf_integral,
+                                            check_render_value, check_sample_weights, check_textured_like_constant,
+                                            chi2_test, furnace_wi, mean_le, mitsuba_bsdf, mitsuba_bsdf_with_checkers,
+                                            mitsuba_rough_cases, mitsuba_row, render_furnace_plane, sidak,
+                                            specular_grid, wi_at)
 
 from .mitsuba_values import case_id, check_glossy_values, ref_cases, values
 
@@ -38,7 +39,7 @@ def _cases():
 
 
 CASES = _cases()
-N_CHI2 = len(CASES)
+N_CHI2 = FAMILIES["mitsuba-rough-chi2"]
 # The default run samples a cross-section (each distribution: grazing, anisotropic, all normals); the whole sweep
 # is marked slow.
 DEFAULT_CASES = {f"rc-{d}-{c}" for d in ("beckmann", "ggx") for c in ("a0.3-45", "a0.05-88", "aniso-75",
@@ -96,7 +97,7 @@ def test_white_furnace(ctx, queue):
     the rest), and almost all of it when smooth at normal incidence."""
     cases = [(make("roughconductor", distribution=dist, alpha=a), wi_at(th))
              for dist in ("beckmann", "ggx") for a in (0.1, 0.5, 1.0) for th in (0.0, 60.0, 85.0)]
-    a_t = sidak(ALPHA, len(cases))
+    a_t = sidak(ALPHA, FAMILIES["mitsuba-rough-furnace"])
     for bsdf, wi in cases:
         s = bsdf_sample_batch(ctx, queue, bsdf.pack(), wi, 100000, 41)
         w = s.weight[:, 0].astype(np.float64) * s.eta.astype(np.float64) ** 2

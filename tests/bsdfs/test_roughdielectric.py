@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from clrender.errors import SceneError
-from clrender.testing.plugin_checks import (ALPHA, albedo_quadrature, bsdf_chi2, bsdf_pdf_eval_batch, bsdf_sample_batch,
-                                            check_pdf_integral, check_render_value, check_sample_weights,
-                                            check_textured_like_constant, chi2_test, furnace_wi, mean_le, mitsuba_bsdf,
-                                            mitsuba_rough_cases, mitsuba_row, render_furnace_plane, sidak,
-                                            specular_grid, wi_at)
+from clrender.testing.plugin_checks import (ALPHA, FAMILIES, albedo_quadrature, bsdf_chi2, bsdf_pdf_eval_batch,
+                                            bsdf_sample_batch, check_pdf_integral, check_render_value,
+                                            check_sample_weights, check_textured_like_constant, chi2_test, furnace_wi,
+                                            mean_le, mitsuba_bsdf, mitsuba_rough_cases, mitsuba_row,
+                                            render_furnace_plane, sidak, specular_grid, wi_at)
 
 from .mitsuba_values import case_id, check_glossy_values, ref_cases
 
@@ -40,7 +40,7 @@ def _cases():
 
 
 CASES = _cases()
-N_CHI2 = len(CASES)
+N_CHI2 = FAMILIES["mitsuba-rough-chi2"]
 # The default run samples a cross-section (each distribution: both sides, grazing, total internal reflection,
 # anisotropic, a high index); the whole sweep is marked slow.
 DEFAULT_CASES = {f"rd-{d}-{c}" for d in ("beckmann", "ggx") for c in (
@@ -98,7 +98,7 @@ def test_white_furnace(ctx, queue):
     cases = [(make("roughdielectric", distribution=dist, alpha=a), wi_at(th, side))
              for dist in ("beckmann", "ggx") for a in (0.1, 0.5, 1.0) for th in (0.0, 60.0, 85.0)
              for side in (1, -1)]
-    a_t = sidak(ALPHA, len(cases))
+    a_t = sidak(ALPHA, FAMILIES["mitsuba-rough-furnace"])
     for bsdf, wi in cases:
         s = bsdf_sample_batch(ctx, queue, bsdf.pack(), wi, 100000, 41)
         w = s.weight[:, 0].astype(np.float64) * s.eta.astype(np.float64) ** 2

@@ -10,7 +10,7 @@ import pytest
 from clrender.errors import SceneError
 from clrender.scene.registry import create
 from clrender.testing.mitsuba_dict import spec_from_dict
-from clrender.testing.plugin_checks import check_render_value, render_furnace_plane
+from clrender.testing.plugin_checks import (FAMILIES, check_render_value, render_furnace_plane)
 
 from .coated_common import CHI2_SEED  # noqa: F401 (read by conftest.py's chi2_runs)
 from .coated_common import (check_smooth_pdf_integral, check_values, check_weights, chi2_case_of, value_cases)
@@ -20,7 +20,7 @@ CASES = [
     ("twosided-front-45", {"type": "twosided", "a": ROUGH, "b": {"type": "plastic"}}, 45.0, False, 0.2),
     ("twosided-back-45", {"type": "twosided", "a": {"type": "plastic"}, "b": ROUGH}, 45.0, True, 0.2),
 ]
-N_CHI2 = len(CASES)
+N_CHI2 = FAMILIES["coated-chi2"]
 chi2_case = chi2_case_of(CASES)
 
 
