@@ -384,3 +384,158 @@ def check_render_value(film, reference, rel_tol: float = 0.0, alpha: float = ALP
     res = _ztest(m - ref, se * se + ((rel_tol + 1e-4) * ref) ** 2, alpha, "furnace image mean vs reference")
     assert res.passed, f"{res.message}: image {m}, reference {ref}"
 
+
+# ------------------------------------------------------------------------------------- reconstruction filters
+FILTER_SRC = r"""
+#include "rng.h"
+#include "filter.h"
+__kernel void offsets(__global const Camera* cam, __global const float* cdf, __global float4* out, uint n, uint seed) {
+    uint i = get_global_id(0);
+    if (i >= n) return;
+    Sampler s;
+    sampler_init(&s, seed, i, 0u);
+    float w;
+    float2 off = filter_sample(cam, cdf, next2d(&s), &w);
+    out[i] = (float4)(off.x, off.y, w, 0.0f);
+}
+"""
+N_FILTER = 400_000
+
+
+def filter_camera(ftype: str, props_xml: str = "", fmt: str = "nori"):
+    """An 8 x 8 camera with the reconstruction filter `<rfilter type=ftype>props_xml</rfilter>` (a Nori or Mitsuba
+    file's)."""
+    from .. import plugins  # noqa: F401
+    from ..scene.registry import create
+    from ..scene.xmlparser import parse_string
+
+    if fmt == "nori":
+        xml = (f'<scene><integrator type="normals"/><camera type="perspective"><integer name="width" value="8"/>'
+               f'<integer name="height" value="8"/><rfilter type="{ftype}">{props_xml}</rfilter></camera></scene>')
+    else:
+        xml = (f'<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer name="width" '
+               f'value="8"/><integer name="height" value="8"/><rfilter type="{ftype}">{props_xml}</rfilter></film>'
+               f'</sensor></scene>')
+    return create(parse_string(xml, "f.xml")).camera
+
+
+def filter_offsets(ctx, queue, cam, n: int = N_FILTER, seed: int = 7):
+    """n offsets (x, y) and weights w of the camera's filter_sample on the device, (n, 4); and its CDF table."""
+    import pyopencl as cl
+
+    from ..device.program import build_program
+
+    kernel = cl.Kernel(build_program(ctx, FILTER_SRC), "offsets")
+    row, table = cam.pack()
+    mf = cl.mem_flags
+    b_cam = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=row)
+    b_cdf = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=table)
+    out = np.zeros((n, 4), np.float32)
+    b_out = cl.Buffer(ctx, mf.WRITE_ONLY, out.nbytes)
+    kernel(queue, (((n + 63) // 64) * 64,), (64,), b_cam, b_cdf, b_out, np.uint32(n), np.uint32(seed))
+    cl.enqueue_copy(queue, out, b_out)
+    queue.finish()
+    return out, table
+
+
+def cell_masses(table, radius, edges):
+    """Probability of each [edges[k], edges[k+1]) under the piecewise-constant table pdf."""
+    cdf = table.astype(np.float64)
+    xs = np.linspace(-radius, radius, len(cdf))
+    return np.diff(np.interp(edges, xs, cdf))
+
+
+def check_filter_offsets(ctx, queue, cam, n_tests: int) -> None:
+    """The filter's offsets stay within its radius and follow its own tabulated pdf (chi-square over 20 x 20
+    cells, Šidák over `n_tests`)."""
+    out, table = filter_offsets(ctx, queue, cam)
+    r = cam.filter.radius
+    assert np.all(np.abs(out[:, :2]) <= r + 1e-6)
+    edges = np.linspace(-r, r, 21)
+    obs, _, _ = np.histogram2d(out[:, 0], out[:, 1], bins=[edges, edges])
+    m = cell_masses(table, r, edges)
+    res = chi2_test(obs, np.outer(m, m) * len(out), alpha=ALPHA, n_tests=n_tests)
+    assert res.passed, res.message
+
+
+def check_filter_weights(ctx, queue, cam, n_tests: int) -> None:
+    """E[w 1{x in cell}] / E[w] equals integral_cell f / integral f (separable, so per axis), for 8 cells over the
+    filter's support: the weighted samples reproduce the filter, so an image converges to integral f L / integral f
+    (Šidák over `n_tests` filters' cells)."""
+    from scipy import stats
+    from scipy.integrate import trapezoid
+
+    out, _ = filter_offsets(ctx, queue, cam, seed=11)
+    f = cam.filter
+    r = f.radius
+    edges = np.linspace(-r, r, 9)
+    x = np.linspace(-r, r, 200001)
+    fx = f.eval(x)
+    total = trapezoid(fx, x)
+    w = out[:, 2].astype(np.float64)
+    zs = []
+    for a, b in zip(edges[:-1], edges[1:]):
+        sel = (out[:, 0] >= a) & (out[:, 0] < b)
+        expect = trapezoid(np.where((x >= a) & (x <= b), fx, 0), x) / total
+        v = w * sel
+        ratio = v.sum() / w.sum()
+        # delta-method standard error of a ratio of means
+        se = np.sqrt(np.var(v - ratio * w) / len(w)) / w.mean()
+        zs.append((ratio - expect) / max(se, 1e-12))
+    p = 2 * stats.norm.sf(np.max(np.abs(zs)))
+    assert p > 1 - (1 - ALPHA) ** (1 / (n_tests * len(zs))), (type(f).__name__, np.round(zs, 2))
+
+
+EDGE_WIDTH = 16
+
+
+def filter_edge_scene(ftype: str, props_xml: str = "", fmt: str = "nori") -> str:
+    """A scene (XML of format `fmt`) whose image is a vertical step through its middle: a black half-plane x < 0 at
+    z = 0 seen straight on (so its edge falls on raster x = EDGE_WIDTH / 2 whatever the perspective), a constant
+    environment of radiance 1 beside it, EDGE_WIDTH x 2 pixels, reconstruction filter `ftype`. (Needs half.obj
+    beside it for Nori: `render_filter_edge` writes it.)"""
+    cam = '<lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/>'
+    if fmt == "nori":
+        return (f'<scene><integrator type="path_mis"/><camera type="perspective"><float name="fov" value="30"/>'
+                f'<integer name="width" value="{EDGE_WIDTH}"/><integer name="height" value="2"/>'
+                f'<transform name="toWorld">{cam}</transform><rfilter type="{ftype}">{props_xml}</rfilter></camera>'
+                f'<mesh type="obj"><string name="filename" value="half.obj"/><bsdf type="diffuse"><color '
+                f'name="albedo" value="0"/></bsdf></mesh>'
+                f'<emitter type="constant"><color name="radiance" value="1"/></emitter></scene>')
+    return (f'<scene version="3.0.0"><integrator type="path"/><sensor type="perspective"><float name="fov" '
+            f'value="30"/><transform name="to_world">{cam}</transform><film type="hdrfilm"><integer name="width" '
+            f'value="{EDGE_WIDTH}"/><integer name="height" value="2"/><rfilter type="{ftype}">{props_xml}</rfilter>'
+            f'</film></sensor><shape type="rectangle"><transform name="to_world"><scale x="50" y="100"/>'
+            f'<translate x="-50"/></transform><bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>'
+            f'</shape><emitter type="constant"><rgb name="radiance" value="1"/></emitter></scene>')
+
+
+def check_filter_edge_render(folder, ftype: str, props_xml: str = "", fmt: str = "nori", spp: int = 4096) -> None:
+    """Render `filter_edge_scene`: each pixel j is the filter's share beyond the edge, integral from
+    EDGE_WIDTH / 2 - (j + 0.5) to r of f over integral f (or one minus it, as the camera's x runs), by a z-test per
+    pixel against that host integral of the plugin's own eval (Šidák over the image)."""
+    from pathlib import Path
+
+    from scipy.integrate import trapezoid
+
+    from .. import load_scene, render
+    from .stats import compare_to_value
+
+    folder = Path(folder)
+    (folder / "half.obj").write_text("v -100 -100 0\nv 0 -100 0\nv 0 100 0\nv -100 100 0\nf 1 2 3 4\n")
+    (folder / "edge.xml").write_text(filter_edge_scene(ftype, props_xml, fmt))
+    scene = load_scene(folder / "edge.xml")
+    f = scene.camera.filter
+    r = f.radius
+    x = np.linspace(-r, r, 400001)
+    fx = f.eval(x)
+    total = trapezoid(fx, x)
+    beyond = np.array([trapezoid(np.where(x > EDGE_WIDTH / 2 - (j + 0.5), fx, 0), x) / total
+                       for j in range(EDGE_WIDTH)])
+    assert 0 < beyond[EDGE_WIDTH // 2] < 1 and beyond[0] == 0 and abs(beyond[-1] - 1) < 1e-9
+    film = render(scene, spp=spp, seed=3)
+    if film.image[:, 0].mean() > 0.5:   # the camera's x runs the other way: the environment on the left
+        beyond = 1 - beyond
+    ref = np.broadcast_to(beyond[None, :, None], film.image.shape)
+    res = compare_to_value(film, ref, ALPHA)
+    assert res.passed, f"{res.message}: row {film.image[0, :, 0].round(4)}, expected {beyond.round(4)}"
