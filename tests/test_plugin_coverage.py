@@ -38,10 +38,9 @@ GAPS = {
                                                  "spot") for a in ("sampling", "render")},
     **{("shapes", p, a): _NOT_MOVED for p in ("cube", "cylinder", "disk", "instance", "obj", "ply", "rectangle",
                                                "serialized", "sphere") for a in ("sampling", "render")},
-    **{("textures", p, a): _NOT_MOVED for p in ("checkerboard", "mesh_attribute", "rawconstant", "uvtexture")
+    **{("textures", p, a): _NOT_MOVED for p in ("checkerboard", "mesh_attribute", "rawconstant")
        for a in ("eval", "render")},
     ("textures", "bitmap", "render"): _NOT_MOVED,
-    ("textures", "checkerboard_color", "render"): _NO_RENDER,
 }
 
 

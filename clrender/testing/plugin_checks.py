@@ -323,29 +323,37 @@ FURNACE_THETA = 40.0
 
 
 def furnace_plane_scene(bsdf_xml: str, fmt: str = "mitsuba", theta: float = FURNACE_THETA, radiance: float = 1.0,
-                        size: int = 8) -> str:
+                        size: int = 8, target=(0.0, 0.0)) -> str:
     """A scene (XML of format `fmt`, "nori" or "mitsuba") of one wide plane z = 0 (normal +z) made of the BSDF
     `bsdf_xml`, inside a constant environment of `radiance`, seen by a narrow camera (size x size pixels) at polar
     angle `theta` in the xz plane. Everything a ray leaving the plane meets is the environment, on either side, so
     the path integrator's image is the radiance times the BSDF's directional albedo ∫ f(wi, wo) |cos theta_o| dwo at
-    wi = the direction to the camera (`furnace_wi`), reflection and transmission together. (The camera is narrow
+    wi = the direction to the camera (`furnace_wi`), reflection and transmission together. The camera looks at the
+    point `target` (x, y) of the plane, where its uv is `furnace_uv(target)`. (The camera is narrow
     (0.05 degrees), so every pixel sees the same wi; many pixels of a few thousand samples rather than a few pixels
     of many keep the film's float32 sums exact enough, while the image mean has the error of all their samples.)"""
     t = np.radians(theta)
-    o = ", ".join(f"{3 * v:.9g}" for v in (np.sin(t), 0.0, np.cos(t)))
+    x0, y0 = target
+    o = ", ".join(f"{v:.9g}" for v in (x0 + 3 * np.sin(t), y0, 3 * np.cos(t)))
+    tg = f"{x0:.9g}, {y0:.9g}, 0"
     if fmt == "nori":
         return (f'<scene><integrator type="path_mis"/><camera type="perspective"><float name="fov" value="0.05"/>'
                 f'<integer name="width" value="{size}"/><integer name="height" value="{size}"/>'
-                f'<transform name="toWorld"><lookat origin="{o}" target="0, 0, 0" up="0, 0, 1"/></transform>'
+                f'<transform name="toWorld"><lookat origin="{o}" target="{tg}" up="0, 0, 1"/></transform>'
                 f'<rfilter type="box"/></camera>'
                 f'<mesh type="obj"><string name="filename" value="plane.obj"/>{bsdf_xml}</mesh>'
                 f'<emitter type="constant"><color name="radiance" value="{radiance!r}"/></emitter></scene>')
     return (f'<scene version="3.0.0"><integrator type="path"/><sensor type="perspective">'
-            f'<float name="fov" value="0.05"/><transform name="to_world"><lookat origin="{o}" target="0, 0, 0" '
+            f'<float name="fov" value="0.05"/><transform name="to_world"><lookat origin="{o}" target="{tg}" '
             f'up="0, 0, 1"/></transform><film type="hdrfilm"><integer name="width" value="{size}"/>'
             f'<integer name="height" value="{size}"/><rfilter type="box"/></film></sensor>'
             f'<shape type="rectangle"><transform name="to_world"><scale value="50"/></transform>{bsdf_xml}</shape>'
             f'<emitter type="constant"><rgb name="radiance" value="{radiance!r}"/></emitter></scene>')
+
+
+def furnace_uv(target=(0.0, 0.0)) -> np.ndarray:
+    """The uv of the furnace plane (100 x 100, uv 0..1 over it, u along x, v along y) at the point `target`."""
+    return 0.5 + np.asarray(target, np.float64) / 100.0
 
 
 def furnace_wi(theta: float = FURNACE_THETA) -> np.ndarray:
@@ -360,7 +368,8 @@ def render_furnace_plane(folder, bsdf_xml: str, fmt: str = "mitsuba", spp: int =
     from .. import load_scene, render
 
     folder = Path(folder)
-    (folder / "plane.obj").write_text("v -50 -50 0\nv 50 -50 0\nv 50 50 0\nv -50 50 0\nf 1 2 3 4\n")
+    (folder / "plane.obj").write_text("v -50 -50 0\nv 50 -50 0\nv 50 50 0\nv -50 50 0\n"
+                                      "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n")
     (folder / "furnace.xml").write_text(furnace_plane_scene(bsdf_xml, fmt, **kw))
     return render(load_scene(folder / "furnace.xml"), spp=spp, seed=seed)
 
@@ -539,3 +548,57 @@ def check_filter_edge_render(folder, ftype: str, props_xml: str = "", fmt: str =
     ref = np.broadcast_to(beyond[None, :, None], film.image.shape)
     res = compare_to_value(film, ref, ALPHA)
     assert res.passed, f"{res.message}: row {film.image[0, :, 0].round(4)}, expected {beyond.round(4)}"
+
+
+# ------------------------------------------------------------------------------------------------ textures
+TEXTURE_SRC = r"""
+#include "texture.h"
+__kernel void tex_eval(__global const Texture* textures, uint idx, uint n, __global const float2* uv,
+                       __global float4* out) {
+    uint i = get_global_id(0);
+    if (i >= n) return;
+    out[i] = (float4)(texture_eval(textures + idx, uv[i]), 0.0f);
+}
+"""
+#: where the textured furnace plane is seen: uv (0.63, 0.62), inside a cell of every checkerboard tested
+TEXTURE_TARGET = (13.0, 12.0)
+
+
+def texture_eval_batch(ctx, queue, textures, uv):
+    """Evaluate every texture in `textures` (placed in one table, after a decoy) at uv (N, 2) on the device."""
+    import pyopencl as cl
+
+    from ..device.program import build_program
+    from ..scene import registry
+    from ..textures.texture import TextureTable
+
+    kernel = cl.Kernel(build_program(ctx, TEXTURE_SRC), "tex_eval")
+    table = TextureTable()
+    table.add(registry.instantiate("texture", "checkerboard", {}, fmt="mitsuba"))   # not at row 0
+    rows = [table.add(t) for t in textures]
+    arr = table.array()
+    ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
+    tbuf = cl.Buffer(ctx, ro, hostbuf=arr)
+    uv = np.ascontiguousarray(uv, np.float32)
+    ubuf = cl.Buffer(ctx, ro, hostbuf=uv)
+    n = len(uv)
+    obuf = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, size=n * 16)
+    outs = []
+    for r in rows:
+        kernel(queue, ((n + 63) // 64 * 64,), (64,), tbuf, np.uint32(r), np.uint32(n), ubuf, obuf)
+        out = np.empty((n, 4), np.float32)
+        cl.enqueue_copy(queue, out, obuf)
+        outs.append(out[:, :3])
+    return outs
+
+
+def check_texture_render(folder, texture_xml: str, fmt: str = "nori", spp: int = 256) -> None:
+    """A diffuse furnace plane whose albedo is the texture `texture_xml` (named `albedo` for Nori, `reflectance`
+    for Mitsuba), seen at TEXTURE_TARGET: the image is the texture's value there, its host eval at that uv (exactly:
+    a diffuse plane in a constant environment of radiance 1 reflects its albedo, whatever direction it samples)."""
+    from .. import load_scene
+
+    film = render_furnace_plane(folder, f'<bsdf type="diffuse">{texture_xml}</bsdf>', fmt, spp=spp,
+                                target=TEXTURE_TARGET)
+    texture = load_scene(folder / "furnace.xml").shapes[0].bsdf.texture   # the plane's diffuse albedo
+    check_render_value(film, texture.eval(furnace_uv(TEXTURE_TARGET)[None, :])[0])

@@ -1,12 +1,13 @@
 """Nori's checkerboard_color texture (clrender/textures/checkerboard_color.py, kernels/textures/
 checkerboard_color.h) as a BSDF's parameter on the device: its values at uv against the host's eval and at
-hand-checked points, read through diffuse's albedo (eval, albedo and sample weights), and the scene errors."""
+hand-checked points, read through diffuse's albedo (eval, albedo and sample weights), a rendered plane, and the
+scene errors."""
 import numpy as np
 import pytest
 
 from clrender.device.dispatch import flag_defines, tag_of
 from clrender.errors import SceneError
-from clrender.testing.plugin_checks import bsdf_from_xml, bsdf_pdf_eval_batch, bsdf_sample_batch
+from clrender.testing.plugin_checks import bsdf_from_xml, bsdf_pdf_eval_batch, bsdf_sample_batch, check_texture_render
 
 CHECKER_XML = """<scene><mesh type="obj"><string name="filename" value="x.obj"/>
   <bsdf type="{kind}">
@@ -55,3 +56,13 @@ def test_checkerboard_errors():
                                          extra='<color name="albedo" value="0.5"/>'))
     with pytest.raises(SceneError):
         bsdf_from_xml(CHECKER_XML.format(kind="mirror", name="albedo", extra=""))
+
+
+@pytest.mark.plugin("checkerboard_color", "render")
+def test_furnace_render(tmp_path):
+    """A diffuse plane with a checkerboard_color albedo in a constant environment of radiance 1 shows the cell's
+    colour at its uv."""
+    check_texture_render(tmp_path, '<texture type="checkerboard_color" name="albedo"><color name="value1" '
+                                   'value="0.8, 0.1, 0.1"/><color name="value2" value="0.1, 0.2, 0.7"/>'
+                                   '<point name="delta" value="0.05, -0.1"/><vector name="scale" value="0.25 0.5"/>'
+                                   '</texture>')
