@@ -1,12 +1,13 @@
 """Mitsuba 3's bitmap texture (clrender/textures/bitmap.py, kernels/textures/bitmap.h): its uv gradient, bumpmap's
 slope, on the device and on the host against Mitsuba 3.9.1's eval_1_grad (tests/mitsuba/bsdf_values/perturbed.json,
-written by make_perturbed_values.py there). Its values as a BSDF's or emitter's parameter are tested in
-tests/test_mitsuba_textures.py."""
+written by make_perturbed_values.py there), and a rendered plane that shows the image at its uv. Its lookups for
+every filter, wrap mode and image format are still tested in tests/test_mitsuba_textures.py."""
 import numpy as np
 import pytest
 
 from bsdfs.perturbed_common import DATA, spec
 from clrender.scene.registry import create
+from clrender.testing.plugin_checks import check_texture_render
 from clrender.textures.texture import TextureTable
 
 GRAD_SRC = r"""
@@ -47,3 +48,15 @@ def test_bitmap_gradient_is_mitsubas(ctx, queue, name):
         assert not ref.any()
     else:
         assert np.abs(ref).max() > 0.5
+
+
+@pytest.mark.plugin("bitmap", "render")
+def test_furnace_render(tmp_path):
+    """A diffuse plane with a bitmap reflectance (a 5 x 7 sRGB PNG, bilinear) in a constant environment of radiance 1
+    shows the image's value at its uv."""
+    from PIL import Image
+
+    img = (np.random.default_rng(4).random((5, 7, 3)) * 255).astype(np.uint8)
+    Image.fromarray(img).save(tmp_path / "t.png")
+    check_texture_render(tmp_path, f'<texture type="bitmap" name="reflectance"><string name="filename" '
+                                   f'value="{tmp_path / "t.png"}"/></texture>', "mitsuba")
