@@ -4,14 +4,20 @@ A BSDF plugin's test file (tests/bsdfs/test_<name>.py) states its cases (the plu
 
 - `bsdf_chi2`: samples on the device binned over Nori's (RES cos theta x 2 RES phi) cells against the integral of
   the plugin's own pdf over them (`lobe_grid` refines the quadrature around the specular peaks), then
-  `chi2.chi2_test` with a Šidák correction over the file's cases (`BsdfRuns` computes each case once, when a test
+  `chi2.chi2_test` with a Šidák correction over its family (`BsdfRuns` computes each case once, when a test
   first asks for it);
 - `chi2.check_pdf_integral`: the pdf integrates to the fraction of samples that survive (at most 1);
-- `check_weights` / `chi2.check_sample_weights`: every kept sample's weight is f cos / pdf;
+- `check_weights` / `chi2.check_sample_weights` / `check_mixed_weights`: every kept sample's weight is f cos / pdf
+  (and a delta lobe's samples go where they must);
 - `mean_agrees` / `mean_le`: energy, a white furnace (the mean weight against a reference or a bound);
-- `fresnel`: the dielectric Fresnel reflectance in float64, the reference several plugins are checked against.
+- `fresnel`: the dielectric Fresnel reflectance in float64, the reference several plugins are checked against;
+- `render_furnace_plane` + `check_render_value`: its render test, a plane of it in a constant environment, whose
+  image is its directional albedo (a closed form, or `albedo_quadrature` of its eval).
 
-Rows are always built by the plugins themselves (`bsdf_from_xml`, `mitsuba_bsdf`), never by hand.
+Rows are always built by the plugins themselves (`bsdf_from_xml`, `mitsuba_bsdf`), never by hand. A filter's file
+(tests/filters/) runs `check_filter_offsets` (chi-square against its own table), `check_filter_weights` and
+`check_filter_edge_render`; a texture's (tests/textures/) `texture_eval_batch` against its host eval and
+`check_texture_render`. The Šidák families of the statistical tests are FAMILIES.
 
 Tests declare which plugin and which aspect they cover with the `plugin` marker (registered in tests/conftest.py):
 ``@pytest.mark.plugin("roughplastic", "sampling")``; tests/test_plugin_coverage.py reads these markers to check
