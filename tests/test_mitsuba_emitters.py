@@ -1,5 +1,5 @@
 """Mitsuba 3 emitters (clrender/emitters: point, spot, directional, constant, envmap registered for Mitsuba files),
-on the device through the kernels of tests/test_emitters.py.
+on the device through the kernels of tests/emitters/emitter_common.py.
 
 * spot: Mitsuba's falloff (1 inside the beam, linear in angle to 0 at the cutoff) against closed-form values;
 * directional and point: the irradiance / intensity as Mitsuba names them;
@@ -21,7 +21,7 @@ from clrender.testing.stats import compare_films, compare_mean_to_value
 from scipy import stats
 from clrender.textures.imagefile import read_image, write_rgbe
 
-from test_emitters import HEADER, Dev, kernels, run_chi2, tris_obj, quad  # noqa: F401  (kernels: a fixture)
+from emitters.emitter_common import HEADER, Dev, kernels, run_chi2, tris_obj, quad  # noqa: F401  (kernels: a fixture)
 
 
 def mitsuba(type_name, **props):

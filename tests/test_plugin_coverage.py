@@ -29,13 +29,12 @@ KINDS = {"bsdfs": ("bsdf",), "emitters": ("emitter",), "shapes": ("shape", "mesh
 NEEDS = {"bsdfs": ("sampling", "render"), "emitters": ("sampling", "render"), "shapes": ("sampling", "render"),
          "textures": ("eval", "render"), "filters": ("sampling", "render")}
 
-_NOT_MOVED = "not yet moved to its own file (issue 26, point 3: the BSDFs, filters and textures first)"
+_NOT_MOVED = "not yet moved to its own file (issue 26, point 3: still in the theme files)"
 _NO_RENDER = "no render test of this plugin yet (issue 26, point 3)"
 #: (folder, plugin, aspect) -> why it is missing today
 GAPS = {
     ("bsdfs", "bumpmap", "render"): _NO_RENDER,
-    **{("emitters", p, a): _NOT_MOVED for p in ("area", "constant", "distant", "distantdisk", "envmap", "point",
-                                                 "spot") for a in ("sampling", "render")},
+    **{("emitters", p, a): _NOT_MOVED for p in ("envmap", "spot") for a in ("sampling", "render")},
     **{("shapes", p, a): _NOT_MOVED for p in ("cube", "cylinder", "disk", "instance", "obj", "ply", "rectangle",
                                                "serialized", "sphere") for a in ("sampling", "render")},
 }
