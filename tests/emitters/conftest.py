@@ -1,1 +1,2 @@
-from .emitter_common import kernels, scenes  # noqa: F401  (the emitters' device program and test scenes: fixtures)
+# the emitters' device program, their test scenes and environment maps: fixtures
+from .emitter_common import envmaps, kernels, scenes  # noqa: F401

@@ -18,6 +18,8 @@ from clrender.device.dispatch import flag_defines as layout_flags
 from clrender.device.program import build_program
 from clrender.loader import load_scene
 from clrender.pack import pack_scene
+from clrender.scene import registry
+from clrender.scene.transform import Transform
 from clrender.testing.chi2 import bin_directions, chi2_test, expected_from_pdf, integration_directions
 from icosphere import icosphere
 
@@ -448,3 +450,50 @@ def check_noiseless_render(tmp_path, scene_of, value):
     p.write_text(scene_of(tmp_path, "path_mis"))
     film = clrender.render(clrender.load_scene(p), spp=16, seed=1)
     np.testing.assert_allclose(film.image, np.broadcast_to(value, film.image.shape), rtol=2e-4)
+
+
+# ------------------------------------------------------------------------------------- Mitsuba's emitters
+def mitsuba(type_name, **props):
+    """A Mitsuba-format emitter made from code: props name=(tag, value)."""
+    return registry.instantiate("emitter", type_name, props, fmt="mitsuba")
+
+
+def device(tmp, ctx, queue, kernels, emitters, stem="s", selection="uniform"):
+    """A ground quad (for the scene bounds) lit by the given emitter objects, packed and on the device."""
+    (tmp / "ground.obj").write_text(tris_obj(quad([0, 0, 0], [0, 0, 5], [5, 0, 0])))
+    path = tmp / f"{stem}.xml"
+    path.write_text(HEADER + '<mesh type="obj"><string name="filename" value="ground.obj"/></mesh>\n</scene>\n')
+    scene = load_scene(path)
+    scene.emitters.extend(emitters)
+    return Dev(ctx, queue, kernels, pack_scene(scene, emitter_selection=selection))
+
+
+def unit(v):
+    v = np.asarray(v, np.float64)
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def sky_image(w=24, h=12):
+    """A small lat-long test map: a dim gradient, a bright warm patch and a black band (generated here)."""
+    y, x = np.mgrid[0:h, 0:w]
+    img = np.stack([0.2 + 0.3 * x / w, 0.3 + 0.2 * y / h, 0.5 - 0.3 * y / h], axis=-1)
+    img[2:4, 5:8] = [40.0, 30.0, 10.0]
+    img[8, :] = 0.0
+    return img.astype(np.float32)
+
+
+def write_exr(path, img):
+    import OpenEXR
+
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    OpenEXR.File(header, {"RGB": np.ascontiguousarray(img, np.float32)}).write(str(path))
+
+
+@pytest.fixture(scope="module")
+def envmaps(tmp_path_factory, ctx, queue, kernels):
+    tmp = tmp_path_factory.mktemp("envmap")
+    write_exr(tmp / "sky.exr", sky_image())
+    rot = Transform.rotate([0.3, 1.0, -0.2], 70.0)
+    em = mitsuba("envmap", filename=("string", str(tmp / "sky.exr")), scale=("float", 1.5),
+                 to_world=("transform", rot))
+    return em, device(tmp, ctx, queue, kernels, [em])
