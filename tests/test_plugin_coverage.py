@@ -34,8 +34,7 @@ _NO_RENDER = "no render test of this plugin yet (issue 26, point 3)"
 #: (folder, plugin, aspect) -> why it is missing today
 GAPS = {
     ("bsdfs", "bumpmap", "render"): _NO_RENDER,
-    **{("shapes", p, a): _NOT_MOVED for p in ("cube", "cylinder", "disk", "instance", "obj", "ply", "rectangle",
-                                               "serialized", "sphere") for a in ("sampling", "render")},
+    **{("shapes", "instance", a): _NOT_MOVED for a in ("sampling", "render")},
 }
 
 
