@@ -34,7 +34,7 @@ _NO_RENDER = "no render test of this plugin yet (issue 26, point 3)"
 #: (folder, plugin, aspect) -> why it is missing today
 GAPS = {
     ("bsdfs", "bumpmap", "render"): _NO_RENDER,
-    **{("shapes", "instance", a): _NOT_MOVED for a in ("sampling", "render")},
+    ("shapes", "instance", "sampling"): "an instance holds no emitter (refused, as in Mitsuba): nothing of it is sampled",
 }
 
 
