@@ -29,7 +29,6 @@ KINDS = {"bsdfs": ("bsdf",), "emitters": ("emitter",), "shapes": ("shape", "mesh
 NEEDS = {"bsdfs": ("sampling", "render"), "emitters": ("sampling", "render"), "shapes": ("sampling", "render"),
          "textures": ("eval", "render"), "filters": ("sampling", "render")}
 
-_NOT_MOVED = "not yet moved to its own file (issue 26, point 3: still in the theme files)"
 _NO_RENDER = "no render test of this plugin yet (issue 26, point 3)"
 #: (folder, plugin, aspect) -> why it is missing today
 GAPS = {
