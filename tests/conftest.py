@@ -28,3 +28,9 @@ def ctx(cl_env):
 @pytest.fixture(scope="session")
 def queue(cl_env):
     return cl_env[1]
+
+
+def pytest_configure(config):
+    # Read by tests/test_plugin_coverage.py (from the source, without importing the test files).
+    config.addinivalue_line("markers", "plugin(name, aspect): the test covers plugin `name`'s `aspect` "
+                                       "(sampling, eval or render); see clrender/testing/plugin_checks.py")

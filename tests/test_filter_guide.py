@@ -1,13 +1,18 @@
 """The guided filter sampling the renderer uses (filter_sample_guided over the CDF + guide table of
 clrender/filters/filter.py's with_guide) gives exactly the offsets and weights of the bisection in
-filter_sample, which test_filters.py checks statistically."""
+filter_sample, which tests/filters/ check statistically."""
 import numpy as np
 import pyopencl as cl
 import pytest
 
 from clrender.device.program import build_program
 from clrender.filters.filter import with_guide
-from test_filters import FILTERS, make_camera
+from clrender.testing.plugin_checks import filter_camera
+
+# the filters of tests/filters/ whose sampling the bisection's statistical tests check
+FILTERS = {"box": ("box", ""), "box_wide": ("box", '<float name="radius" value="1.5"/>'),
+           "tent": ("tent", '<float name="radius" value="1.2"/>'), "gaussian": ("gaussian", ""),
+           "mitchell": ("mitchell", "")}
 
 SRC = r"""
 #include "filter.h"
@@ -37,7 +42,7 @@ def test_guide_table():
 
 @pytest.mark.parametrize("name", sorted(FILTERS))
 def test_guided_equals_bisection(ctx, queue, name):
-    row, cdf = make_camera(name).pack()
+    row, cdf = filter_camera(*FILTERS[name]).pack()
     table = with_guide(cdf)
     n = len(cdf) - 1
     rng = np.random.default_rng(3)

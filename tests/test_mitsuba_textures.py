@@ -3,52 +3,14 @@ references (numpy), which were checked against Mitsuba 3.9.1's own plugins (see 
 lookup for every filter and wrap mode, with and without sRGB decoding and a to_uv transform; the checkerboard
 pattern; known sRGB values; errors."""
 import numpy as np
-import pyopencl as cl
 import pytest
 from PIL import Image
 
 from clrender import plugins  # noqa: F401  (registers the plugins)
-from clrender.device.program import build_program
 from clrender.errors import SceneError
 from clrender.scene import registry
 from clrender.scene.transform import Transform
-from clrender.textures.texture import TextureTable
-
-SRC = r"""
-#include "texture.h"
-__kernel void tex_eval(__global const Texture* textures, uint idx, uint n, __global const float2* uv,
-                       __global float4* out) {
-    uint i = get_global_id(0);
-    if (i >= n) return;
-    out[i] = (float4)(texture_eval(textures + idx, uv[i]), 0.0f);
-}
-"""
-
-
-@pytest.fixture(scope="module")
-def tex_kernel(ctx):
-    return cl.Kernel(build_program(ctx, SRC), "tex_eval")
-
-
-def device_eval(ctx, queue, kernel, textures, uv):
-    """Evaluate every texture in `textures` (placed in one table, after a decoy) at uv (N, 2) on the device."""
-    table = TextureTable()
-    table.add(registry.instantiate("texture", "checkerboard", {}, fmt="mitsuba"))   # not at row 0
-    rows = [table.add(t) for t in textures]
-    arr = table.array()
-    ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
-    tbuf = cl.Buffer(ctx, ro, hostbuf=arr)
-    uv = np.ascontiguousarray(uv, np.float32)
-    ubuf = cl.Buffer(ctx, ro, hostbuf=uv)
-    n = len(uv)
-    obuf = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, size=n * 16)
-    outs = []
-    for r in rows:
-        kernel(queue, ((n + 63) // 64 * 64,), (64,), tbuf, np.uint32(r), np.uint32(n), ubuf, obuf)
-        out = np.empty((n, 4), np.float32)
-        cl.enqueue_copy(queue, out, obuf)
-        outs.append(out[:, :3])
-    return outs
+from clrender.testing.plugin_checks import texture_eval_batch
 
 
 def bitmap(path, **props):
@@ -71,7 +33,7 @@ TO_UV = Transform.translate([0.25, 0.1, 0.3]) @ Transform.scale([2, 3, 1]) @ Tra
 
 @pytest.mark.parametrize("filt", ["bilinear", "nearest"])
 @pytest.mark.parametrize("wrap", ["repeat", "mirror", "clamp"])
-def test_bitmap_lookup_matches_host(ctx, queue, tex_kernel, png, filt, wrap):
+def test_bitmap_lookup_matches_host(ctx, queue, png, filt, wrap):
     path, _ = png
     texs = [bitmap(path, filter_type=filt, wrap_mode=wrap), bitmap(path, filter_type=filt, wrap_mode=wrap, raw=True),
             bitmap(path, filter_type=filt, wrap_mode=wrap, to_uv=TO_UV)]
@@ -79,7 +41,7 @@ def test_bitmap_lookup_matches_host(ctx, queue, tex_kernel, png, filt, wrap):
     # also exact texel centres and edges, where nearest and bilinear switch
     g = np.stack(np.meshgrid(np.arange(-7, 15) / 7.0, np.arange(-5, 11) / 5.0), -1).reshape(-1, 2) + 1e-4
     uv = np.concatenate([uv, g])
-    for t, dev in zip(texs, device_eval(ctx, queue, tex_kernel, texs, uv)):
+    for t, dev in zip(texs, texture_eval_batch(ctx, queue, texs, uv)):
         # float32 st on the device: positions differ by ~1e-6 pixel, values by that times a pixel step
         np.testing.assert_allclose(dev, t.eval(uv.astype(np.float32)), rtol=1e-5, atol=5e-5)
 
@@ -104,48 +66,6 @@ def test_bitmap_pixels_and_srgb(png):
         np.testing.assert_allclose(t.eval([-0.5 / 7, 0.5 / 5]), img[0, col] / 255.0, atol=1e-6)
     t = bitmap(path, filter_type="nearest", wrap_mode="mirror", raw=True)
     np.testing.assert_allclose(t.eval([-1.5 / 7, 0.5 / 5]), img[0, 1] / 255.0, atol=1e-6)
-
-
-def test_checkerboard_pattern(ctx, queue, tex_kernel):
-    c0, c1 = [0.9, 0.1, 0.2], [0.05, 0.3, 0.7]
-    t = registry.instantiate("texture", "checkerboard", {"color0": ("color", c0), "color1": ("color", c1),
-                                                        "to_uv": ("transform", Transform.scale([3, 2, 1]))},
-                             fmt="mitsuba")
-    # [0, 1/2)^2 of st is color0; st = (3u, 2v)
-    pts = np.array([[0.1 / 3, 0.1 / 2], [0.6 / 3, 0.1 / 2], [0.6 / 3, 0.6 / 2], [0.1 / 3, 0.6 / 2], [1.1 / 3, 0.1 / 2],
-                    [-0.4 / 3, 0.1 / 2]])
-    expect = np.array([c0, c1, c0, c1, c0, c1])
-    np.testing.assert_allclose(t.eval(pts), expect)
-    uv = np.concatenate([pts, np.random.default_rng(6).uniform(-3, 3, size=(4000, 2))])
-    dev = device_eval(ctx, queue, tex_kernel, [t], uv)[0]
-    host = t.eval(uv)
-    # points within float rounding of a cell edge may land either side
-    st = uv @ t.to_uv[:, :2].T + t.to_uv[:, 2]
-    frac = st - np.floor(st)
-    clear = np.all(np.minimum(np.abs(frac - 0.5), np.minimum(frac, 1 - frac)) > 1e-5, axis=1)
-    np.testing.assert_allclose(dev[clear], host[clear], atol=1e-7)
-    np.testing.assert_allclose(dev[:6], expect, atol=1e-7)
-    dflt = registry.instantiate("texture", "checkerboard", {}, fmt="mitsuba")
-    np.testing.assert_allclose(dflt.eval([[0.2, 0.2], [0.7, 0.2]]), [[0.4] * 3, [0.2] * 3])
-
-
-def test_rawconstant_is_its_value_everywhere(ctx, queue, tex_kernel):
-    """Mitsuba 3.9.1's rawconstant: a <vector> as written (no colour conversion, no range check: negative and above
-    1 stay), a <float> in every channel; a 3-D one read as a float and a value of another kind are errors."""
-    vec = registry.instantiate("texture", "rawconstant", {"value": ("vector", [0.5, -2.0, 1.3])}, fmt="mitsuba")
-    one = registry.instantiate("texture", "rawconstant", {"value": ("float", 0.25)}, fmt="mitsuba")
-    uv = np.random.default_rng(3).uniform(-4, 4, size=(256, 2))
-    dev_vec, dev_one = device_eval(ctx, queue, tex_kernel, [vec, one], uv)
-    np.testing.assert_array_equal(dev_vec, np.tile(np.float32([0.5, -2.0, 1.3]), (256, 1)))
-    np.testing.assert_array_equal(dev_one, np.full((256, 3), 0.25, np.float32))
-    np.testing.assert_array_equal(vec.eval(uv), np.tile([0.5, -2.0, 1.3], (256, 1)))
-    assert one.float_view() is one
-    with pytest.raises(SceneError, match="3-D value cannot fill a float parameter"):
-        vec.float_view()
-    with pytest.raises(SceneError, match="expected a <float> or a 3-D <vector>"):
-        registry.instantiate("texture", "rawconstant", {"value": ("string", "x")}, fmt="mitsuba")
-    with pytest.raises(SceneError, match="needs a \"value\""):
-        registry.instantiate("texture", "rawconstant", {}, fmt="mitsuba")
 
 
 def test_texture_errors(tmp_path, png):
@@ -205,12 +125,12 @@ def test_float_view_is_mitsubas_float_lookup(png):
     np.testing.assert_allclose(c.eval([[0.2, 0.2]]), [[0.9, 0.1, 0.2]])
 
 
-def test_float_view_on_the_device(ctx, queue, tex_kernel, png):
+def test_float_view_on_the_device(ctx, queue, png):
     path, _ = png
     t, c = bitmap(path), checkerboard([0.9, 0.1, 0.2], [0.05, 0.3, 0.7], Transform.scale([3, 2, 1]))
     uv = np.random.default_rng(8).uniform(-1, 2, size=(500, 2))
     views = [t.float_view(), c.float_view()]
-    for v, dev in zip(views, device_eval(ctx, queue, tex_kernel, views, uv)):
+    for v, dev in zip(views, texture_eval_batch(ctx, queue, views, uv)):
         np.testing.assert_allclose(dev, v.eval(uv.astype(np.float32)), rtol=1e-5, atol=5e-5)
 
 
@@ -570,109 +490,3 @@ def test_unsupported_images(tmp_path):
     (tmp_path / "short.ppm").write_bytes(b"P6\n4 4\n65535\n" + bytes(20))
     with pytest.raises(SceneError, match="ends before its 48 samples"):
         bitmap(tmp_path / "short.ppm")
-
-
-# ------------------------------------------------------------------------------------------------- mesh_attribute
-def write_attribute_ply(path):
-    """A 4 x 4 square at z = 1 facing +z, two triangles: vertex colours `color_0..2` (floats) affine in x and y,
-    face colours `color_0..2`, and face bytes `w_r w_g w_b` (Mitsuba normalises and sRGB-decodes integer fields)."""
-    import struct
-
-    xy = np.array([[-2, -2], [2, -2], [2, 2], [-2, 2]], np.float64)
-    colors = np.stack([vertex_color_at(x, y) for x, y in xy])
-    faces = [(0, 1, 2), (0, 2, 3)]
-    face_colors = np.array([[0.9, 0.2, 0.1], [0.1, 0.5, 0.8]])
-    head = ("ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
-            "property float z\nproperty float color_0\nproperty float color_1\nproperty float color_2\n"
-            "element face 2\nproperty list uchar int vertex_indices\nproperty float color_0\nproperty float color_1\n"
-            "property float color_2\nproperty uchar w_r\nproperty uchar w_g\nproperty uchar w_b\n"
-            "property float weight_0\nend_header\n")
-    body = b"".join(struct.pack("<6f", x, y, 1.0, *c) for (x, y), c in zip(xy, colors))
-    body += b"".join(struct.pack("<B3i3f3Bf", 3, *f, *c, 255, 128, 0, w)
-                     for f, c, w in zip(faces, face_colors, FACE_WEIGHTS))
-    path.write_bytes(head.encode() + body)
-    return face_colors
-
-
-FACE_WEIGHTS = (0.25, 0.7)
-
-
-def vertex_color_at(x, y):
-    return np.array([0.5 + 0.1 * x + 0.05 * y, 0.4 - 0.05 * x + 0.1 * y, 0.6 + 0.05 * x - 0.05 * y])
-
-
-def test_ply_attributes_are_named_as_mitsuba_names_them(tmp_path):
-    from clrender.shapes.plyfile import load_ply
-    from clrender.textures.imagefile import srgb_to_linear
-
-    face_colors = write_attribute_ply(tmp_path / "a.ply")
-    m = load_ply(tmp_path / "a.ply")
-    assert sorted(m.attributes) == ["face_color", "face_w_color", "face_weight", "vertex_color"]
-    np.testing.assert_allclose(m.attributes["face_color"], face_colors, atol=1e-7)
-    np.testing.assert_allclose(m.attributes["face_w_color"][0], [1.0, srgb_to_linear(128 / 255), 0.0])
-    np.testing.assert_allclose(m.attributes["vertex_color"][2], vertex_color_at(2, 2), atol=1e-7)
-
-
-@pytest.mark.parametrize("attribute", ["vertex_color", "face_color", "face_weight"])
-def test_mesh_attribute_renders_the_attribute(tmp_path, attribute):
-    """A diffuse square under a unit sky, seen by `direct`: each pixel is the reflectance where it looks, here the
-    vertex colours interpolated barycentrically (an affine function over the square, so a box-filtered pixel is its
-    value at the hit of the pixel's centre) or the face's colour (pixels off the diagonal); a one-value face
-    attribute as a blendbsdf's weight between black and white gives that weight. Where each pixel looks is the aov
-    integrator's `position`; z-tested per pixel. Mitsuba 3.9.1 renders Mitsuba's own attribute sphere
-    (tests/scenes/mesh_attributes) within the noise of both (checked by hand)."""
-    import clrender
-    from clrender.testing.stats import compare_to_value
-
-    face_colors = write_attribute_ply(tmp_path / "a.ply")
-    scene = ('<scene version="3.0.0">{integrator}<sensor type="perspective">'
-             '<transform name="to_world"><lookat origin="0, 0, 4" target="0, 0, 1" up="0, 1, 0"/></transform>'
-             '<film type="hdrfilm"><integer name="width" value="12"/><integer name="height" value="12"/>'
-             '<rfilter type="box"/></film></sensor><emitter type="constant"/><shape type="ply">'
-             '<string name="filename" value="a.ply"/>{bsdf}</shape></scene>')
-    texture = f'<string name="name" value="{attribute}"/></texture>'
-    if attribute == "face_weight":
-        bsdf = (f'<bsdf type="blendbsdf"><texture type="mesh_attribute" name="weight">{texture}{BLACK}{WHITE}'
-                '</bsdf>')
-    else:
-        bsdf = f'<bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance">{texture}</bsdf>'
-    scene = scene.replace("{bsdf}", bsdf)
-    (tmp_path / "s.xml").write_text(scene.format(integrator='<integrator type="direct"/>'))
-    (tmp_path / "p.xml").write_text(scene.format(
-        integrator='<integrator type="aov"><string name="aovs" value="p:position"/></integrator>'))
-    p = clrender.render(clrender.load_scene(tmp_path / "p.xml"), spp=16, seed=1).image.astype(np.float64)
-    assert np.allclose(p[..., 2], 1.0, atol=1e-4)   # every pixel sees the square
-    x, y = p[..., 0], p[..., 1]
-    if attribute == "vertex_color":
-        expected, mask = np.moveaxis(vertex_color_at(x, y), 0, -1), np.ones(x.shape, bool)
-    else:
-        pitch = np.abs(np.diff(x, axis=1)).max()
-        per_face = face_colors if attribute == "face_color" else np.repeat(np.array(FACE_WEIGHTS)[:, None], 3, 1)
-        expected = np.where((y < x)[..., None], per_face[0], per_face[1])
-        mask = np.abs(y - x) / np.sqrt(2) > pitch
-    film = clrender.render(clrender.load_scene(tmp_path / "s.xml"), spp=256, seed=2)
-    result = compare_to_value(film, expected, mask=mask)
-    assert result.passed, result.message
-
-
-def test_mesh_attribute_errors(tmp_path):
-    import clrender
-
-    write_attribute_ply(tmp_path / "a.ply")
-    base = ('<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/>'
-            '<integer name="height" value="4"/></film></sensor><shape type="{shape}"><string name="filename" '
-            'value="a.ply"/><bsdf type="{bsdf}">{extra}<texture type="mesh_attribute" name="{param}"><string '
-            'name="name" value="{name}"/></texture></bsdf></shape></scene>')
-    cases = [(dict(name="color"), 'must start with "vertex_" or "face_"'),
-             (dict(name="vertex_nope"), 'has no attribute "vertex_nope" (it has: face_color, face_w_color, face_weight, '
-                                        'vertex_color)'),
-             (dict(bsdf="blendbsdf", param="weight", name="face_weight",
-                   extra='<bsdf type="diffuse"><texture type="checkerboard" name="reflectance"/></bsdf>'
-                         '<bsdf type="diffuse"/>'), "reads another texture beside it")]
-    for kw, message in cases:
-        fields = dict(shape="ply", bsdf="diffuse", extra="", param="reflectance", name="vertex_color")
-        fields.update(kw)
-        (tmp_path / "e.xml").write_text(base.format(**fields))
-        with pytest.raises(SceneError) as e:
-            clrender.load_scene(tmp_path / "e.xml")
-        assert message in str(e.value) and e.value.location.file.endswith("e.xml"), str(e.value)

@@ -8,7 +8,7 @@ Each case is one BSDF, given as the (tag, value) properties clrender's registry 
 directions (wi: (13, 3); wo: (13, 16, 3), per wi). Glossy BSDFs: f = eval/cos_o (Mitsuba's eval includes the
 cosine) at each (wi, wo). Delta BSDFs: for each wi, the reflection (sample1 = 0) and
 transmission (sample1 -> 1) samples: direction, weight and probability (Mitsuba's bs.pdf of a delta lobe).
-tests/test_mitsuba_bsdfs.py compares clrender's kernels with these values.
+tests/bsdfs/test_<name>.py (through tests/bsdfs/mitsuba_values.py) compares clrender's kernels with these values.
 """
 import json
 import sys

@@ -1,5 +1,5 @@
 """Development tool: evaluate Mitsuba 3's plastic, roughplastic and composite BSDFs (scalar_rgb) at a fixed set of
-direction pairs and write the values the default test run compares clrender with (tests/test_mitsuba_coated.py).
+direction pairs and write the values the default test run compares clrender with (tests/bsdfs/coated_common.py).
 
     pip install mitsuba==3.9.1      # dev only, never a dependency of clrender
     python tests/mitsuba/bsdf_values/make_coated_values.py

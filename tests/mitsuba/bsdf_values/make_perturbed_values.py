@@ -1,5 +1,5 @@
 """Development tool: evaluate Mitsuba 3's normalmap and bumpmap (scalar_rgb) at fixed surface points and direction
-pairs, and write the values tests/test_mitsuba_perturbed.py compares clrender with (perturbed.json), with the small
+pairs, and write the values tests/bsdfs/perturbed_common.py compares clrender with (perturbed.json), with the small
 textures they read (perturbed_*.png, made here from formulas).
 
     pip install mitsuba==3.9.1      # dev only, never a dependency of clrender

@@ -1,6 +1,6 @@
 """Development tool: evaluate Mitsuba 3's principled and principledthin BSDFs at fixed direction pairs and write the
-values the default test run compares clrender with (tests/test_mitsuba_principled.py): principled.json,
-principledthin.json.
+values the default test run compares clrender with (tests/bsdfs/test_principled.py, test_principledthin.py):
+principled.json, principledthin.json.
 
     pip install mitsuba==3.9.1      # dev only, never a dependency of clrender
     python tests/mitsuba/bsdf_values/make_principled_values.py

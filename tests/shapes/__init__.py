@@ -1,0 +1,1 @@
+"""One test file per shape plugin (test_<name>.py, as clrender/shapes/<name>.py)."""
