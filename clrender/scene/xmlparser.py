@@ -12,30 +12,19 @@ the original file.
 """
 from __future__ import annotations
 
-import bisect
-import codecs
-import logging
-import math
 import os
-import re
 import stat
-from dataclasses import dataclass, field
 from typing import Mapping
-from xml.parsers import expat
-
-import numpy as np
 
 from ..errors import SceneError, SourceLocation
 from . import dialect as _dialect
 from .properties import PROPERTY_TAGS, PropertyList
 from .spec import OBJECT_TAGS, PluginSpec, describe
 from .transform import Transform
+from .xmlbase import FLOAT_MAX, OP_TAGS, Elem, Source, XmlBuilder, check_defines_used, check_filename, read_bytes, tags
 
-__all__ = ["parse_file", "parse_string", "OBJECT_TAGS", "PROPERTY_TAGS", "OP_TAGS"]
+__all__ = ["parse_file", "parse_string", "FLOAT_MAX"]
 
-log = logging.getLogger("clrender")
-
-OP_TAGS = ("translate", "scale", "rotate", "lookat", "matrix")
 ROOT_TAGS = ("scene", "test")
 TEST_TYPES = ("ttest", "chi2test")
 
@@ -46,286 +35,19 @@ _OP_ATTRS = {
     "rotate": ("axis", "angle"),
     "lookat": ("origin", "target", "up"),
 }
-_XML_WS = b" \t\r\n"
-_VAR = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
-_NUM_SPLIT = re.compile(r"[\s,]+")
-#: the largest finite float32: the device computes in float, where a larger number becomes infinite
-FLOAT_MAX = float(np.finfo(np.float32).max)
-_INT = re.compile(r"[+-]?[0-9]+")
-_ATTR = re.compile(rb"""([^\s=/<>"']+)\s*=\s*("[^"]*"|'[^']*')""")
-_DECL_ENCODING = re.compile(rb"""encoding\s*=\s*["']([A-Za-z0-9._-]+)["']""")
-
-
-def _tags(names) -> str:
-    return ", ".join(f"<{n}>" for n in names)
-
-
-def _quoted(names) -> str:
-    if not names:
-        return "no attributes"
-    return ", ".join(f"'{n}'" for n in names)
-
-
-# --------------------------------------------------------------------------------------------------
-# Pass one: bytes -> located element tree
-# --------------------------------------------------------------------------------------------------
-class _Source:
-    """The bytes given to expat, with offset -> (line, column) mapping.
-
-    Columns count characters, not bytes. Each line's byte -> column table is built once, when the line is
-    first asked about, so a whole scene written on one long line still loads in linear time.
-    """
-
-    def __init__(self, data: bytes, filename: str, encoding: str | None):
-        self.data = data
-        self.filename = filename
-        self.encoding = encoding or "utf-8"
-        try:
-            self._utf8 = codecs.lookup(self.encoding).name == "utf-8"
-        except LookupError:
-            self._utf8 = False
-        self._newlines = [m.start() for m in re.finditer(b"\n", data)]
-        self._line_columns: dict[int, np.ndarray | None] = {}
-
-    def _columns(self, line: int, start: int) -> np.ndarray | None:
-        """Characters before each byte of line ``line`` (None: the line is ASCII, bytes are columns)."""
-        if line not in self._line_columns:
-            end = self._newlines[line] if line < len(self._newlines) else len(self.data)
-            raw = np.frombuffer(self.data, np.uint8, end - start, start)
-            table = None
-            if raw.size and raw.max() >= 0x80:
-                if self._utf8:
-                    starts = (raw & 0xC0) != 0x80   # UTF-8: every byte but a continuation starts a character
-                else:
-                    text = self.data[start:end].decode(self.encoding, errors="replace")
-                    starts = np.zeros(raw.size, bool)
-                    pos = 0
-                    for ch in text:   # other encodings: map each character back to its first byte
-                        if pos < raw.size:
-                            starts[pos] = True
-                        pos += max(1, len(ch.encode(self.encoding, errors="replace")))
-                table = np.concatenate(([0], np.cumsum(starts)))
-            self._line_columns[line] = table
-        return self._line_columns[line]
-
-    def loc(self, offset: int) -> SourceLocation:
-        offset = max(0, min(offset, len(self.data)))
-        line = bisect.bisect_left(self._newlines, offset)  # newlines strictly before offset
-        start = self._newlines[line - 1] + 1 if line else 0
-        table = self._columns(line, start)
-        col = offset - start if table is None else int(table[min(offset - start, table.size - 1)])
-        return SourceLocation(self.filename, line + 1, col + 1)
-
-
-@dataclass(eq=False)
-class _Elem:
-    tag: str
-    attrs: dict[str, str]
-    offset: int
-    loc: SourceLocation
-    children: list["_Elem"] = field(default_factory=list)
-
-
-def _prepare(data: bytes) -> tuple[bytes, str | None, bool]:
-    """Make leading whitespace before ``<?xml`` acceptable to expat without moving any byte.
-
-    Returns (data, declared encoding, whether the declaration was blanked out).
-    """
-    start = len(codecs.BOM_UTF8) if data.startswith(codecs.BOM_UTF8) else 0
-    body = data[start:]
-    stripped = body.lstrip(_XML_WS)
-    encoding = None
-    if stripped.startswith(b"<?xml"):
-        end = stripped.find(b"?>")
-        if end >= 0:
-            decl = stripped[: end + 2]
-            m = _DECL_ENCODING.search(decl)
-            encoding = m.group(1).decode("ascii") if m else None
-            if len(stripped) != len(body):
-                pos = start + len(body) - len(stripped)
-                blank = bytes(b if b in b"\r\n" else 0x20 for b in decl)
-                return data[:pos] + blank + data[pos + len(decl):], encoding, True
-    return data, encoding, False
-
-
-#: Deeper nesting than any scene needs; the builder recurses once per level.
-MAX_DEPTH = 200
-
-
-def _read_tree(src: _Source, expat_encoding: str | None) -> _Elem:
-    parser = expat.ParserCreate(expat_encoding)
-    stack: list[_Elem] = []
-    roots: list[_Elem] = []
-
-    def start(tag, attrs):
-        off = parser.CurrentByteIndex
-        el = _Elem(tag, attrs, off, src.loc(off))
-        if len(stack) >= MAX_DEPTH:
-            raise SceneError(f"elements are nested more than {MAX_DEPTH} deep (at <{tag}>); "
-                             f"a scene needs only a few levels", el.loc)
-        (stack[-1].children if stack else roots).append(el)
-        stack.append(el)
-
-    def end(tag):
-        stack.pop()
-
-    def chars(text):
-        stripped = text.strip(" \t\r\n")
-        if not stripped:
-            return
-        off = parser.CurrentByteIndex
-        # Point at the first non-blank byte; expat's offset is where this text run begins.
-        while 0 <= off < len(src.data) and src.data[off] in _XML_WS:
-            off += 1
-        shown = stripped if len(stripped) <= 30 else stripped[:27] + "..."
-        raise SceneError(f"unexpected text {shown!r} inside <{stack[-1].tag}>; only elements, "
-                         f"comments and whitespace may appear here", src.loc(off))
-
-    parser.StartElementHandler = start
-    parser.EndElementHandler = end
-    parser.CharacterDataHandler = chars
-    try:
-        parser.Parse(src.data, True)
-    except expat.ExpatError as e:
-        off = parser.ErrorByteIndex
-        if off is not None and off >= 0:
-            loc = src.loc(off)
-        else:
-            loc = SourceLocation(src.filename, e.lineno, e.offset + 1)
-        raise SceneError(f"malformed XML: {expat.ErrorString(e.code)}", loc) from None
-    return roots[0]
-
 
 # --------------------------------------------------------------------------------------------------
 # Pass two: element tree -> PluginSpec
 # --------------------------------------------------------------------------------------------------
-class _Builder:
-    def __init__(self, src: _Source, defines: Mapping[str, str] | None, base_dir: str, dialect: str):
-        self.src = src
-        self.dialect = dialect
+class _Builder(XmlBuilder):
+    def __init__(self, src: Source, defines: Mapping[str, str] | None, base_dir: str, dialect: str):
         self.user_defines = {str(k): str(v) for k, v in (defines or {}).items()}
-        self.defines: dict[str, str] = dict(self.user_defines)
-        #: every $name an attribute of the file asked for (whether -D or a <default> filled it)
-        self.used_defines: set[str] = set()
+        super().__init__(src, dict(self.user_defines), set())
+        self.dialect = dialect
         self.base_dir = base_dir
 
-    # --- locations ------------------------------------------------------------------------------
-    def attr_loc(self, el: _Elem, name: str, *, at_value: bool = True) -> SourceLocation:
-        """Where attribute ``name`` (its value, or its name) is written in ``el``'s start tag."""
-        data = self.src.data
-        end, quote = el.offset, None
-        while end < len(data):
-            c = data[end]
-            if quote is not None:
-                if c == quote:
-                    quote = None
-            elif c in (0x22, 0x27):
-                quote = c
-            elif c == 0x3E:
-                break
-            end += 1
-        want = name.encode(self.src.encoding, errors="replace")
-        for m in _ATTR.finditer(data, el.offset, end):
-            if m.group(1) == want:
-                return self.src.loc(m.start(2) + 1 if at_value else m.start(1))
-        return el.loc
-
-    # --- attributes -----------------------------------------------------------------------------
-    def attrs(self, el: _Elem, expected: tuple[str, ...], *, substitute: bool = True) -> dict[str, str]:
-        """Check that ``el`` has exactly the attributes ``expected`` and return their values."""
-        for name in el.attrs:
-            if name not in expected:
-                raise SceneError(f"unexpected attribute '{name}' in <{el.tag}>; it takes "
-                                 f"{_quoted(expected)}", self.attr_loc(el, name, at_value=False))
-        for name in expected:
-            if name not in el.attrs:
-                raise SceneError(f"<{el.tag}> is missing the required attribute '{name}' "
-                                 f"(it takes {_quoted(expected)})", el.loc)
-        if not substitute:
-            return {n: el.attrs[n] for n in expected}
-        return {n: self.substitute(el, n) for n in expected}
-
-    def substitute(self, el: _Elem, name: str) -> str:
-        value = el.attrs[name]
-        if "$" not in value:
-            return value
-
-        def replace(m: re.Match) -> str:
-            var = m.group(1)
-            self.used_defines.add(var)
-            if var not in self.defines:
-                raise SceneError(
-                    f"undefined variable '${var}' in attribute {name}=\"{value}\" of <{el.tag}>; "
-                    f"pass -D {var}=value (or add <default name=\"{var}\" value=\"...\"/> to the file)",
-                    self.attr_loc(el, name))
-            return self.defines[var]
-
-        return _VAR.sub(replace, value)
-
-    @staticmethod
-    def _describe(el) -> str:
-        name = el.attrs.get("name")
-        return f'<{el.tag} name="{name}">' if name else f"<{el.tag}>"
-
-    # --- values ---------------------------------------------------------------------------------
-    def numbers(self, el: _Elem, attr: str, text: str, counts: tuple[int, ...] | None = None,
-                spelled_inf: bool = False) -> np.ndarray:
-        """The numbers of an attribute, each finite and within float32's range. `spelled_inf`: also +inf written as
-        such (inf, infinity), which the property's getter refuses unless it means "no limit" there."""
-        tag = self._describe(el)
-        tokens = [t for t in _NUM_SPLIT.split(text.strip()) if t]
-        if not tokens:
-            raise SceneError(f"attribute {attr}=\"{text}\" of {tag} is empty; expected numbers "
-                             f"separated by commas and/or spaces", self.attr_loc(el, attr))
-        values = []
-        for t in tokens:
-            try:
-                values.append(float(t))
-            except ValueError:
-                raise SceneError(f"bad number '{t}' in attribute {attr}=\"{text}\" of {tag}; "
-                                 f"expected numbers separated by commas and/or spaces",
-                                 self.attr_loc(el, attr)) from None
-            if spelled_inf and values[-1] == math.inf and t.lower().lstrip("+") in ("inf", "infinity"):
-                continue
-            if not math.isfinite(values[-1]):
-                what = "not a number" if math.isnan(values[-1]) else "infinite (or too large for a float)"
-                raise SceneError(f"number '{t}' in attribute {attr}=\"{text}\" of {tag} is {what}; "
-                                 f"every number in a scene must be finite", self.attr_loc(el, attr))
-            if abs(values[-1]) > FLOAT_MAX:
-                raise SceneError(f"number '{t}' in attribute {attr}=\"{text}\" of {tag} is too large: the "
-                                 f"renderer computes in single precision, whose numbers stop at about "
-                                 f"{FLOAT_MAX:.4g}", self.attr_loc(el, attr))
-        if counts is not None and len(values) not in counts:
-            want = " or ".join(str(c) for c in counts)
-            raise SceneError(f"attribute {attr}=\"{text}\" of {tag} needs {want} "
-                             f"number{'s' if counts != (1,) else ''}, got {len(values)}",
-                             self.attr_loc(el, attr))
-        return np.array(values, dtype=np.float64)
-
-    def one_float(self, el: _Elem, attr: str, text: str, spelled_inf: bool = False) -> float:
-        return float(self.numbers(el, attr, text, (1,), spelled_inf)[0])
-
-    def value_of(self, el: _Elem, tag: str, text: str):
-        if tag == "boolean":
-            low = text.strip().lower()
-            if low not in ("true", "false"):
-                raise SceneError(f"bad boolean value=\"{text}\" in <boolean>; expected true or false",
-                                 self.attr_loc(el, "value"))
-            return low == "true"
-        if tag == "integer":
-            if not _INT.fullmatch(text.strip()):
-                raise SceneError(f"bad integer value=\"{text}\" in <integer>; expected a whole number",
-                                 self.attr_loc(el, "value"))
-            return int(text.strip())
-        if tag == "float":
-            return self.one_float(el, "value", text, spelled_inf=True)
-        if tag == "string":
-            return text
-        # point / vector / color: the getter checks the count, since it depends on the use (3 or 2).
-        return self.numbers(el, "value", text)
-
     # --- structure ------------------------------------------------------------------------------
-    def build_root(self, el: _Elem) -> PluginSpec:
+    def build_root(self, el: Elem) -> PluginSpec:
         if el.tag not in ROOT_TAGS:
             raise SceneError(f"the root element must be <scene> or <test type=\"ttest|chi2test\">, "
                              f"not <{el.tag}>", el.loc)
@@ -333,22 +55,18 @@ class _Builder:
         for c in el.children:
             if c.tag != "default":
                 continue
-            # Default values are taken literally: they are the base layer of substitution.
-            a = self.attrs(c, ("name", "value"), substitute=False)
-            if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", a["name"]):
-                raise SceneError(f"<default> name '{a['name']}' is not a valid variable name",
-                                 self.attr_loc(c, "name"))
-            if a["name"] in file_defaults:
-                first = file_defaults[a["name"]][1]
-                raise SceneError(f"<default> '{a['name']}' given twice (first at line {first.line})", c.loc)
+            name, value = self.default_attrs(c)
+            if name in file_defaults:
+                first = file_defaults[name][1]
+                raise SceneError(f"<default> '{name}' given twice (first at line {first.line})", c.loc)
             if c.children:
                 raise SceneError(f"<{c.children[0].tag}> cannot be nested in <default>", c.children[0].loc)
-            file_defaults[a["name"]] = (a["value"], c.loc)
+            file_defaults[name] = (value, c.loc)
         self.defines = {k: v for k, (v, _) in file_defaults.items()}
         self.defines.update(self.user_defines)
         return self.build_object(el, is_root=True)
 
-    def build_object(self, el: _Elem, is_root: bool = False) -> PluginSpec:
+    def build_object(self, el: Elem, is_root: bool = False) -> PluginSpec:
         if el.tag == "scene":
             self.attrs(el, ())
             type_name, name = "scene", None
@@ -371,8 +89,7 @@ class _Builder:
                 if not is_root:
                     raise SceneError("<default> is only allowed directly inside the root element", c.loc)
             elif c.tag in OP_TAGS:
-                raise SceneError(f"<{c.tag}> is a transform op and is only allowed inside <transform>",
-                                 c.loc)
+                raise self.op_outside_transform(c)
             else:
                 extra = ", or <default>" if is_root else ""
                 hint = ""
@@ -380,17 +97,11 @@ class _Builder:
                     hint = ('; <' + c.tag + '> is Mitsuba 3\'s: a Mitsuba scene\'s root is <scene version="3.0.0">, '
                             'and this file\'s <scene> has no version, so it is read as a Nori scene')
                 raise SceneError(f"unknown tag <{c.tag}> in <{el.tag}>; expected an object "
-                                 f"({_tags(OBJECT_TAGS)}) or a property ({_tags(PROPERTY_TAGS)}){extra}{hint}",
+                                 f"({tags(OBJECT_TAGS)}) or a property ({tags(PROPERTY_TAGS)}){extra}{hint}",
                                  c.loc)
         return spec
 
-    def no_children(self, el: _Elem) -> None:
-        if el.children:
-            c = el.children[0]
-            raise SceneError(f"<{c.tag}> cannot be nested in <{el.tag}>, which takes no nested elements",
-                             c.loc)
-
-    def build_property(self, el: _Elem, props: PropertyList) -> None:
+    def build_property(self, el: Elem, props: PropertyList) -> None:
         if el.tag == "transform":
             name = self.attrs(el, ("name",))["name"]
             props.add(name, "transform", self.build_transform(el), el.loc)
@@ -404,79 +115,34 @@ class _Builder:
         self.no_children(el)
         props.add(name, el.tag, value, el.loc, raw=text)
 
-    def build_transform(self, el: _Elem) -> Transform:
-        result = Transform()
-        for op in el.children:
-            if op.tag not in OP_TAGS:
-                known = "" if op.tag in OBJECT_TAGS or op.tag in PROPERTY_TAGS else "unknown tag "
-                raise SceneError(f"{known}<{op.tag}> is not allowed in <transform>; expected one of "
-                                 f"{_tags(OP_TAGS)}", op.loc)
-            a = self.attrs(op, _OP_ATTRS[op.tag])
-            if op.tag == "translate":
-                step = Transform.translate(self.numbers(op, "value", a["value"], (3,)))
-            elif op.tag == "scale":
-                step = self.checked(op, Transform.scale, self.numbers(op, "value", a["value"], (3, 1)))
-            elif op.tag == "matrix":
-                step = self.checked(op, Transform.from_rows, self.numbers(op, "value", a["value"], (16,)))
-            elif op.tag == "rotate":
-                axis = self.numbers(op, "axis", a["axis"], (3,))
-                angle = self.one_float(op, "angle", a["angle"])
-                step = self.checked(op, Transform.rotate, axis, angle,
-                                    _dialect.normalizes_rotate_axis(self.dialect))
-            else:
-                vs = [self.numbers(op, k, a[k], (3,)) for k in ("origin", "target", "up")]
-                warnings: list[str] = []
-                step = self.checked(op, Transform.lookat, *vs, warnings)
-                for w in warnings:
-                    log.warning("%s: %s", op.loc, w)
-            self.no_children(op)
-            result = step @ result  # Nori: each op is left-multiplied onto what came before
-        return result
-
-    @staticmethod
-    def checked(op: _Elem, fn, *args) -> Transform:
-        try:
-            return fn(*args)
-        except ValueError as e:
-            raise SceneError(f"<{op.tag}>: {e}", op.loc) from None
+    def transform_op(self, op: Elem) -> Transform:
+        if op.tag not in OP_TAGS:
+            known = "" if op.tag in OBJECT_TAGS or op.tag in PROPERTY_TAGS else "unknown tag "
+            raise SceneError(f"{known}<{op.tag}> is not allowed in <transform>; expected one of "
+                             f"{tags(OP_TAGS)}", op.loc)
+        a = self.attrs(op, _OP_ATTRS[op.tag])
+        if op.tag == "translate":
+            step = Transform.translate(self.numbers(op, "value", a["value"], (3,)))
+        elif op.tag == "scale":
+            step = self.checked(op, Transform.scale, self.numbers(op, "value", a["value"], (3, 1)))
+        elif op.tag == "matrix":
+            step = self.checked(op, Transform.from_rows, self.numbers(op, "value", a["value"], (16,)))
+        elif op.tag == "rotate":
+            axis = self.numbers(op, "axis", a["axis"], (3,))
+            angle = self.one_float(op, "angle", a["angle"])
+            step = self.checked(op, Transform.rotate, axis, angle, _dialect.normalizes_rotate_axis(self.dialect))
+        else:
+            step = self.lookat(op, *(self.numbers(op, k, a[k], (3,)) for k in ("origin", "target", "up")))
+        self.no_children(op)
+        return step
 
 
 # --------------------------------------------------------------------------------------------------
 # Public entry points
 # --------------------------------------------------------------------------------------------------
-def check_defines_used(defines: Mapping[str, str], used: set[str], filename: str) -> None:
-    """A -D value that fills no ``$name`` is a mistake (a typo, the wrong scene): an error, as Mitsuba 3.9 stops
-    with "Found unused parameters", whether or not a <default> declares the name."""
-    unused = [f"{k}={v}" for k, v in defines.items() if k not in used]
-    if unused:
-        asks = ", ".join(f"${n}" for n in sorted(used)) or "no $name at all"
-        raise SceneError(f"-D {', -D '.join(unused)}: the scene has no such $name to fill (it uses {asks})",
-                         SourceLocation(filename))
-
-
-def check_filename(value: str, location: SourceLocation) -> None:
-    """An empty filename would resolve to the scene's own folder and be reported as "a folder, not a file"."""
-    if not value.strip():
-        raise SceneError('<string name="filename"> is empty; expected the path of a file', location)
-
-
-def _read_bytes(data: bytes, filename: str, force_encoding: str | None) -> tuple[_Source, _Elem]:
-    """Pass one for any of the XML scene formats: the located element tree of ``data``."""
-    data, declared, blanked = _prepare(data)
-    encoding = force_encoding or declared
-    if encoding is not None:
-        try:
-            codecs.lookup(encoding)
-        except LookupError:
-            raise SceneError(f"unknown encoding '{encoding}' in the XML declaration; use UTF-8",
-                             SourceLocation(filename, 1, 1)) from None
-    src = _Source(data, filename, encoding)
-    return src, _read_tree(src, encoding if (force_encoding or blanked) else None)
-
-
 def _parse_bytes(data: bytes, filename: str, defines, base_dir: str, force_encoding: str | None,
                  nori_dialect: str | None = None) -> PluginSpec:
-    src, root = _read_bytes(data, filename, force_encoding)
+    src, root = read_bytes(data, filename, force_encoding)
     from . import mitsuba_xml
 
     if mitsuba_xml.is_mitsuba_root(root):  # <scene version="..."> is Mitsuba's; Nori's <scene> has no attributes
