@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..scene.registry import register
-from ..scene.xmlparser import FLOAT_MAX
+from ..scene.xmlbase import FLOAT_MAX
 from .emitter import Emitter, luminance, nonnegative_color
 
 

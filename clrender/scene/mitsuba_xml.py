@@ -2,8 +2,8 @@
 "mitsuba". Older files (``version="0.x|1.x"``) are upgraded object by object as Mitsuba 3 upgrades them
 (:mod:`clrender.scene.mitsuba_legacy`).
 
-It shares pass one (bytes -> located element tree) and the value parsing of the Nori reader
-(:mod:`clrender.scene.xmlparser`) and differs in the structure it accepts:
+It shares pass one (bytes -> located element tree) and the value parsing with the Nori reader
+(:mod:`clrender.scene.xmlbase`) and differs in the structure it accepts:
 
 - object tags ``shape bsdf emitter sensor film rfilter sampler integrator texture ...`` with ``type`` and optional
   ``id`` and ``name`` (the parameter a nested object fills, e.g. ``<texture name="reflectance">``);
@@ -22,7 +22,6 @@ It shares pass one (bytes -> located element tree) and the value parsing of the 
 """
 from __future__ import annotations
 
-import logging
 import os
 import re
 import stat
@@ -35,11 +34,8 @@ from .properties import MITSUBA_PROPERTY_TAGS, PropertyList
 from .spec import MITSUBA_OBJECT_TAGS, PluginSpec, RefSite, describe
 from .transform import Transform
 from . import mitsuba_legacy as _legacy
-from . import xmlparser as _x
+from .xmlbase import OP_TAGS, XmlBuilder, check_defines_used, check_filename, quoted, read_bytes, tags
 
-log = logging.getLogger("clrender")
-
-OP_TAGS = ("translate", "scale", "rotate", "lookat", "matrix")
 _VERSION = re.compile(r"([0-9]+)\.([0-9]+)(\.([0-9]+))?")
 _ID = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*")
 #: Mitsuba 3.9's limit (ParserConfig::max_include_depth): the main file is depth 0, a file it includes depth 1,
@@ -106,18 +102,16 @@ class _State:
             entry.value = self.resolve(entry.value)
 
 
-class MitsubaBuilder(_x._Builder):
+class MitsubaBuilder(XmlBuilder):
     """Pass two for one Mitsuba file; includes get a builder of their own sharing ``state``."""
 
     def __init__(self, src, state: _State, folder: str | None = None):
-        super().__init__(src, None, state.main_dir, "upstream")
+        super().__init__(src, state.defines, state.used_defines)
         #: the folder of this builder's file (the main file's: the scene's base folder)
         self.folder = folder or state.main_dir
         #: a file older than Mitsuba 2.0, upgraded as Mitsuba 3 reads it (mitsuba_legacy.py)
         self.legacy = False
         self.state = state
-        self.defines = state.defines
-        self.used_defines = state.used_defines
 
     @staticmethod
     def err(message: str, loc) -> SceneError:
@@ -153,19 +147,16 @@ class MitsubaBuilder(_x._Builder):
         for c in el.children:
             if c.tag != "default":
                 continue
-            a = self.attrs(c, ("name", "value"), substitute=False)
-            if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", a["name"]):
-                raise self.err(f"<default> name '{a['name']}' is not a valid variable name",
-                               self.attr_loc(c, "name"))
-            first = self.state.file_defaults.get(a["name"])
+            name, value = self.default_attrs(c)
+            first = self.state.file_defaults.get(name)
             if first is not None and first.file == c.loc.file:
-                raise self.err(f"<default> '{a['name']}' given twice (first at {first})", c.loc)
+                raise self.err(f"<default> '{name}' given twice (first at {first})", c.loc)
             self.no_children(c)
             if first is not None:   # an included file's default for a name already given: the first wins, as in
                 continue            # Mitsuba 3.9.1 (mitsuba-data's participating_media tests and their preamble)
-            self.state.file_defaults[a["name"]] = c.loc
-            if a["name"] not in self.state.user_defines:  # -D wins over the file's default
-                self.defines[a["name"]] = a["value"]
+            self.state.file_defaults[name] = c.loc
+            if name not in self.state.user_defines:  # -D wins over the file's default
+                self.defines[name] = value
 
     # --- objects --------------------------------------------------------------------------------
     def object_attrs(self, el) -> tuple[str, str | None, str | None]:
@@ -240,7 +231,7 @@ class MitsubaBuilder(_x._Builder):
                                    c.loc)
                 self.add_path(c)
             elif c.tag in OP_TAGS:
-                raise self.err(f"<{c.tag}> is a transform op and is only allowed inside <transform>", c.loc)
+                raise self.op_outside_transform(c)
             else:
                 extra = ", <default>, <path>" if is_root else ""
                 hint = ""
@@ -251,8 +242,8 @@ class MitsubaBuilder(_x._Builder):
                     hint = (f"; <{c.tag}> is Nori's: this file is read as a Mitsuba 3 scene because its <scene> has "
                             f"a version attribute (Nori's <scene> has none)")
                 raise self.err(f"unknown tag <{c.tag}> in <{el.tag}>; expected an object "
-                               f"({_x._tags(t for t in MITSUBA_OBJECT_TAGS if t != 'scene')}), a property "
-                               f"({_x._tags(MITSUBA_PROPERTY_TAGS)}), <ref>, <include>, <alias>{extra}{hint}", c.loc)
+                               f"({tags(t for t in MITSUBA_OBJECT_TAGS if t != 'scene')}), a property "
+                               f"({tags(MITSUBA_PROPERTY_TAGS)}), <ref>, <include>, <alias>{extra}{hint}", c.loc)
 
     def add_path(self, el) -> None:
         """``<path value="folder"/>``: the folder goes first in the resolver. A relative one is the folder beside
@@ -317,7 +308,7 @@ class MitsubaBuilder(_x._Builder):
         except OSError as e:
             raise self.err(f"cannot include '{filename}': {e.strerror or e} (looked in "
                            f"{', '.join(self.state.looked_in())})", self.attr_loc(el, "filename")) from None
-        src, root = _x._read_bytes(data, path, None)
+        src, root = read_bytes(data, path, None)
         sub = MitsubaBuilder(src, self.state, os.path.dirname(path))
         if root.tag != "scene":
             raise sub.err(f"an included file must have a <scene> root, not <{root.tag}>", root.loc)
@@ -381,7 +372,7 @@ class MitsubaBuilder(_x._Builder):
             value = self.value_of(el, el.tag, text)
         props.add(name, tag, value, el.loc, raw=text)
         if el.tag == "string" and name == "filename":
-            _x.check_filename(value, self.attr_loc(el, "value"))
+            check_filename(value, self.attr_loc(el, "value"))
             self.state.filenames.append((props, name))
         if el.tag == "spectrum":
             props._entry(name).spectrum = pairs
@@ -423,59 +414,49 @@ class MitsubaBuilder(_x._Builder):
         except ValueError as e:
             raise self.err(f"<spectrum value=\"{text}\">: {e}", self.attr_loc(el, "value")) from None
 
-    def build_transform(self, el) -> Transform:
-        result = Transform()
-        for op in el.children:
-            if op.tag == "lookAt" and self.legacy:   # old files' spelling; Mitsuba 3 knows only <lookat>
-                op = replace(op, tag="lookat")
-            if op.tag not in OP_TAGS:
-                hint = " (<lookAt> is how Mitsuba 0.x files spell it)" if op.tag == "lookAt" else ""
-                raise self.err(f"<{op.tag}> is not allowed in <transform>; expected one of {_x._tags(OP_TAGS)}{hint}",
-                               op.loc)
-            self.no_children(op)
-            if op.tag == "translate":
-                self.op_attrs(op, ("value", "x", "y", "z"))
-                step = Transform.translate(self.xyz(op, 0.0))
-            elif op.tag == "scale":
-                self.op_attrs(op, ("value", "x", "y", "z"))
-                step = self.checked(op, Transform.scale, self.xyz(op, 1.0))
-            elif op.tag == "matrix":
-                a = self.attrs(op, ("value",))
-                v = self.numbers(op, "value", a["value"], (16, 9))
-                if v.size == 9:
-                    m = np.eye(4)
-                    m[:3, :3] = v.reshape(3, 3)
-                    v = m.reshape(-1)
-                step = self.checked(op, Transform.from_rows, v)
-            elif op.tag == "rotate":
-                self.op_attrs(op, ("value", "x", "y", "z", "angle"))
-                if "angle" not in op.attrs:
-                    raise self.err("<rotate> is missing the required attribute 'angle'", op.loc)
-                axis = self.xyz(op, 0.0)
-                angle = self.one_float(op, "angle", self.substitute(op, "angle"))
-                step = self.checked(op, Transform.rotate, axis, angle, False)
-            else:
-                self.op_attrs(op, ("origin", "target", "up"))
-                for k in ("origin", "target"):
-                    if k not in op.attrs:
-                        raise self.err(f"<lookat> is missing the required attribute '{k}'", op.loc)
-                vs = [self.numbers(op, k, self.substitute(op, k), (3,)) for k in ("origin", "target")]
-                up = self.numbers(op, "up", self.substitute(op, "up"), (3,)) if "up" in op.attrs else np.zeros(3)
-                if not up.any():   # none given (or zero): Mitsuba's choice, a vector perpendicular to the view
-                    d = vs[1] - vs[0]
-                    up = _frame_vector(d / np.linalg.norm(d)) if d.any() else up
-                vs.append(up)
-                warnings: list[str] = []
-                step = self.checked(op, Transform.lookat, *vs, warnings)
-                for w in warnings:
-                    log.warning("%s: %s", op.loc, w)
-            result = step @ result  # each op is applied after the ones before it
-        return result
+    def transform_op(self, op) -> Transform:
+        if op.tag == "lookAt" and self.legacy:   # old files' spelling; Mitsuba 3 knows only <lookat>
+            op = replace(op, tag="lookat")
+        if op.tag not in OP_TAGS:
+            hint = " (<lookAt> is how Mitsuba 0.x files spell it)" if op.tag == "lookAt" else ""
+            raise self.err(f"<{op.tag}> is not allowed in <transform>; expected one of {tags(OP_TAGS)}{hint}", op.loc)
+        self.no_children(op)
+        if op.tag == "translate":
+            self.op_attrs(op, ("value", "x", "y", "z"))
+            return Transform.translate(self.xyz(op, 0.0))
+        if op.tag == "scale":
+            self.op_attrs(op, ("value", "x", "y", "z"))
+            return self.checked(op, Transform.scale, self.xyz(op, 1.0))
+        if op.tag == "matrix":
+            a = self.attrs(op, ("value",))
+            v = self.numbers(op, "value", a["value"], (16, 9))
+            if v.size == 9:
+                m = np.eye(4)
+                m[:3, :3] = v.reshape(3, 3)
+                v = m.reshape(-1)
+            return self.checked(op, Transform.from_rows, v)
+        if op.tag == "rotate":
+            self.op_attrs(op, ("value", "x", "y", "z", "angle"))
+            if "angle" not in op.attrs:
+                raise self.err("<rotate> is missing the required attribute 'angle'", op.loc)
+            axis = self.xyz(op, 0.0)
+            angle = self.one_float(op, "angle", self.substitute(op, "angle"))
+            return self.checked(op, Transform.rotate, axis, angle, False)
+        self.op_attrs(op, ("origin", "target", "up"))
+        for k in ("origin", "target"):
+            if k not in op.attrs:
+                raise self.err(f"<lookat> is missing the required attribute '{k}'", op.loc)
+        origin, target = (self.numbers(op, k, self.substitute(op, k), (3,)) for k in ("origin", "target"))
+        up = self.numbers(op, "up", self.substitute(op, "up"), (3,)) if "up" in op.attrs else np.zeros(3)
+        if not up.any():   # none given (or zero): Mitsuba's choice, a vector perpendicular to the view
+            d = target - origin
+            up = _frame_vector(d / np.linalg.norm(d)) if d.any() else up
+        return self.lookat(op, origin, target, up)
 
     def op_attrs(self, op, allowed) -> None:
         for n in op.attrs:
             if n not in allowed:
-                raise self.err(f"unexpected attribute '{n}' in <{op.tag}>; it takes {_x._quoted(allowed)}",
+                raise self.err(f"unexpected attribute '{n}' in <{op.tag}>; it takes {quoted(allowed)}",
                                self.attr_loc(op, n, at_value=False))
 
 
@@ -539,7 +520,7 @@ def build(src, root, defines, main_dir: str) -> PluginSpec:
         spec = MitsubaBuilder(src, state).build_root(root)
         _resolve_forward(state, spec)
         state.resolve_filenames()
-        _x.check_defines_used(state.user_defines, state.used_defines, src.filename)
+        check_defines_used(state.user_defines, state.used_defines, src.filename)
         return spec
     except SceneError as e:
         raise SceneError(with_reader(e.message), e.location) from None
