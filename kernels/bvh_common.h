@@ -15,6 +15,7 @@
 
 /* BVH_LEAF_BIT, BVH_SPHERE_BIT, BVH_STACK_SIZE, BVH4_STACK_SIZE, BVH4_COUNT_SHIFT, BVH4_MAX_LEAF_COUNT: generated
    from clrender/device/layout.py ENUMS, which the host's builders read too. */
+#include "math.h"   /* vec3 */
 #define BVH_INLINE static inline __attribute__((always_inline))
 /* a wide leaf reference's first primitive (bvh4.h, bvh8.h) */
 #define BVH4_FIRST_MASK ((1u << BVH4_COUNT_SHIFT) - 1u)

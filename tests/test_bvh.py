@@ -20,10 +20,10 @@ __kernel void trace(__global const float4* nodes, __global const float4* prims, 
     if (i >= n) return;   /* the global size is padded to a multiple of the local size */
     float4 o = org[i], d = dir[i];
     Hit h;
-    bool f = bvh_closest_hit(nodes, prims, o.xyz, d.xyz, o.w, d.w, &h);
+    bool f = bvh_closest_hit(nodes, prims, vxyz(o), vxyz(d), o.w, d.w, &h);
     out[i] = f ? (float4)(h.t, h.u, h.v, 1.0f) : (float4)(0.0f);
     prim[i] = f ? h.prim : 0xffffffffu;
-    any[i] = bvh_any_hit(nodes, prims, o.xyz, d.xyz, o.w, d.w) ? 1 : 0;
+    any[i] = bvh_any_hit(nodes, prims, vxyz(o), vxyz(d), o.w, d.w) ? 1 : 0;
 }
 """
 

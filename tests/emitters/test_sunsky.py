@@ -34,7 +34,7 @@ from clrender.scene.cie_tables import CIE1931_X, CIE1931_Y, CIE1931_Z
 from clrender.scene.transform import Transform
 from clrender.testing.stats import compare_mean_to_value
 
-from test_emitters import HEADER, Dev, kernels, run_chi2, tris_obj, quad  # noqa: F401  (kernels: a fixture)
+from .emitter_common import HEADER, Dev, kernels, run_chi2, tris_obj, quad  # noqa: F401  (kernels: a fixture)
 
 try:
     TABLES = sunsky.tables()
@@ -184,6 +184,7 @@ def test_sun_at_solstice_noon(lat, month, expect_x):
 
 # ------------------------------------------------------------------------------------------------- sampling
 @needs_tables
+@pytest.mark.plugin("sunsky", "sampling")
 @pytest.mark.parametrize("part", [0, 1])
 def test_chi2_sky_and_sun_sampling(tmp_path, ctx, queue, kernels, part):
     """Row 0 is the sky map, row 1 the sun (given a 60° aperture here so that its cone spans many cells)."""
@@ -234,6 +235,7 @@ def plane_scene(tmp, emitter_xml, up="z"):
           '<rgb name="albedo" value="0.2, 0.4, 0.6"/><transform name="to_world"><rotate x="1" angle="-90"/>'
           '</transform></emitter>'),
 ])
+@pytest.mark.plugin("sunsky", "render")
 def test_plane_under_sun_and_sky(tmp_path, up, emitter_xml):
     scene = load_scene(plane_scene(tmp_path, emitter_xml, up))
     em = scene.emitters[0]
