@@ -141,7 +141,7 @@ __kernel void simd_pass(SCENE_ARGS, __global const Camera* cam, __global const f
             for (int l = 0; l < W; ++l) {
                 if (al.a[l]) continue;
                 if (pe.a[l]) {   /* a finished path: into the pixel's sums (non-finite samples dropped) */
-                    float3 v = (float3)(Lx.a[l], Ly.a[l], Lz.a[l]);
+                    vec3 v = v3(Lx.a[l], Ly.a[l], Lz.a[l]);
                     if (all_finite(v) && isfinite(fw.a[l])) {
                         sx.a[l] = v.x * fw.a[l]; sy.a[l] = v.y * fw.a[l]; sz.a[l] = v.z * fw.a[l]; sw.a[l] = fw.a[l];
                     }
@@ -187,7 +187,7 @@ __kernel void simd_pass(SCENE_ARGS, __global const Camera* cam, __global const f
                 hit.a[l] = 0; hprim.a[l] = 0; bu.a[l] = 0.0f; bv.a[l] = 0.0f;
                 if (!al.a[l]) continue;
                 Hit h;
-                float3 o = (float3)(ro.x[l], ro.y[l], ro.z[l]), d = (float3)(rd.x[l], rd.y[l], rd.z[l]);
+                vec3 o = v3(ro.x[l], ro.y[l], ro.z[l]), d = v3(rd.x[l], rd.y[l], rd.z[l]);
                 if (!bvh_closest_hit(sd.nodes, sd.prims, o, d, 0.0f, INFINITY, &h)) continue;
                 hit.a[l] = -1; hprim.a[l] = (int)h.prim; bu.a[l] = h.u; bv.a[l] = h.v;
             }
@@ -265,7 +265,7 @@ __kernel void simd_pass(SCENE_ARGS, __global const Camera* cam, __global const f
                 p1x.a[l] = t.p1.x; p1y.a[l] = t.p1.y; p1z.a[l] = t.p1.z;
                 p2x.a[l] = t.p2.x; p2y.a[l] = t.p2.y; p2z.a[l] = t.p2.z;
                 if (sh->flags & SHAPE_HAS_NORMALS) {
-                    float3 a = mesh_normal(&sd, t.i0), b = mesh_normal(&sd, t.i1), c = mesh_normal(&sd, t.i2);
+                    vec3 a = mesh_normal(&sd, t.i0), b = mesh_normal(&sd, t.i1), c = mesh_normal(&sd, t.i2);
                     n0x.a[l] = a.x; n0y.a[l] = a.y; n0z.a[l] = a.z;
                     n1x.a[l] = b.x; n1y.a[l] = b.y; n1z.a[l] = b.z;
                     n2x.a[l] = c.x; n2y.a[l] = c.y; n2z.a[l] = c.z;
@@ -388,15 +388,15 @@ __kernel void simd_pass(SCENE_ARGS, __global const Camera* cam, __global const f
         for (int l = 0; l < W; ++l) {
                     unocc.a[l] = 0.0f;
                     if (!okl.a[l]) continue;
-                    float3 wl = (float3)(wi.x[l], wi.y[l], wi.z[l]);
-                    float3 ngl = (float3)(ng.x[l], ng.y[l], ng.z[l]);
-                    float3 pol = (float3)(po.x[l], po.y[l], po.z[l]);
-                    float3 o = dot3(wl, ngl) < 0.0f ? pol - ngl * off[l] : pol + ngl * off[l];
-                    float3 q = (float3)(lpnt.x[l], lpnt.y[l], lpnt.z[l]);
-                    float3 sd3 = q - o;
+                    vec3 wl = v3(wi.x[l], wi.y[l], wi.z[l]);
+                    vec3 ngl = v3(ng.x[l], ng.y[l], ng.z[l]);
+                    vec3 pol = v3(po.x[l], po.y[l], po.z[l]);
+                    vec3 o = dot3(wl, ngl) < 0.0f ? vsub(pol, vscale(ngl, off[l])) : vadd(pol, vscale(ngl, off[l]));
+                    vec3 q = v3(lpnt.x[l], lpnt.y[l], lpnt.z[l]);
+                    vec3 sd3 = vsub(q, o);
                     float len = len3(sd3);
                     float tmax = len * (1.0f - 1e-4f) - ray_eps(q);
-                    if (!(tmax > 0.0f) || !bvh_any_hit(sd.nodes, sd.prims, o, sd3 * (1.0f / len), 0.0f, tmax))
+                    if (!(tmax > 0.0f) || !bvh_any_hit(sd.nodes, sd.prims, o, vscale(sd3, 1.0f / len), 0.0f, tmax))
                         unocc.a[l] = 1.0f;
                 }
                 scale *= unocc.v;

@@ -19,7 +19,7 @@ __kernel void rays(__global const Camera* cam, __global const float2* pos, __glo
     uint i = get_global_id(0);
     if (i >= n) return;
     Ray r = camera_ray(cam, pos[i].x, pos[i].y);
-    o[i] = (float4)(r.o, 0.0f); d[i] = (float4)(r.d, 0.0f); clip[i] = (float2)(r.tmin, r.tmax);
+    o[i] = vf4(r.o, 0.0f); d[i] = vf4(r.d, 0.0f); clip[i] = (float2)(r.tmin, r.tmax);
 }
 """
 

@@ -18,7 +18,7 @@ __kernel void lens_rays(__global const Camera* cam, __global const float4* pos_l
     if (i >= n) return;
     float4 a = pos_lens[i];
     Ray r = camera_ray_lens(cam, a.x, a.y, (float2)(a.z, a.w));
-    o[i] = (float4)(r.o, r.tmin); d[i] = (float4)(r.d, r.tmax);
+    o[i] = vf4(r.o, r.tmin); d[i] = vf4(r.d, r.tmax);
 }
 """
 

@@ -563,7 +563,7 @@ __kernel void tex_eval(__global const Texture* textures, uint idx, uint n, __glo
                        __global float4* out) {
     uint i = get_global_id(0);
     if (i >= n) return;
-    out[i] = (float4)(texture_eval(textures + idx, uv[i]), 0.0f);
+    out[i] = vf4(texture_eval(textures + idx, uv[i]), 0.0f);
 }
 """
 #: where the textured furnace plane is seen: uv (0.63, 0.62), inside a cell of every checkerboard tested
