@@ -34,7 +34,7 @@ INLINE float filter_in_bin(__global const Camera* cam, __global const float* cdf
    Returns x; *pdf receives its density. */
 INLINE float filter_sample_1d(__global const Camera* cam, __global const float* cdf, float u, float* pdf) {
     uint n = cam->filter_bins;
-#ifdef CLR_SEARCH_STEPS
+#if defined(CLR_SEARCH_STEPS) && defined(CLR_WAVEFRONT_STAGES)
     return filter_in_bin(cam, cdf, table_count_le(cdf, n, u) - 1u, u, pdf);   /* cdf[0] = 0 <= u: at least 1 */
 #else
     uint lo = 0u, hi = n; /* find the bin i with cdf[i] <= u < cdf[i+1] */
@@ -49,7 +49,7 @@ INLINE float filter_sample_1d(__global const Camera* cam, __global const float* 
 /* filter_sample_1d for a table followed by its guide (clrender/filters/filter.py, with_guide): the same bin,
    found from guide[floor(u * bins)] in about one step instead of a bisection. */
 INLINE float filter_sample_1d_guided(__global const Camera* cam, __global const float* cdf, float u, float* pdf) {
-#ifdef CLR_SEARCH_STEPS
+#if defined(CLR_SEARCH_STEPS) && defined(CLR_WAVEFRONT_STAGES)
     return filter_sample_1d(cam, cdf, u, pdf);   /* the same bin, in fixed steps (no per-item loop) */
 #else
     uint n = cam->filter_bins;

@@ -59,9 +59,11 @@ INLINE float vcomp(vec3 a, uint i) { return i == 0u ? a.x : (i == 1u ? a.y : a.z
 /* Searches of sorted tables with a fixed trip count. A `while` bisection runs a per-item number of steps, and
    one such loop anywhere in a stage kernel keeps PoCL's work-item loop scalar; CLR_SEARCH_STEPS halvings (the host
    sets it from the scene's largest searched table, so that 2^steps exceeds every count: clrender/pack.py
-   SceneBuffers.search_steps) unroll into straight code with masked loads. Programs built without a scene keep the
-   bisection. */
-#ifdef CLR_SEARCH_STEPS
+   SceneBuffers.search_steps) unroll into straight code with masked loads. Only the wavefront's stage kernels use
+   them (CLR_WAVEFRONT_STAGES, defined by wavefront.cl): in the scalar megakernel the bisection is the faster
+   (the fixed steps cost it 7 % on the Cornell twin, benchmarks/README.md); programs built without a scene keep the
+   bisection too. */
+#if defined(CLR_SEARCH_STEPS) && defined(CLR_WAVEFRONT_STAGES)
 /* How many of the non-decreasing values t[0..count) are <= u. */
 INLINE uint table_count_le(__global const float* t, uint count, float u) {
     uint n = 0u;

@@ -116,9 +116,13 @@ INLINE float next1d(Sampler* s) {
        reloads the counter as 64-bit words just after 32-bit stores to it, a store-forwarding stall (perf: 9 % of
        the furnace twin's time; this is x1.10 there, x1.00 on the Cornell twin) */
     uint u = s->used;
-    /* and as masks, not a chain of ?: (LLVM turns that into a switch, which PoCL's vectoriser refuses) */
+#ifdef CLR_WAVEFRONT_STAGES
+    /* and as masks in the stage kernels: LLVM turns the chain of ?: into a switch, which PoCL's vectoriser refuses */
     uint x = (s->out.v[0] & (0u - (uint)(u == 0u))) | (s->out.v[1] & (0u - (uint)(u == 1u)))
            | (s->out.v[2] & (0u - (uint)(u == 2u))) | (s->out.v[3] & (0u - (uint)(u >= 3u)));
+#else
+    uint x = u == 0u ? s->out.v[0] : (u == 1u ? s->out.v[1] : (u == 2u ? s->out.v[2] : s->out.v[3]));
+#endif
     s->used += 1u;
     return (float)(x >> 8) * (1.0f / 16777216.0f);
 }

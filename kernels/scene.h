@@ -74,7 +74,7 @@ typedef struct {
    (mesh_vertices rows: (first vertex, shape), ascending; a binary search over a table of one row per mesh). */
 INLINE uint scene_triangle_shape(const SceneData* sd, uint pos) {
     uint i0 = sd->tri_index[3u * pos];
-#ifdef CLR_SEARCH_STEPS
+#if defined(CLR_SEARCH_STEPS) && defined(CLR_WAVEFRONT_STAGES)
     /* the last row whose first vertex is <= i0, in the fixed steps of math.h's table_count_le */
     uint n = 0u, count = sd->info->n_meshes;
 #pragma unroll

@@ -5,6 +5,8 @@
    slot lists filled with atomic counters (their order varies from run to run; each path's arithmetic does not).
    The random numbers are the megakernel's, keyed by (seed, pixel, sample, dimension), and each pixel's samples are
    summed in the megakernel's order (wf_finish, wf_flush): both drivers give the same image up to float rounding. */
+/* the stage kernels' forms of the searches and the sampler (kernels/math.h, rng.h): no per-item loop, no switch */
+#define CLR_WAVEFRONT_STAGES 1
 #include "li.h"
 #include "filter.h"
 #ifdef CLR_FEATURE_AOVS

@@ -40,7 +40,7 @@ INLINE float shape_point_sample(ShapeSample* ss, vec3 ref, vec3 p, vec3 n, vec3 
 
 /* First index i in cdf[0..count) with cdf[i] > u (the CDF ends with 1, u < 1). */
 INLINE uint shape_cdf_search(__global const float* cdf, uint count, float u) {
-#ifdef CLR_SEARCH_STEPS
+#if defined(CLR_SEARCH_STEPS) && defined(CLR_WAVEFRONT_STAGES)
     return min(table_count_le(cdf, count, u), count - 1u);
 #else
     uint lo = 0u, hi = count - 1u;
