@@ -16,7 +16,7 @@
    (benchmarks/pocl_vectorise.py). float4 stays for loads of packed rows only (vxyz takes their xyz). Colours are
    vec3 too.
    On x86-64 a struct of three floats is passed to and returned from functions as {<2 x float>, float} (the SysV
-   ABI's SSE classes), and those vector pieces survive inlining (wf_shade's IR for the Cornell twin: 248
+   ABI's SSE classes), and those vector pieces survive inlining (wf_shade's IR for the Cornell twin: 230
    vector-typed instructions); a struct larger than 16 bytes is passed in memory and leaves none (0). The padded
    form is the one a vectorising build needs; it is opt-in (-DCLR_VEC3_PASS_IN_MEMORY) until a stage vectorises,
    because it costs the scalar megakernel a few per cent (benchmarks/README.md). */

@@ -49,12 +49,12 @@ step render 120 python3 -m clrender.cli render scenes/default.xml --device "$DEV
 # each time-boxed, so that a test that hangs (2026-11-29: test_path.py's first-but-one test did not finish on
 # an H200) costs only its file; --timeout-method=thread dumps the stack of a test stuck in a driver call.
 tests_left=${TESTS_SECONDS:-150}
-for f in test_layout test_warps test_bsdfs test_emitters test_direct test_path test_nori_files test_render \
-         test_specialise; do
+for f in test_layout.py test_warps.py bsdfs test_emitters.py emitters test_direct.py test_path.py \
+         test_nori_files.py test_render.py test_specialise.py; do
   ((tests_left < 15)) && { echo "=== tests: $f and later skipped"; break; }
   t=$SECONDS
   step "tests $f" $((tests_left < 60 ? tests_left : 60)) env CLRENDER_DEVICE="$DEVICE" python3 -m pytest \
-    -p no:cacheprovider -n 4 --timeout 45 --timeout-method=thread --durations=5 -rfE -q "tests/$f.py" \
+    -p no:cacheprovider -n 4 --timeout 45 --timeout-method=thread --durations=5 -rfE -q "tests/$f" \
     >> "$OUT/tests.log" 2>&1
   tests_left=$((tests_left - (SECONDS - t)))
 done
