@@ -47,6 +47,7 @@ def main(argv=None):
     ap.add_argument("--twin", default="cornell")
     ap.add_argument("--stage", default="shade")
     ap.add_argument("--define", action="append", default=[], help="an extra -D of the program, NAME or NAME=V")
+    ap.add_argument("--dump", metavar="DIR", help="write both functions' IR text there (to find what made them)")
     args = ap.parse_args(argv)
     import llvmlite.binding as llvm
 
@@ -79,6 +80,9 @@ def main(argv=None):
         mod = llvm.parse_bitcode(path.read_bytes())
         fn = next(f for f in mod.functions if pick(f))
         kinds = blockers(str(fn))
+        if args.dump:
+            Path(args.dump).mkdir(parents=True, exist_ok=True)
+            (Path(args.dump) / f"{kernel}.{path.stem}.ll").write_text(str(fn))
         print(f"{kernel}, {label}: {sum(kinds.values())} instructions the loop vectoriser refuses")
         for k, n in kinds.most_common(20):
             print(f"  {n:5d}  {k}")

@@ -119,7 +119,7 @@ class WavefrontExecutor:
         probe.set_arg(0, d_sizes)
         cl.enqueue_nd_range_kernel(queue, probe, (1,), None)
         cl.enqueue_copy(queue, sizes, d_sizes)
-        path_bytes, sampler_bytes, hit_bytes = (int(x) for x in sizes[:3])
+        path_bytes, sampler_bytes, hit_bytes, self.lanes = (int(x) for x in sizes[:4])
         self.launch_pixels = launch_pixels
         self.slots = max(MAX_WAVE_SLOTS, launch_pixels)
         n = self.slots
@@ -138,12 +138,14 @@ class WavefrontExecutor:
         self.sum1 = cl.Buffer(ctx, rw | mf.COPY_HOST_PTR, hostbuf=zeros)
         self.nbad = cl.Buffer(ctx, rw | mf.COPY_HOST_PTR, hostbuf=np.zeros(launch_pixels, np.uint32))
         self.device_bytes = n * (path_bytes + sampler_bytes + hit_bytes + 8 + 16) + launch_pixels * 36
-        self.a["camera"].set(paths=self.paths, samplers=self.samplers, wt=self.wt, flags=self.flags)
-        self.a["trace"].set(paths=self.paths, hits=self.hits)
-        self.a["shade"].set(paths=self.paths, samplers=self.samplers, hits=self.hits, flags=self.flags)
+        stride = np.uint32(n)   # slots per buffer: a column's length in the structure-of-arrays form (WF_SOA)
+        self.a["camera"].set(paths=self.paths, samplers=self.samplers, stride=stride, wt=self.wt, flags=self.flags)
+        self.a["trace"].set(paths=self.paths, hits=self.hits, stride=stride)
+        self.a["shade"].set(paths=self.paths, samplers=self.samplers, hits=self.hits, stride=stride, flags=self.flags)
         self.a["compact"].set(flags=self.flags, shadow_queue=self.queues[2], counts=self.counts)
-        self.a["shadow"].set(paths=self.paths, queue=self.queues[2])
-        self.a["finish"].set(paths=self.paths, wt=self.wt, sum0=self.sum0, sum1=self.sum1, nbad=self.nbad)
+        self.a["shadow"].set(paths=self.paths, stride=stride, queue=self.queues[2])
+        self.a["finish"].set(paths=self.paths, stride=stride, wt=self.wt, sum0=self.sum0, sum1=self.sum1,
+                             nbad=self.nbad)
         self.a["flush"].set(sum0=self.sum0, sum1=self.sum1, nbad=self.nbad)
         self.timed = timed
         self.stage_seconds = dict.fromkeys(self.STAGES, 0.0)
@@ -224,7 +226,7 @@ class WavefrontExecutor:
                 self.a["trace"].set(queue=q_now, n=np.uint32(n))
                 self._run("trace", n)
                 self.a["shade"].set(queue=q_now, n=np.uint32(n))
-                self._run("shade", n)
+                self._run("shade", -(-n // self.lanes))   # a shade work-item takes `lanes` paths (WF_LANES)
                 self.a["compact"].set(queue=q_now, identity=np.uint32(0), n=np.uint32(n), next_queue=q_next)
                 self._run("compact", n)
                 n_next, n_shadow = self._take_counts()

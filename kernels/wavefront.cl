@@ -21,18 +21,46 @@
 #define QUEUE_TRACE 1u
 #define QUEUE_SHADOW 2u
 
+/* Per-slot state (PathState, Sampler, Hit) as 32-bit words: word j of slot s of a struct of `words` words at
+   col[WF_INDEX(j, words, stride, slot)]: array-of-structures by default (a path's state is a few neighbouring cache
+   lines), structure-of-arrays with -DWF_SOA (stride: the number of slots), measured in benchmarks/README.md. The
+   copy loops have a constant trip count and are unrolled whole. `first`, `count`: a part of the struct, in words. */
+#define WF_WORDS(T) ((uint)(sizeof(T) / 4u))
+#define WF_WORD_OF(base, member) ((uint)(((char*)&(member) - (char*)&(base)) / 4))
+#ifdef WF_SOA
+#define WF_INDEX(j, words, stride, slot) ((j) * (stride) + (slot))
+#else
+#define WF_INDEX(j, words, stride, slot) ((size_t)(slot) * (words) + (j))
+#endif
+#define WF_GET(col, T, stride, slot, dst, first, count) do { \
+        uint* wf_w_ = (uint*)(dst); \
+        _Pragma("unroll") for (uint wf_j_ = 0u; wf_j_ < (count); ++wf_j_) \
+            wf_w_[wf_j_] = (col)[WF_INDEX((first) + wf_j_, WF_WORDS(T), stride, slot)]; \
+    } while (0)
+#define WF_LOAD(T, col, stride, slot, dst) WF_GET(col, T, stride, slot, dst, 0u, WF_WORDS(T))
+#define WF_STORE(T, col, stride, slot, src) do { \
+        const uint* wf_w_ = (const uint*)(src); \
+        _Pragma("unroll") for (uint wf_j_ = 0u; wf_j_ < WF_WORDS(T); ++wf_j_) \
+            (col)[WF_INDEX(wf_j_, WF_WORDS(T), stride, slot)] = wf_w_[wf_j_]; \
+    } while (0)
+
 /* The pixel of launch index i: i itself over a range of pixels, or pixel_list[i] when the launch runs over a list
    (adaptive sampling's rounds; `listed` != 0). */
 inline uint listed_pixel(__global const uint* pixel_list, uint listed, uint i) {
     return listed ? pixel_list[i] : i;
 }
 
+#ifndef WF_LANES
+#define WF_LANES 1   /* paths per work-item of the shade stage */
+#endif
+
 /* The sizes the host allocates per slot: PathState, Sampler, Hit (the kernels' own layout, so nothing on the host
-   spells it out). */
+   spells it out), and the paths a shade work-item takes (WF_LANES). */
 __kernel void wf_sizes(__global uint* out) {
     out[0] = (uint)sizeof(PathState);
     out[1] = (uint)sizeof(Sampler);
     out[2] = (uint)sizeof(Hit);
+    out[3] = WF_LANES;
 }
 
 /* Camera stage: the camera sample of every slot (sample_offset + slot % k of pixel pixel_offset + slot / k, or of
@@ -40,7 +68,7 @@ __kernel void wf_sizes(__global uint* out) {
    it counts, but adds nothing) and flags[slot] = QUEUE_TRACE when the path's first segment is to be traced
    (wf_compact queues it). */
 __kernel void wf_camera(SCENE_ARGS, __global const Camera* cam, __global const float* filter_cdf,
-                        __global PathState* paths, __global Sampler* samplers, __global float2* wt,
+                        __global uint* paths, __global uint* samplers, uint stride, __global float2* wt,
                         __global uint* flags, __global const uint* pixel_list, uint listed,
                         uint pixel_offset, uint n_slots, uint k, uint sample_offset, uint seed) {
     uint slot = get_global_id(0);
@@ -59,40 +87,105 @@ __kernel void wf_camera(SCENE_ARGS, __global const Camera* cam, __global const f
         ps.alive = 0u;
         wt[slot] = (float2)(0.0f, 0.0f);
     }
-    paths[slot] = ps;
-    samplers[slot] = smp;
+    WF_STORE(PathState, paths, stride, slot, &ps);
+    WF_STORE(Sampler, samplers, stride, slot, &smp);
     flags[slot] = ps.alive ? QUEUE_TRACE : 0u;
 }
 
 /* Trace stage: the closest hit of each queued path's segment (t < 0: it hit nothing). */
-__kernel void wf_trace(SCENE_ARGS, __global const PathState* paths, __global Hit* hits, __global const uint* queue,
-                       uint n) {
+__kernel void wf_trace(SCENE_ARGS, __global const uint* paths, __global uint* hits, uint stride,
+                       __global const uint* queue, uint n) {
     uint i = get_global_id(0);
     if (i >= n) return;
     SCENE_INIT(sd);
     uint slot = queue[i];
-    Ray r = paths[slot].ray;
+    PathState ps;
+    Ray r;
+    WF_GET(paths, PathState, stride, slot, &r, WF_WORD_OF(ps, ps.ray), WF_WORDS(Ray));
     Hit h;
     if (!scene_trace(&sd, &r, &h)) h.t = -1.0f;
-    hits[slot] = h;
+    WF_STORE(Hit, hits, stride, slot, &h);
 }
 
 /* Shade stage: surface reconstruction, emission and its MIS weight, the emitter sample (a shadow ray to trace:
    QUEUE_SHADOW in flags[i]), roulette and the BSDF sample (the next segment to trace: QUEUE_TRACE). */
-__kernel void wf_shade(SCENE_ARGS, __global PathState* paths, __global Sampler* samplers, __global const Hit* hits,
-                       __global const uint* queue, uint n, __global uint* flags) {
+#if WF_LANES > 1
+/* WF_LANES paths per work-item (opt-in, measured in benchmarks/README.md, "third step"), in three loops: their state
+   copied into private arrays, one row per word with the lanes side by side; the shading over the lanes, a loop that
+   LLVM's loop vectoriser widens in PoCL's first -O3 round, before the SLP vectoriser of that round can pack pairs of
+   a path's scalars into <2 x float> values (which keep PoCL's own work-item loop scalar); and the state copied
+   back. Lanes past n repeat the last path and are not copied back. Needs -DCLR_VEC3_PASS_IN_MEMORY (x86-64 passes a
+   12-byte vec3 as a <2 x float> piece, which the vectoriser refuses). */
+#define WF_LSTRIDE (2 * WF_LANES)   /* rows two vectors apart: no dependence between rows for the vectoriser to check */
+#define WF_LANE_GET(T, arr, lane, dst) do { \
+        uint* wf_w_ = (uint*)(dst); \
+        _Pragma("unroll") for (uint wf_j_ = 0u; wf_j_ < WF_WORDS(T); ++wf_j_) \
+            wf_w_[wf_j_] = (arr)[wf_j_ * WF_LSTRIDE + (lane)]; \
+    } while (0)
+#define WF_LANE_PUT(T, arr, lane, src) do { \
+        const uint* wf_w_ = (const uint*)(src); \
+        _Pragma("unroll") for (uint wf_j_ = 0u; wf_j_ < WF_WORDS(T); ++wf_j_) \
+            (arr)[wf_j_ * WF_LSTRIDE + (lane)] = wf_w_[wf_j_]; \
+    } while (0)
+/* word by word between a slot of a per-slot buffer and a lane of a private array */
+#define WF_TO_LANE(T, arr, lane, col, stride, slot) \
+    _Pragma("unroll") for (uint wf_j_ = 0u; wf_j_ < WF_WORDS(T); ++wf_j_) \
+        (arr)[wf_j_ * WF_LSTRIDE + (lane)] = (col)[WF_INDEX(wf_j_, WF_WORDS(T), stride, slot)]
+#define WF_FROM_LANE(T, arr, lane, col, stride, slot) \
+    _Pragma("unroll") for (uint wf_j_ = 0u; wf_j_ < WF_WORDS(T); ++wf_j_) \
+        (col)[WF_INDEX(wf_j_, WF_WORDS(T), stride, slot)] = (arr)[wf_j_ * WF_LSTRIDE + (lane)]
+__kernel void wf_shade(SCENE_ARGS, __global uint* paths, __global uint* samplers, __global const uint* hits,
+                       uint stride, __global const uint* queue, uint n, __global uint* flags) {
+    uint base = get_global_id(0) * WF_LANES;
+    if (base >= n) return;
+    SCENE_INIT(sd);
+    uint ps_w[WF_WORDS(PathState) * WF_LSTRIDE], smp_w[WF_WORDS(Sampler) * WF_LSTRIDE];
+    uint h_w[WF_WORDS(Hit) * WF_LSTRIDE], flag_w[WF_LANES];
+    for (uint lane = 0u; lane < WF_LANES; ++lane) {
+        uint slot = queue[min(base + lane, n - 1u)];
+        WF_TO_LANE(PathState, ps_w, lane, paths, stride, slot);
+        WF_TO_LANE(Sampler, smp_w, lane, samplers, stride, slot);
+        WF_TO_LANE(Hit, h_w, lane, hits, stride, slot);
+    }
+#pragma clang loop vectorize(enable) vectorize_width(WF_LANES) interleave_count(1)
+    for (uint lane = 0u; lane < WF_LANES; ++lane) {
+        PathState ps;
+        Sampler smp;
+        Hit h;
+        WF_LANE_GET(PathState, ps_w, lane, &ps);
+        WF_LANE_GET(Sampler, smp_w, lane, &smp);
+        WF_LANE_GET(Hit, h_w, lane, &h);
+        path_vertex(&sd, &ps, h.t >= 0.0f, &h, &smp);
+        WF_LANE_PUT(PathState, ps_w, lane, &ps);
+        WF_LANE_PUT(Sampler, smp_w, lane, &smp);
+        flag_w[lane] = (ps.alive ? QUEUE_TRACE : 0u) | (ps.shadow_pending ? QUEUE_SHADOW : 0u);
+    }
+    for (uint lane = 0u; lane < WF_LANES && base + lane < n; ++lane) {
+        uint slot = queue[base + lane];
+        WF_FROM_LANE(PathState, ps_w, lane, paths, stride, slot);
+        WF_FROM_LANE(Sampler, smp_w, lane, samplers, stride, slot);
+        flags[base + lane] = flag_w[lane];
+    }
+}
+#else
+__kernel void wf_shade(SCENE_ARGS, __global uint* paths, __global uint* samplers, __global const uint* hits,
+                       uint stride, __global const uint* queue, uint n, __global uint* flags) {
     uint i = get_global_id(0);
     if (i >= n) return;
     SCENE_INIT(sd);
     uint slot = queue[i];
-    PathState ps = paths[slot];
-    Sampler smp = samplers[slot];
-    Hit h = hits[slot];
+    PathState ps;
+    Sampler smp;
+    Hit h;
+    WF_LOAD(PathState, paths, stride, slot, &ps);
+    WF_LOAD(Sampler, samplers, stride, slot, &smp);
+    WF_LOAD(Hit, hits, stride, slot, &h);
     path_vertex(&sd, &ps, h.t >= 0.0f, &h, &smp);
-    paths[slot] = ps;
-    samplers[slot] = smp;
+    WF_STORE(PathState, paths, stride, slot, &ps);
+    WF_STORE(Sampler, samplers, stride, slot, &smp);
     flags[i] = (ps.alive ? QUEUE_TRACE : 0u) | (ps.shadow_pending ? QUEUE_SHADOW : 0u);
 }
+#endif
 
 /* The queues of the next stages from the flags the camera or shade stage left, one per launch index i (the
    slot is i itself after the camera stage, queue[i] after a shade stage): the paths to trace in next_queue
@@ -109,19 +202,20 @@ __kernel void wf_compact(__global const uint* flags, __global const uint* queue,
 }
 
 /* Shadow stage: the pending emitter samples count where their shadow rays reach the light. */
-__kernel void wf_shadow(SCENE_ARGS, __global PathState* paths, __global const uint* queue, uint n) {
+__kernel void wf_shadow(SCENE_ARGS, __global uint* paths, uint stride, __global const uint* queue, uint n) {
     uint i = get_global_id(0);
     if (i >= n) return;
     SCENE_INIT(sd);
     uint slot = queue[i];
-    PathState ps = paths[slot];
+    PathState ps;
+    WF_LOAD(PathState, paths, stride, slot, &ps);
     path_shadow_done(&ps, shadow_occluded(&sd, &ps.shadow));
-    paths[slot] = ps;
+    WF_STORE(PathState, paths, stride, slot, &ps);
 }
 
 /* Finish stage: each pixel's k finished samples added to its sums of this pass, in sample order, as render_pass adds
    them: sum0 = (sum wL, sum w), sum1 = (sum (wL)^2, -), nbad = samples dropped for being NaN/Inf. */
-__kernel void wf_finish(SCENE_ARGS, __global const PathState* paths, __global const float2* wt,
+__kernel void wf_finish(SCENE_ARGS, __global const uint* paths, uint stride, __global const float2* wt,
                         __global float4* sum0, __global float4* sum1, __global uint* nbad, uint n_pixels, uint k) {
     uint gid = get_global_id(0);
     if (gid >= n_pixels) return;
@@ -133,7 +227,8 @@ __kernel void wf_finish(SCENE_ARGS, __global const PathState* paths, __global co
         uint slot = gid * k + j;
         float2 w = wt[slot];
         if (w.y == 0.0f) continue;
-        PathState ps = paths[slot];
+        PathState ps;
+        WF_LOAD(PathState, paths, stride, slot, &ps);
         vec3 L = path_result(&sd, &ps);
         if (!all_finite(L) || !isfinite(w.x)) { bad += 1u; continue; }
         vec3 wl = vscale(L, w.x);

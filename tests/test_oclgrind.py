@@ -153,3 +153,25 @@ def test_pixel_lists_and_feature_aovs_are_clean_under_oclgrind(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert "rendered megakernel" in proc.stdout and "rendered wavefront" in proc.stdout, proc.stdout
     assert report == "", report[:4000]
+
+
+_RUN_LAYOUTS = textwrap.dedent("""
+    import sys
+    from clrender.bench import load_bench_scene
+    from clrender.renderer import Renderer
+    scene, _, _ = load_bench_scene(sys.argv[1], None, width=9, height=7)
+    for defines in ({"WF_SOA": None}, {"WF_LANES": 4, "CLR_VEC3_PASS_IN_MEMORY": None}):
+        film = Renderer(scene, device="Oclgrind", driver="wavefront", defines=defines).render(spp=2, seed=1)
+        print("rendered", "+".join(defines), float(film.image.mean()))
+""")
+
+
+@needs_oclgrind
+@slow
+def test_the_wavefront_layouts_are_clean_under_oclgrind(tmp_path):
+    """The wavefront's structure-of-arrays path state and its shade stage in lanes (kernels/wavefront.cl, WF_SOA,
+    WF_LANES) over 63 pixels: a last shade work-item with idle lanes, no out-of-bounds access, no race."""
+    proc, report = _run_under_oclgrind(tmp_path, [str(SCENES / "cornell" / "cornell_path_mis.xml")], _RUN_LAYOUTS)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.count("rendered") == 2, proc.stdout
+    assert report == "", report[:4000]

@@ -104,3 +104,24 @@ def test_auto_picks_the_megakernel_and_wavefront_refuses_other_integrators():
         Renderer(direct, driver="wavefront")
     with pytest.raises(ValueError, match="unknown driver"):
         Renderer(s, driver="fast")
+
+
+# The wavefront's other forms, measured in benchmarks/README.md ("third step") and opt-in by build defines: path state
+# in structure-of-arrays buffers (WF_SOA), and the shade stage over WF_LANES paths per work-item in a loop that LLVM's
+# loop vectoriser widens (WF_LANES; needs the vec3 passed in memory). Both must give the megakernel's image.
+LAYOUTS = [{"WF_SOA": None}, {"WF_LANES": 4, "CLR_VEC3_PASS_IN_MEMORY": None},
+           {"WF_LANES": 4, "CLR_VEC3_PASS_IN_MEMORY": None, "WF_SOA": None}]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scene", ["cornell/cornell_path_mis.xml", "glass/glass_path_mis.xml"])
+@pytest.mark.parametrize("defines", LAYOUTS, ids=lambda d: "+".join(d))
+def test_every_layout_of_the_wavefront_gives_the_megakernel_image(scene, defines):
+    s = load(scene)
+    p0, p1 = band(s, rows=5)   # an odd number of paths: shade launches whose last work-item has idle lanes
+    mega = Renderer(s, driver="megakernel").render(spp=3, seed=7, pixels=(p0, p1))
+    wave = Renderer(s, driver="wavefront", defines=defines).render(spp=3, seed=7, pixels=(p0, p1))
+    a, b = mega.image.reshape(-1, 3)[p0:p1], wave.image.reshape(-1, 3)[p0:p1]
+    assert a.mean() > 1e-3
+    np.testing.assert_allclose(b, a, rtol=2e-4, atol=2e-6)
+    np.testing.assert_array_equal(wave.dropped.reshape(-1)[p0:p1], mega.dropped.reshape(-1)[p0:p1])
