@@ -14,7 +14,8 @@ def load_scene(path, nori_dialect=None, **defines):
     """Load a Nori XML scene file (``defines`` fill ``$name`` placeholders).
 
     ``nori_dialect``: "upstream" (wjakob/nori, EPFL; the default) or "eth" (ETH Zürich, Dartmouth 2015):
-    they differ in the camera's x direction and in rotate axes. None reads $CLRENDER_NORI_DIALECT."""
+    they differ in the camera's x direction and in rotate axes; "eth2023" is "eth" with the analytic sphere's u
+    turned half a revolution (ETH's course files up to 2023). None reads $CLRENDER_NORI_DIALECT."""
     from .loader import load_scene as _load
 
     return _load(path, nori_dialect=nori_dialect, **defines)

@@ -11,7 +11,7 @@ from .scene.xmlparser import parse_file
 
 def load_scene(path, nori_dialect: str | None = None, **defines):
     """Load a Nori or Mitsuba 3 XML scene (a root ``<scene version="...">`` is Mitsuba's); `defines` replace `$name` in attribute values (like `-D name=value`).
-    `nori_dialect` is "upstream" (default) or "eth" (see clrender.scene.dialect)."""
+    `nori_dialect` is "upstream" (default), "eth" or "eth2023" (see clrender.scene.dialect)."""
     from . import plugins  # noqa: F401  (registers every plugin)
 
     path = Path(path)

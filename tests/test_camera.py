@@ -107,6 +107,16 @@ def test_rotate_axis_normalisation_differs_by_dialect():
     np.testing.assert_allclose(eth, [[0, 0, 2], [0, 4, 0], [-2, 0, 0]], atol=1e-12)
 
 
+def test_eth2023_reads_cameras_and_rotations_as_eth():
+    """eth2023 is eth but for the analytic sphere's u (tests/shapes/test_sphere.py): the same camera mirror and the
+    same unnormalised rotate axes."""
+    for inner in ('<rotate axis="0,2,0" angle="90"/>', '<scale value="-1,1,1"/><lookat origin="1,2,3" '
+                  'target="0,0.5,-1" up="0,1,0"/>'):
+        eth, eth2023 = (camera_from_xml(inner, dialect=d) for d in ("eth", "eth2023"))
+        np.testing.assert_array_equal(eth2023.to_world.matrix, eth.to_world.matrix)
+        assert eth2023.mirror_x == eth.mirror_x != camera_from_xml(inner).mirror_x
+
+
 def test_lookat_with_up_parallel_to_view_is_accepted_with_a_warning(ctx, queue, program, caplog):
     """Nori leaves left = newUp = 0 (Eigen normalises a zero vector to zero): every ray leaves along dir."""
     import logging

@@ -37,4 +37,5 @@ def add_dialect_option(p) -> None:
     p.add_argument("--nori-dialect", choices=DIALECTS, default=None,
                    help=f"how to read Nori XML: upstream (wjakob/nori, EPFL; camera +x on the image's left, "
                         f"rotate axes normalised) or eth (ETH Zürich, Dartmouth; +x on the right, axes as "
-                        f"written). Default: ${ENV_VAR}, else upstream")
+                        f"written) or eth2023 (eth with the analytic sphere's u turned half a revolution, as ETH's "
+                        f"course files up to 2023). Default: ${ENV_VAR}, else upstream")

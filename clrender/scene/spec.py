@@ -42,7 +42,7 @@ class PluginSpec:
     props: PropertyList
     children: list["PluginSpec"] = field(default_factory=list)
     location: SourceLocation | None = None
-    #: the Nori dialect the file was read in ("upstream" or "eth"; see clrender.scene.dialect)
+    #: the Nori dialect the file was read in ("upstream", "eth" or "eth2023"; see clrender.scene.dialect)
     dialect: str = "upstream"
     #: the scene format the file was read as ("nori" or "mitsuba"); picks the registry's namespace
     format: str = "nori"

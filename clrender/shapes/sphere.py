@@ -7,6 +7,8 @@
 </mesh>
 ```
 Normals point outward; uv = (atan2(n.y, n.x) / 2pi wrapped to [0,1), acos(n.z) / pi), n in the sphere's own frame.
+The Nori dialect `eth2023` (clrender/scene/dialect.py) turns that frame half a revolution about z, so there
+u = 1/2 + atan2(n.y, n.x) / 2pi (wrapped): the uv the ETH course's test files up to 2023 were made with.
 Tables (kernels/shapes/sphere.h): one row of `spheres` (centre, radius) and of `sphere_shape` (this shape); the
 row's first is that row. Row: p.sphere.rot = the rotation taking the sphere's own frame to the world, a unit
 quaternion (x, y, z, w) with w >= 0, whose w has its sign bit set where the frame is mirrored (to_world with a
@@ -16,6 +18,7 @@ import numpy as np
 
 from ..device import dispatch
 from ..errors import SceneError
+from ..scene.dialect import sphere_u_turn
 from ..scene.registry import register
 from .shape import SPHERE_EXTENT_MAX, Shape
 
@@ -62,6 +65,10 @@ class Sphere(Shape):
             raise SceneError(f"sphere center must be finite, got {self.center}", props.location("center"))
         if not (self.radius > 0 and np.isfinite(self.radius)):
             raise SceneError(f"sphere radius must be a positive number, got {self.radius}", spec.location)
+        turn = 2.0 * np.pi * sphere_u_turn(spec.dialect)
+        if turn:   # u shifted by turning the sphere's own frame: uv, dp/du and shading frame stay consistent
+            c, s = np.round([np.cos(turn), np.sin(turn)], 12)   # a half turn exactly diag(-1, -1, 1)
+            self.frame = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
         self._check_extent(spec)
         self._attach(children, spec)
 

@@ -1,8 +1,8 @@
 """The analytic sphere of Nori's and Mitsuba 3's files (clrender/shapes/sphere.py, kernels/shapes/sphere.h): its
 to_world (uniform scales only) and errors (with the cylinder's and disk's, checked beside it), flip_normals, the
-frame quaternion the kernel reads, its uv turning with to_world as Mitsuba's, its sampling as an area light (a
-chi-square of the directions against the pdf of the first hit) and a rendered furnace (shared set-up:
-shape_common.py)."""
+frame quaternion the kernel reads, its uv turning with to_world as Mitsuba's, the Nori dialects' uv (a t-test
+against the checkerboard's direct light integrated in numpy), its sampling as an area light (a chi-square of the
+directions against the pdf of the first hit) and a rendered furnace (shared set-up: shape_common.py)."""
 import numpy as np
 import pytest
 
@@ -116,6 +116,82 @@ def test_sphere_uv_turns_with_to_world(tmp_path, xform, view, expect):
     if flip:   # without flip_normals the mirrored sphere's light faces inward, as in Mitsuba: black from outside
         (tmp_path / "s.xml").write_text(xml.replace(flip, ""))
         assert clrender.render(clrender.load_scene(tmp_path / "s.xml"), spp=4, seed=1).image.max() == 0
+
+
+LUMINANCE = np.array([0.212671, 0.715160, 0.072169])   # Nori's Color3f::getLuminance
+NORI_CASE = """<scene><integrator type="direct"/>
+    <camera type="perspective"><integer name="width" value="1"/><integer name="height" value="1"/>
+        <float name="fov" value="{fov}"/>
+        <transform name="toWorld"><lookat origin="{o}" target="{t}" up="0, 0, 1"/></transform></camera>
+    <mesh type="sphere"><point name="center" value="{c}"/><float name="radius" value="{r}"/>
+        <bsdf type="diffuse"><texture type="checkerboard_color" name="albedo">
+            <vector name="scale" value="{scale}"/><color name="value1" value="{v1}"/><color name="value2" value="{v2}"/>
+        </texture></bsdf></mesh>
+    <emitter type="point"><point name="position" value="{light}"/><color name="power" value="{power}"/></emitter>
+</scene>"""
+#: our own configurations: the footprint spans few enough cells that eth's u, eth2023's half-turned u and a mirrored
+#: u give three clearly different means (0.479, 0.094, 0.549 and 0.024, 0.088, 0.209)
+NORI_CASES = [dict(o=(7, 2, 5), t=(1.5, -0.8, 1.6)), dict(o=(7, 2, 5), t=(2.2, -1.0, 1.2))]
+NORI_COMMON = dict(fov=4.0, c=(1, -2, 0.5), r=2.0, light=(-1, 5, 8), power=3000.0, scale=(0.15, 0.25),
+                   v1=(0.9, 0.8, 0.7), v2=(0.1, 0.05, 0.2))
+
+
+def nori_sphere_checker_mean(o, t, fov, c, r, light, power, scale, v1, v2, u_turn, n=4_000_000, seed=11):
+    """The luminance a 1 x 1 Nori ttest image of a checkerboard sphere under a point light (the `direct`
+    integrator) averages to, as Monte Carlo in numpy over the pixel's square of image-plane positions: albedo/pi
+    · power/(4 pi) · cos / d^2 with u = atan2(n.y, n.x)/2pi + u_turn wrapped to [0, 1), v = acos(n.z)/pi, value1
+    where floor(u/su) + floor(v/sv) is even."""
+    rng = np.random.default_rng(seed)
+    o, c = np.asarray(o, float), np.asarray(c, float)
+    fwd = np.asarray(t, float) - o
+    fwd /= np.linalg.norm(fwd)
+    left = np.cross([0.0, 0.0, 1.0], fwd)
+    left /= np.linalg.norm(left)
+    up = np.cross(fwd, left)
+    h = np.tan(np.radians(fov) / 2)
+    total = 0.0
+    for _ in range(n // 1_000_000):
+        a, b = rng.uniform(-h, h, (2, 1_000_000))
+        d = fwd + a[:, None] * left + b[:, None] * up
+        d /= np.linalg.norm(d, axis=1, keepdims=True)
+        oc = o - c
+        bb = d @ oc
+        disc = bb * bb - (oc @ oc - r * r)
+        x = o + (-bb - np.sqrt(np.maximum(disc, 0)))[:, None] * d
+        nrm = (x - c) / r
+        u = np.mod(np.arctan2(nrm[:, 1], nrm[:, 0]) / (2 * np.pi) + u_turn, 1.0)
+        v = np.arccos(np.clip(nrm[:, 2], -1, 1)) / np.pi
+        odd = (np.floor(u / scale[0]) + np.floor(v / scale[1])) % 2 == 1
+        albedo = np.where(odd, np.dot(v2, LUMINANCE), np.dot(v1, LUMINANCE))
+        w = np.asarray(light, float) - x
+        d2 = (w * w).sum(1)
+        cos = np.maximum((nrm * w).sum(1) / np.sqrt(d2), 0.0)
+        total += np.where(disc > 0, albedo / np.pi * power / (4 * np.pi) * cos / d2, 0.0).sum()
+    return total / n
+
+
+@pytest.mark.parametrize("dialect,u_turn,other", [("eth", 0.0, 0.5), ("eth2023", 0.5, 0.0)])
+def test_nori_sphere_uv_per_dialect(tmp_path, capsys, dialect, u_turn, other):
+    """The Nori sphere's u in each ETH dialect (clrender/scene/dialect.py): `clrender test` of our own checkerboard
+    spheres passes against references integrated in numpy with that dialect's u, and fails against the other's."""
+    from clrender.cli import main
+
+    def vals(x):
+        return ", ".join(f"{float(e):g}" for e in np.atleast_1d(x))
+
+    def ttest(turn):
+        cases = [dict(NORI_COMMON, **k) for k in NORI_CASES]
+        refs = [nori_sphere_checker_mean(**k, u_turn=turn) for k in cases]
+        scenes = "".join(NORI_CASE.format(**{key: vals(val) for key, val in k.items()}) for k in cases)
+        path = tmp_path / f"sphere_uv_{turn}.xml"
+        path.write_text(f'<test type="ttest"><string name="references" value="{vals(refs)}"/>{scenes}</test>')
+        return str(path)
+
+    args = ["--nori-dialect", dialect, "--seed", "3", "--no-plots"]
+    assert main(["test", ttest(u_turn), *args]) == 0, capsys.readouterr().out
+    capsys.readouterr()
+    assert main(["test", ttest(other), *args]) == 1
+    assert "2 failed" in capsys.readouterr().out
 
 
 @pytest.mark.plugin("sphere", "sampling")
