@@ -10,7 +10,7 @@ from clrender import plugins  # noqa: F401  (registers the plugins)
 from clrender.scene import registry
 from clrender.scene.transform import Transform
 from clrender.testing.plugin_checks import texture_eval_batch
-from textures.image_common import bitmap, random_png, real_mitsuba
+from textures.image_common import bitmap, mitsuba_lookups, random_png, real_mitsuba
 
 
 @pytest.fixture(scope="module")
@@ -68,12 +68,7 @@ def test_float_view_matches_mitsuba(tmp_path, png):
                "color1": {"type": "rgb", "value": [0.05, 0.3, 0.7]}, "to_uv": mi.ScalarTransform4f().scale([3, 2, 1])})]
     uv = np.random.default_rng(10).uniform(0.01, 0.99, size=(200, 2))
     for ours, d in cases:
-        theirs = mi.load_dict(d)
-        si = mi.SurfaceInteraction3f()
-        want = []
-        for u in uv:
-            si.uv = mi.Point2f(*u)
-            want.append(theirs.eval_1(si))
+        want = mitsuba_lookups(mi, d, uv, float_lookup=True)
         np.testing.assert_allclose(ours.float_view().eval(uv)[:, 0], want, rtol=2e-5, atol=1e-6, err_msg=d["type"])
 
 

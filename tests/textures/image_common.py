@@ -1,6 +1,7 @@
 """What the tests of Mitsuba's bitmap texture (tests/textures/test_bitmap.py), of a texture where a float is read
 (tests/test_mitsuba_textures.py) and of envmap's image files (tests/emitters/test_envmap.py) share: a bitmap from
-its properties, a small random PNG, a 16-bit PNG written by hand, and Mitsuba 3 itself (or a skip)."""
+its properties, a small random PNG, a 16-bit PNG written by hand, and Mitsuba 3 itself (or a skip) with its own
+lookups of a texture."""
 import numpy as np
 import pytest
 from PIL import Image
@@ -67,3 +68,15 @@ def write_png16(path, img):
     ihdr = struct.pack(">IIBBBBB", w, h, 16, 2, 0, 0, 0)
     path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(b"".join(rows)))
                      + chunk(b"IEND", b""))
+
+
+def mitsuba_lookups(mi, d: dict, uv, float_lookup: bool = False) -> np.ndarray:
+    """Mitsuba's own texture of the dict `d` (as mi.load_dict takes it) at each uv (N, 2): its colour lookup (eval),
+    or with `float_lookup` its float one (eval_1)."""
+    texture = mi.load_dict(d)
+    si = mi.SurfaceInteraction3f()
+    out = []
+    for u in uv:
+        si.uv = mi.Point2f(*u)
+        out.append(texture.eval_1(si) if float_lookup else np.array(texture.eval(si)))
+    return np.array(out)

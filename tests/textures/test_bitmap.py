@@ -15,7 +15,7 @@ from clrender.scene.registry import create
 from clrender.scene.transform import Transform
 from clrender.testing.plugin_checks import check_texture_render, texture_eval_batch
 from clrender.textures.texture import TextureTable
-from textures.image_common import bitmap, random_png, real_mitsuba, write_png16
+from textures.image_common import bitmap, mitsuba_lookups, random_png, real_mitsuba, write_png16
 
 
 @pytest.fixture(scope="module")
@@ -154,14 +154,9 @@ def test_16_bit_pngs_match_mitsuba(tmp_path):
     mi.Bitmap(rng.integers(0, 65536, size=(5, 7, 4)).astype(np.uint16), mi.Bitmap.PixelFormat.RGBA).write(
         str(tmp_path / "rgba.png"))
     uv = rng.uniform(0.01, 0.99, size=(100, 2))
-    si = mi.SurfaceInteraction3f()
     for name in ("rgb.png", "rgba.png"):
         for raw in (False, True):
-            theirs = mi.load_dict({"type": "bitmap", "filename": str(tmp_path / name), "raw": raw})
-            want = []
-            for u in uv:
-                si.uv = mi.Point2f(*u)
-                want.append(np.array(theirs.eval(si)))
+            want = mitsuba_lookups(mi, {"type": "bitmap", "filename": str(tmp_path / name), "raw": raw}, uv)
             np.testing.assert_allclose(bitmap(tmp_path / name, raw=raw).eval(uv), want, atol=1e-6,
                                        err_msg=f"{name} raw={raw}")
 
@@ -209,16 +204,11 @@ def test_bitmap_format_matches_mitsuba(tmp_path):
     mi = real_mitsuba("Mitsuba 3 is not installed (pip install mitsuba==3.9.1): it checks bitmap formats")
     mi.set_variant("scalar_rgb")
     format_images(tmp_path)
-    si = mi.SurfaceInteraction3f()
     uv = (np.stack(np.meshgrid(np.arange(5), np.arange(6)), -1).reshape(-1, 2) + 0.5) / [5, 6]
     for name in ("f.exr", "p.png"):
         for fmt in ("auto", "variant", "float16", "uint8"):
-            theirs = mi.load_dict({"type": "bitmap", "filename": str(tmp_path / name), "format": fmt,
-                                   "filter_type": "nearest"})
-            want = []
-            for u in uv:
-                si.uv = mi.Point2f(*u)
-                want.append(np.array(theirs.eval(si)))
+            want = mitsuba_lookups(mi, {"type": "bitmap", "filename": str(tmp_path / name), "format": fmt,
+                                        "filter_type": "nearest"}, uv)
             ours = bitmap(tmp_path / name, format=fmt, filter_type="nearest").eval(uv)
             if fmt == "uint8":   # one byte step: 1/255 of a linear value, at most 0.009 once an encoded one is decoded
                 np.testing.assert_allclose(ours, want, rtol=0, atol=1 / 255 + 1e-6 if name == "f.exr" else 0.009)
@@ -334,18 +324,14 @@ def test_image_formats_match_mitsuba(image_files):
     greyscale PPM; its 16-bit PPM is little-endian, against the Netpbm specification that we and Pillow follow)."""
     mi = real_mitsuba("Mitsuba 3 is not installed (pip install mitsuba==3.9.1): it checks the image formats")
     mi.set_variant("scalar_rgb")
-    si = mi.SurfaceInteraction3f()
     uv = np.stack(np.meshgrid((np.arange(7) + 0.5) / 7, (np.arange(5) + 0.5) / 5), -1).reshape(-1, 2)
     checked = 0
     for path, _, _ in image_files:
         if path.suffix in (".tif", ".pgm") or path.name == "rgb16.ppm":
             continue
         for raw in (False, True):
-            theirs = mi.load_dict({"type": "bitmap", "filename": str(path), "raw": raw, "filter_type": "nearest"})
-            want = []
-            for u in uv:
-                si.uv = mi.Point2f(*u)
-                want.append(np.array(theirs.eval(si)))
+            want = mitsuba_lookups(mi, {"type": "bitmap", "filename": str(path), "raw": raw, "filter_type": "nearest"},
+                                   uv)
             np.testing.assert_allclose(bitmap(path, raw=raw, filter_type="nearest").eval(uv), want, rtol=1e-6,
                                        atol=1e-7, err_msg=f"{path.name} raw={raw}")
             checked += 1
