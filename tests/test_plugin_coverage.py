@@ -29,10 +29,8 @@ KINDS = {"bsdfs": ("bsdf",), "emitters": ("emitter",), "shapes": ("shape", "mesh
 NEEDS = {"bsdfs": ("sampling", "render"), "emitters": ("sampling", "render"), "shapes": ("sampling", "render"),
          "textures": ("eval", "render"), "filters": ("sampling", "render")}
 
-_NO_RENDER = "no render test of this plugin yet (issue 26, point 3)"
 #: (folder, plugin, aspect) -> why it is missing today
 GAPS = {
-    ("bsdfs", "bumpmap", "render"): _NO_RENDER,
     ("shapes", "instance", "sampling"): "an instance holds no emitter (refused, as in Mitsuba): nothing of it is sampled",
 }
 

@@ -2,12 +2,9 @@
 in clrender that it evaluates in Mitsuba: nested dicts with a type other than "rgb" are child plugins."""
 from __future__ import annotations
 
+from ..scene import registry
 from ..scene.properties import PropertyList
 from ..scene.spec import PluginSpec
-
-
-#: the Mitsuba texture plugins a nested dict may be (its tag is then <texture>, else <bsdf>)
-TEXTURES = ("bitmap", "checkerboard")
 
 
 def spec_from_dict(d: dict, tag: str = "bsdf", name: str | None = None, special=None) -> PluginSpec:
@@ -21,7 +18,9 @@ def spec_from_dict(d: dict, tag: str = "bsdf", name: str | None = None, special=
         if isinstance(v, dict) and v.get("type") == "rgb":
             props.add(k, "color", v["value"])
         elif isinstance(v, dict):
-            children.append(spec_from_dict(v, "texture" if v["type"] in TEXTURES else "bsdf", k, special))
+            # a <texture> where its type is a registered Mitsuba texture (no BSDF has such a name), else a <bsdf>
+            textures = registry.registered("texture", fmt="mitsuba")
+            children.append(spec_from_dict(v, "texture" if v["type"] in textures else "bsdf", k, special))
         elif isinstance(v, bool):
             props.add(k, "boolean", v)
         elif isinstance(v, (int, float)):

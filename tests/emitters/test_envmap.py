@@ -135,7 +135,7 @@ def test_small_envmaps_are_padded(tmp_path, ctx, queue, kernels):
 
 @pytest.mark.parametrize("h, w", [(1, 1), (1, 2), (2, 1), (2, 2), (1, 3)])
 def test_small_envmaps_match_mitsuba(tmp_path, h, w):
-    from test_mitsuba_textures import real_mitsuba
+    from textures.image_common import real_mitsuba
 
     mi = real_mitsuba("Mitsuba 3 is not installed (pip install mitsuba==3.9.1): it checks the padding of small maps")
     import drjit as dr
@@ -155,7 +155,7 @@ def test_envmaps_from_8_and_16_bit_images_match_mitsuba(tmp_path):
     """An envmap reads any image a bitmap reads: 8- and 16-bit ones sRGB-decoded, 16-bit ones at float precision
     (Mitsuba's envmap converts to float32, where its bitmap texture keeps half floats)."""
     from PIL import Image
-    from test_mitsuba_textures import real_mitsuba, write_png16
+    from textures.image_common import real_mitsuba, write_png16
 
     mi = real_mitsuba("Mitsuba 3 is not installed (pip install mitsuba==3.9.1): it checks envmaps from 8/16-bit images")
     import drjit as dr
