@@ -32,6 +32,28 @@ def test_wrong_reference_fails(tmp_path, capsys):
     assert "FAIL" in out and "1 failed" in out
 
 
+def test_checkerboard_references_are_its_scenes_integrated():
+    """checkerboard_ttest.xml's references are its own scenes integrated in numpy (tests/nori/checkerboard_refs.py,
+    which reads the file), and where a case has a delta, delta in uv units instead of cells moves it far (> 10 %)
+    from its reference: an edit of the scenes that leaves a reference stale, or a case that no longer tells the
+    conventions apart, fails here."""
+    import importlib.util
+
+    import numpy as np
+
+    spec = importlib.util.spec_from_file_location("checkerboard_refs", NORI / "checkerboard_refs.py")
+    refs_mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(refs_mod)
+    refs, cases = refs_mod.read_cases()
+    assert len(refs) == len(cases) == 4
+    for ref, case in zip(refs, cases):
+        mean, se = refs_mod.pixel_mean(case, 400_000, seed=7)
+        assert abs(mean - ref) < 5 * se, (case, mean, se, ref)
+        if np.any(case["delta"]):
+            wrong = refs_mod.pixel_mean(dict(case, variant="uv_delta"), 100_000, seed=8)[0]
+            assert abs(wrong - ref) > 0.1 * ref, (case, wrong, ref)
+
+
 def test_broken_bsdf_fails_chi2_with_histograms(tmp_path, capsys, monkeypatch):
     """A microfacet whose pdf() is wrong (alpha given to pdf differs from the sampled one) must fail, and
     the failing case's histograms must be written beside the file."""
