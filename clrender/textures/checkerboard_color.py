@@ -13,15 +13,10 @@
 The colour at uv is value1 where floor(u / scale_u - delta_u) + floor(v / scale_v - delta_v) is even, value2
 where it is odd (kernels/bsdfs/texture.h): `delta` shifts the grid by that many *cells*, not uv units.
 
-How we know: the ETH base's pa1 test file for this texture (`scenes/pa1/test-checkerboard.xml`, public in
-course repositories) has four `direct`-integrator references: a point light (20,50,0), power 50000, over
-Nori's pa1 `plane.obj` (uv = (4(z+1), 4(x+1)) in object space) scaled by (100,1,100), seen through a 1×1,
-1° camera from (50,50,50) towards (2,8,0) with delta (0.3,0.3) and towards (2,7,0) with delta (0.5,0.5);
-and a radius-3 analytic sphere at (0,0,3) (uv = (φ/2π, θ/π)) from (10,10,10), delta 0. Integrating the
-direct illumination over each pixel footprint (4·10⁵ rays) gives 0.13223 / 0.12575 / 0.3619 / 0.1807
-against the references 0.132254 / 0.125814 / 0.362340 / 0.181265 with the rule above, while delta in uv
-units ((u - du)/su) gives 0.1214 / 0.1449 for the plane cases (8 % and 15 % off); the sphere cases (delta
-0) confirm the uv convention and the parity (value1 on even cells).
+How we know: integrating the direct illumination over the pixel footprints of the ETH course's pa1 checkerboard
+test (its scenes, public in course repositories) reproduces its four published references with this rule, and
+puts delta in uv units ((u - du)/su) 8 % and 15 % off on its two plane cases. The test of our own that pins it,
+with references we integrate ourselves: tests/nori/checkerboard_ttest.xml and tests/nori/checkerboard_refs.py.
 Texture row (kernels/textures/checkerboard_color.h): p.checkerboard_color = value1, value2,
 delta_scale = (delta_u, delta_v, scale_u, scale_v).
 """
