@@ -17,6 +17,7 @@ How we know: integrating the direct illumination over the pixel footprints of th
 test (its scenes, public in course repositories) reproduces its four published references with this rule, and
 puts delta in uv units ((u - du)/su) 8 % and 15 % off on its two plane cases. The test of our own that pins it,
 with references we integrate ourselves: tests/nori/checkerboard_ttest.xml and tests/nori/checkerboard_refs.py.
+
 Texture row (kernels/textures/checkerboard_color.h): p.checkerboard_color = value1, value2,
 delta_scale = (delta_u, delta_v, scale_u, scale_v).
 """
