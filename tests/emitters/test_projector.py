@@ -17,10 +17,6 @@ from .emitter_common import device, mitsuba, write_exr
 SLIDE = (np.arange(50, dtype=np.float32).reshape(5, 10, 1) * [0.02, 0.01, 0.03] + [0.1, 0.5, 0.2]).astype(np.float32)
 
 
-def projector(**props):
-    return mitsuba("projector", **props)
-
-
 TWO_SLIDES = """<scene version="3.0.0"><sensor type="perspective"/>
     <shape type="rectangle"/>
     <emitter type="projector">
@@ -46,7 +42,7 @@ def test_projector_inverse_importance_and_frustum(tmp_path, ctx, queue, kernels)
     pos = np.array([0.3, 2.0, -0.4])
     to_world = Transform.lookat(pos, [0.5, 0.0, -0.2], [0, 0, 1])
     E, scale = np.array([2.0, 1.0, 0.5]), 1.5
-    proj = projector(irradiance=("color", E), scale=("float", scale), fov=("float", 50.0),
+    proj = mitsuba("projector", irradiance=("color", E), scale=("float", scale), fov=("float", 50.0),
                      to_world=("transform", to_world))
     d = device(tmp_path, ctx, queue, kernels, [proj])
     m = to_world.matrix[:3, :3]
