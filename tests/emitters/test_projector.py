@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import clrender
+from clrender.emitters.emitter import LUMINANCE
 from clrender.errors import SceneError
 from clrender.scene.transform import Transform
 
@@ -69,6 +70,15 @@ def test_projector_inverse_importance_and_frustum(tmp_path, ctx, queue, kernels)
             np.testing.assert_allclose(got, np.pi * scale * E * np.ones((len(pts), 1)) if lit else 0.0,
                                        rtol=3e-4, atol=1e-6)
             np.testing.assert_allclose(s["w"], proj.weight(pts), rtol=3e-4, atol=1e-6)
+    # the power that selection in proportion to power uses is the flux: the intensity w dist^2 integrated over the
+    # sphere of directions (Monte Carlo, uniform directions; 5 standard errors)
+    dirs = rng.normal(size=(200_000, 3))
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    s = d.sample(0, (pos + dirs).astype(np.float32), np.zeros((len(dirs), 2), np.float32))
+    intensity = s["w"].astype(np.float64) @ LUMINANCE * 4 * np.pi     # dist = 1
+    flux, err = intensity.mean(), intensity.std() / np.sqrt(len(dirs))
+    assert abs(proj.selection_power(1.0, 0.0) - flux) < 5 * err, (proj.selection_power(1.0, 0.0), flux, err)
+    assert err < 0.02 * flux
 
 
 @pytest.mark.plugin("projector", "sampling")
