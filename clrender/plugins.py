@@ -10,6 +10,6 @@ from .textures import bitmap, checkerboard, checkerboard_color, mesh_attribute, 
 from .bsdfs import blendbsdf, bumpmap, conductor, dielectric, diffuse, mask, microfacet, mirror, normalmap  # noqa: F401
 from .bsdfs import null, plastic, principled, principledthin  # noqa: F401
 from .bsdfs import roughconductor, roughdielectric, roughplastic, thindielectric, twosided  # noqa: F401
-from .emitters import area, constant, distant, distantdisk, envmap, point, spot, sunsky  # noqa: F401
+from .emitters import area, constant, distant, distantdisk, envmap, point, projector, spot, sunsky  # noqa: F401
 from .integrators import (ao, aov, av, direct, direct_ems, direct_mats, direct_mis, material,  # noqa: F401
                           moment, normals, path, path_ems, path_mats, path_mis, simple, whitted)

@@ -79,15 +79,21 @@ def _principled_glass_eta(scene):
         b.eta = 1.33
 
 
+def _projector_square_image(scene):
+    for e in scene.emitters:
+        if type(e).__name__ == "ProjectorEmitter":
+            e.v_scale = e.u_scale          # the aspect ratio of the projected image's resolution ignored
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name, mutate", [
     ("cornell_meshes", _mirror), ("filter_lanczos_crop", _crop_off_by_one), ("thinlens", _pinhole),
     ("gaussian_sample_border", _border_ignored), ("filter_gaussian_fov_y", _fov_one_percent_wider),
     ("integrator_volpath_depth2", _path_rules), ("integrator_volpath_hide", _path_rules),
-    ("orthographic", _mirror), ("principled", _principled_glass_eta),
+    ("orthographic", _mirror), ("principled", _principled_glass_eta), ("projector", _projector_square_image),
 ], ids=["mirrored camera", "crop window 1 px off", "pinhole for thin lens", "sample_border ignored", "fov 1% wider",
         "volpath depth as path's", "volpath hide_emitters as path's", "mirrored orthographic sensor",
-        "principled glass eta 1.33 for 1.5"])
+        "principled glass eta 1.33 for 1.5", "projector's image taken as square"])
 def test_twin_test_fails_when_clrender_is_wrong(name, mutate):
     """The harness can fail: each twin, rendered with one thing it verifies done wrong, must not pass."""
     import clrender

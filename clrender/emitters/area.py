@@ -17,10 +17,9 @@ own surface (its area distribution is packed with it: clrender/shapes/shape.py).
 import numpy as np
 
 from ..device import dispatch
-from ..errors import SceneError
 from ..scene.registry import register
-from ..textures.texture import param, texture_child
-from .emitter import Emitter, luminance, nonnegative_color
+from ..textures.texture import param
+from .emitter import Emitter, color_or_texture, luminance, nonnegative_color
 
 
 @register("emitter", "area")
@@ -66,13 +65,4 @@ class MitsubaAreaEmitter(AreaEmitter):
     children = ("texture",)
 
     def __init__(self, props, children, spec):
-        self.texture = texture_child(children, "radiance", '<emitter type="area">')
-        if self.texture is not None:
-            if props.has("radiance"):
-                raise SceneError("radiance given both as a colour and as a texture", props.location("radiance"))
-            self.radiance = np.ones(3)   # unused: the texture gives the radiance
-            return
-        c = np.asarray(props.get_color("radiance", np.ones(3), emitter=True), np.float64)
-        if np.any(c < 0) or not np.all(np.isfinite(c)):
-            raise SceneError(f"radiance must be non-negative and finite, got {c.tolist()}", props.location("radiance"))
-        self.radiance = c
+        self.radiance, self.texture = color_or_texture(props, children, "radiance", '<emitter type="area">')

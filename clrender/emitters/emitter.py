@@ -12,6 +12,7 @@ import numpy as np
 
 from ..device import dispatch, layout
 from ..errors import SceneError
+from ..textures.texture import texture_child
 
 
 class Emitter:
@@ -61,6 +62,18 @@ def nonnegative_color(props, name, default=None, **kw):
     if np.any(c < 0) or not np.all(np.isfinite(c)):
         raise SceneError(f"{name} must be non-negative and finite, got {c.tolist()}", props.location(name))
     return c
+
+
+def color_or_texture(props, children, name: str, owner: str):
+    """A Mitsuba emitter's colour parameter that may instead be a nested texture of that name (area's `radiance`,
+    projector's `irradiance`): (colour, texture). With a texture the colour is 1 and unused; else the property, default
+    1 (Mitsuba's emitter spectrum convention), non-negative."""
+    texture = texture_child(children, name, owner)
+    if texture is None:
+        return nonnegative_color(props, name, np.ones(3), emitter=True), None
+    if props.has(name):
+        raise SceneError(f"{name} given both as a colour and as a texture", props.location(name))
+    return np.ones(3), texture
 
 
 LUMINANCE = np.array([0.212671, 0.715160, 0.072169])   # linear sRGB (Rec. 709) luminance weights

@@ -87,6 +87,10 @@ class Bitmap(Texture):
         self.wrap = choice(props, "wrap_mode", WRAPS, "repeat")
         self.to_uv = uv_transform(props)
 
+    def resolution(self) -> tuple[int, int]:
+        h, w = self.image.shape[:2]
+        return w, h
+
     def max_value(self) -> float:
         return float(self.image.max())
 

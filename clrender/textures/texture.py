@@ -47,6 +47,11 @@ class Texture(abc.ABC):
         """See float_view; by default the texture itself (a float reads its first channel)."""
         return self
 
+    def resolution(self) -> tuple[int, int]:
+        """(width, height) in texels: 1 x 1 but for an image, as Mitsuba's textures report it (a projector takes its
+        aspect ratio from it)."""
+        return 1, 1
+
     @abc.abstractmethod
     def max_value(self) -> float:
         """The largest value of any channel (BSDFs that need colours within [0, 1] check it)."""
