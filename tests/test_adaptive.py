@@ -285,3 +285,15 @@ def test_command_line_says_when_it_went_uniform(tmp_path, capsys):
     assert "even noise" not in capsys.readouterr().err
     assert main(["render", scene, "-o", out, "-q", "--always-adaptive"]) == 2
     assert "add --adaptive" in capsys.readouterr().err
+
+
+def test_the_few_pixels_test_is_the_whole_images(cornell, adaptive_film):
+    """pooled_error_at (the late rounds' test of their few pixels) gives pooled_error's very values, at the border
+    and inside."""
+    from clrender.adaptive import pooled_error_at
+
+    h, w = adaptive_film.count.shape
+    full = pooled_error(adaptive_film).reshape(-1)
+    pixels = np.array([0, w - 1, w, 5 * w + 7, h * w - 1, h * w - w, 17 * w + 16, 5 * w + 8])
+    np.testing.assert_array_equal(pooled_error_at(adaptive_film, pixels), full[pixels])
+    np.testing.assert_array_equal(pooled_error_at(adaptive_film, np.arange(h * w)), full)
