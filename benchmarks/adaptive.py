@@ -1,6 +1,7 @@
 """Adaptive sampling against uniform sampling and Mitsuba 3: the render time each needs to reach the same relMSE.
 
-    python benchmarks/adaptive.py [--res 128] [--spp 64] [--reference-spp 512] [--only NAME ...] [--json OUT]
+    python benchmarks/adaptive.py [--res 128] [--spp 64] [--reference-spp 512] [--repeat 3] [--only NAME ...]
+                                  [--json OUT]
 
 Scenes: the twins of benchmarks/vs_mitsuba.py (Cornell box with mirror and glass spheres, the diffuse Cornell box,
 the rough plates under four lights, the furnace; not the 1 M-triangle mesh, whose BVH build would dominate a small
@@ -13,10 +14,14 @@ aspect ratio). Per scene, in one run:
 - adaptive: renders with target errors 0.4, 0.2, 0.1 and 1.5, 1, 0.7 x sqrt(R) (so that a quiet scene's curve
   reaches R too; no promise of R: relMSE is a mean that fireflies dominate, while the target bounds each pixel's
   standard error), max spp 16 x --spp, their (render seconds, including the rounds' host-side tests, mean spp,
-  relMSE);
+  relMSE; whether it finished as a uniform render, clrender/adaptive.py's switch where the noise is even);
+- the potential gain of any per-pixel allocation over uniform sampling, mean(a) / mean(sqrt a)^2 with a the
+  reference's relative variance of one sample per pixel: a bound on the samples ratio adaptive allocation can reach
+  on the plain relMSE (Cauchy-Schwarz), measured where the estimate of a is best;
 - Mitsuba 3 (--variant: llvm_ad_rgb where vs_mitsuba.py finds the libLLVM >= 16 it needs, else scalar_rgb; an
   older libLLVM crashes the process): renders of 4, 8, ... --spp spp.
-All of it twice: with relMSE over all pixels, and without the 0.1 % of pixels with the largest errors (a firefly's
+Our renders are timed --repeat times, interleaved (every uniform and adaptive render once, then again), and each
+point takes the median (the shared machine's timings vary 2-3x; the images are the same each time). All of it twice: with relMSE over all pixels, and without the 0.1 % of pixels with the largest errors (a firefly's
 pixel dominates the plain mean; adaptive sampling spends samples exactly where fireflies live, so it meets them more
 often). Each curve's time (and mean spp) to R is read off it in log-log (between the two points around R; beyond its
 ends, error ~ 1 / time from the nearest point). Written to benchmarks/results/adaptive-<date>.json and printed as a
@@ -76,8 +81,17 @@ def spp_ladder(top: int) -> list[int]:
     return out
 
 
+def potential_gain(ref_film) -> float:
+    """mean(a) / mean(sqrt a)^2 over the pixels whose samples vary, a = relative variance of one sample (relMSE's
+    channel mean) from the reference's per-pixel variance."""
+    n = ref_film.count.astype(np.float64)[..., None]
+    a = (ref_film.variance() * n / (ref_film.image.astype(np.float64) ** 2 + 1e-2)).mean(axis=-1)
+    a = a[a > 0]
+    return float(a.mean() / np.sqrt(a).mean() ** 2) if a.size else 1.0
+
+
 def bench_scene(name, xml_clr: Path, xml_mi: Path | None, res: int, spp: int, ref_spp: int, say,
-                variant: str) -> dict:
+                variant: str, repeat: int = 3) -> dict:
     import clrender
     from clrender.renderer import Renderer
 
@@ -91,19 +105,33 @@ def bench_scene(name, xml_clr: Path, xml_mi: Path | None, res: int, spp: int, re
     say(f"{name}: reference, {ref_spp} spp")
     ref_film = r.render(spp=ref_spp, seed=12345)
     ref, ref_var = ref_film.image.astype(np.float64), ref_film.variance()
-    out = {"width": r.width, "height": r.height, "uniform": [], "adaptive": [], "adaptive_relmse": [], "mitsuba": []}
-    for s in spp_ladder(spp):
-        f = r.render(spp=s, seed=7)
-        out["uniform"].append({"spp": s, "seconds": f.stats.seconds, **corrected_relmse(f.image, ref, ref_var)})
-    target = out["uniform"][-1]["relmse"]
-    say(f"{name}: uniform at {spp} spp: relMSE {target:.4g}; adaptive")
+    out = {"width": r.width, "height": r.height, "potential_gain": potential_gain(ref_film),
+           "uniform": [], "adaptive": [], "adaptive_relmse": [], "mitsuba": []}
+    # the target relMSE (R) first: the adaptive target errors depend on it
+    target = corrected_relmse(r.render(spp=spp, seed=7).image, ref, ref_var)["relmse"]
+    say(f"{name}: uniform at {spp} spp: relMSE {target:.4g}; uniform and adaptive renders x {repeat}")
     # the fixed targets, and three around sqrt(R) (each pixel at about the uniform render's error)
     errors = sorted({*TARGET_ERRORS, *(round(float(np.sqrt(target)) * k, 4) for k in (1.5, 1.0, 0.7))}, reverse=True)
-    for key, allocation in (("adaptive", "error"), ("adaptive_relmse", "relmse")):
-        for e in errors:
-            f = r.render_adaptive(target_error=e, max_spp=16 * spp, seed=7, allocation=allocation)
-            out[key].append({"target_error": e, "spp_mean": float(f.count.mean()), "seconds": f.stats.seconds,
-                             "converged": f.metadata["converged"], **corrected_relmse(f.image, ref, ref_var)})
+    runs = [("uniform", s, lambda s=s: r.render(spp=s, seed=7)) for s in spp_ladder(spp)]
+    runs += [(key, e, lambda e=e, a=allocation: r.render_adaptive(target_error=e, max_spp=16 * spp, seed=7,
+                                                                   allocation=a))
+             for key, allocation in (("adaptive", "error"), ("adaptive_relmse", "relmse")) for e in errors]
+    points = [{"seconds_all": []} for _ in runs]
+    for rep in range(repeat):
+        for (key, x, run), point in zip(runs, points):
+            f = run()
+            point["seconds_all"].append(f.stats.seconds)
+            point["seconds"] = float(np.median(point["seconds_all"]))
+            if rep:
+                continue
+            point.update(corrected_relmse(f.image, ref, ref_var))
+            if key == "uniform":
+                point["spp"] = x
+            else:
+                point.update(target_error=x, spp_mean=float(f.count.mean()), converged=f.metadata["converged"],
+                             uniform_after=f.metadata.get("uniform_after"),
+                             predicted_gain=f.metadata.get("predicted_gain"))
+            out[key].append(point)
     if xml_mi is not None:
         say(f"{name}: Mitsuba")
         mi = vm.Mitsuba(xml_mi, variant)
@@ -141,11 +169,28 @@ def write_results(kind: str, path, results: dict, **settings) -> Path:
     return path
 
 
+def switched(r) -> str:
+    """How many adaptive renders of each allocation finished as uniform ones, e.g. "6/6 0/6"."""
+    return " ".join(f"{sum(p.get('uniform_after') is not None for p in r[k])}/{len(r[k])}"
+                    for k in ("adaptive", "adaptive_relmse"))
+
+
+def _commit() -> str | None:
+    import subprocess
+
+    try:
+        return subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
+                              text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return None
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--res", type=int, default=128)
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--reference-spp", type=int, default=512)
+    ap.add_argument("--repeat", type=int, default=3, help="timings of our renders: the median of this many")
     ap.add_argument("--only", nargs="*", help=f"some of: {', '.join(TWINS)}, veach_mis")
     ap.add_argument("--json", help="default: benchmarks/results/adaptive-<date>.json")
     ap.add_argument("--variant", help="Mitsuba's (default: llvm_ad_rgb with a libLLVM >= 16, else scalar_rgb)")
@@ -154,6 +199,7 @@ def main(argv=None):
     names = a.only or [*TWINS, "veach_mis"]
     variant = a.variant or ("llvm_ad_rgb" if os.environ.get("DRJIT_LIBLLVM_PATH") else "scalar_rgb")
     results = {}
+    load = os.getloadavg()
     with tempfile.TemporaryDirectory() as tmp:
         for name in names:
             d = Path(tmp) / name
@@ -163,11 +209,13 @@ def main(argv=None):
             else:
                 files = vm.write_twin(vm.TWINS[name](d, a.spp, a.res), d)
             results[name] = bench_scene(name, files["clrender"], files["mitsuba"], a.res, a.spp, a.reference_spp,
-                                        say, variant)
+                                        say, variant, a.repeat)
     path = write_results("adaptive", a.json, results, res=a.res, spp=a.spp, reference_spp=a.reference_spp,
-                         mitsuba_variant=variant)
+                         repeat=a.repeat, mitsuba_variant=variant, load_average_start=load,
+                         load_average_end=os.getloadavg(), commit=_commit())
     print(f"{'scene':16} {'size':>8} {'metric':>13} {'target':>9} {'uniform s':>10} {'adaptive s':>10} "
-          f"{'mitsuba s':>10} {'vs uniform':>10} {'vs mitsuba':>10} {'spp ratio':>9} {'relmse alloc: time, spp':>24}")
+          f"{'mitsuba s':>10} {'vs uniform':>10} {'vs mitsuba':>10} {'spp ratio':>9} {'relmse alloc: time, spp':>24} "
+          f"{'bound':>6} {'uniform finish':>14}")
     for name, r in results.items():
         for metric in ("relmse", "relmse_robust"):
             m = r[metric]
@@ -177,7 +225,7 @@ def main(argv=None):
             print(f"{name:16} {r['width']:>4}x{r['height']:<3} {metric:>13} {m['target']:9.4g} {t['uniform']:10.2f} "
                   f"{t['adaptive']:10.2f} {mi:>10} {m['speedup_over_uniform']:9.2f}x {smi:>10} "
                   f"{m['samples_ratio']:8.2f}x {m['relmse_allocation']['speedup_over_uniform']:11.2f}x "
-                  f"{m['relmse_allocation']['samples_ratio']:8.2f}x")
+                  f"{m['relmse_allocation']['samples_ratio']:8.2f}x {r['potential_gain']:5.2f}x {switched(r):>14}")
     print(f"wrote {path}", file=sys.stderr)
 
 

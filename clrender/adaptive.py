@@ -22,10 +22,21 @@ convergence mask assumes). Pooling matters for bias, not only for caution: a pix
 both low in variance and, for the skewed estimates of path tracing, low in value, so stopping on its own variance
 alone stops the low estimates early (measured in a furnace: pixels 4 standard errors low); pooled, a pixel's own
 samples weigh 1/9 in its decision. A pixel that has stopped stays stopped.
+
+Where the noise is even, adaptive allocation cannot win: its samples go where uniform sampling's would, and its
+rounds cost time (measured 10-30 % slower than uniform on the diffuse Cornell box and our Veach MIS scene). So after
+a first round of at least 16 samples the render measures the potential gain of any allocation over uniform
+sampling (predicted_allocation: mean(a) / mean(sqrt a)^2 of the pixels' relative variances per sample) and, below
+`uniform_below` (UNIFORM_BELOW), finishes as a uniform render: every pixel on to the spp the stopping rule is
+expected to spend on average, in rounds over ranges and without tests, so it costs what a uniform render costs. The
+decision depends only on the first round's samples, so the image stays deterministic; it is the uniform render's
+image at that spp (metadata ``uniform_after``, ``uniform_spp``, ``predicted_gain``). Such an image has about the
+relMSE the allocation would have reached, not every pixel within the target (``converged`` says how many are).
 """
 from __future__ import annotations
 
 import copy
+import sys
 import time
 from dataclasses import dataclass
 
@@ -42,6 +53,13 @@ CONFIDENCE = 0.95
 ROUND_GROWTH = 0.25
 
 
+#: after the first round, below this potential gain (mean(a) / mean(sqrt a)^2 over the noisy pixels: the samples
+#: ratio of the best allocation over uniform sampling) the render finishes as a uniform one (predicted_allocation)
+UNIFORM_BELOW = 1.3
+#: ... decided only after a first round of at least this many samples: fewer hide the spread (the test Cornell box,
+#: 1.39-1.44 from 16 samples, looks 1.19 from 4)
+SWITCH_MIN_SPP = 16
+
 #: how the samples are shared out: "error", every pixel to the target error; "relmse", the least relMSE of the image
 ALLOCATIONS = ("error", "relmse")
 
@@ -52,12 +70,15 @@ class AdaptiveOptions:
     min_spp: int
     max_spp: int
     allocation: str = "error"
+    #: below this potential gain, after the first round, finish as a uniform render (0: never)
+    uniform_below: float = UNIFORM_BELOW
 
     @classmethod
     def make(cls, target_error, min_spp=None, max_spp=None, default_max_spp: int = 64,
-             allocation: str = "error") -> "AdaptiveOptions":
+             allocation: str = "error", uniform_below: float = UNIFORM_BELOW) -> "AdaptiveOptions":
         """Checked options; `max_spp` defaults to `default_max_spp` (the scene's sample count), `min_spp` to 16
-        (at most max_spp). Raises ValueError naming the option that is wrong."""
+        (at most max_spp); `uniform_below` 0 keeps every render adaptive. Raises ValueError naming the option that
+        is wrong."""
         if allocation not in ALLOCATIONS:
             raise ValueError(f"allocation must be one of {', '.join(ALLOCATIONS)}, got {allocation!r}")
         try:
@@ -73,7 +94,9 @@ class AdaptiveOptions:
         if not 2 <= lo <= hi:
             raise ValueError(f"min spp must be at least 2 (a variance needs two samples) and at most max spp "
                              f"({hi}), got {lo}")
-        return cls(e, lo, hi, allocation)
+        if not (uniform_below >= 0 and np.isfinite(uniform_below)):
+            raise ValueError(f"uniform_below must be a finite number >= 0, got {uniform_below}")
+        return cls(e, lo, hi, allocation, float(uniform_below))
 
     def checkpoints(self) -> list[int]:
         """The sample counts at which every still-active pixel is tested."""
@@ -83,17 +106,23 @@ class AdaptiveOptions:
         return out
 
 
+def variance_bound(counts) -> np.ndarray:
+    """The factor from a sample variance of `counts` samples to its upper CONFIDENCE limit: (n - 1) / chi2_0.05(n - 1);
+    inf below two samples."""
+    from scipy.stats import chi2
+
+    # the quantile once per distinct count (chi2.ppf per pixel took 11 % of an adaptive render of a 128 x 128
+    # Cornell box, and 10 % of one of the rough plates in predicted_allocation)
+    counts, inverse = np.unique(np.asarray(counts), return_inverse=True)
+    dof = np.maximum(counts - 1, 1)
+    return np.where(counts >= 2, dof / chi2.ppf(1.0 - CONFIDENCE, dof), np.inf)[inverse].reshape(np.shape(inverse))
+
+
 def relative_error(film) -> np.ndarray:
     """(H, W) the pixel's error as the stopping rule sees it: the largest over channels of the standard error (from
     the variance's upper 95 % confidence limit) over max(|value|, 0.1) in quadrature, i.e.
     sqrt(var_up / (value^2 + 1e-2)). Pixels without two samples: inf."""
-    from scipy.stats import chi2
-
-    # the counts take a few values (the checkpoints): the quantile once per value (chi2.ppf per pixel took 11 % of
-    # an adaptive render of a 128 x 128 Cornell box)
-    counts, inverse = np.unique(film.count, return_inverse=True)
-    dof = np.maximum(counts - 1, 1)
-    factor = np.where(counts >= 2, dof / chi2.ppf(1.0 - CONFIDENCE, dof), np.inf)[inverse].reshape(film.count.shape)
+    factor = variance_bound(film.count).reshape(film.count.shape)
     img = film.image.astype(np.float64)
     with np.errstate(invalid="ignore"):
         err2 = film.variance() * factor[..., None] / (img * img + RELMSE_EPS)
@@ -104,11 +133,71 @@ def relative_error(film) -> np.ndarray:
 def pooled_error(film) -> np.ndarray:
     """(H, W) what the stopping rule tests: relative_error's square averaged over the pixel and its 8 neighbours (the
     image's edge repeats its border pixels), square-rooted."""
-    err2 = np.minimum(relative_error(film) ** 2, 1e12)   # inf (fewer than two samples) as a huge error
+    return np.sqrt(_pool(np.minimum(relative_error(film) ** 2, 1e12)))   # inf (fewer than two samples): huge
+
+
+def _pool(x: np.ndarray) -> np.ndarray:
+    """The mean of x over each pixel and its 8 neighbours (the image's edge repeats its border pixels)."""
     # nine shifted sums, not scipy's uniform_filter: its running sums lose small errors beside huge ones
-    p = np.pad(err2, 1, mode="edge")
-    h, w = err2.shape
-    return np.sqrt(sum(p[i:i + h, j:j + w] for i in range(3) for j in range(3)) / 9.0)
+    p = np.pad(x, 1, mode="edge")
+    h, w = x.shape
+    return sum(p[i:i + h, j:j + w] for i in range(3) for j in range(3)) / 9.0
+
+
+def predicted_allocation(film, opts: "AdaptiveOptions") -> tuple[float, int]:
+    """(gain, n): after the first round, the potential gain of adaptive allocation over uniform sampling, and the
+    spp a uniform render needs for the relMSE the allocation is expected to reach.
+
+    a_p, the relative variance of one sample of pixel p (relMSE's: channel mean of var / (value^2 + 1e-2)),
+    pooled over its 3 x 3 neighbourhood as the stopping rule pools; the allocation's expected samples n_p: where
+    a_p / n_p meets the rule's bound (E^2 for "error", E^2 n_p / min_spp for "relmse"), within min_spp..max_spp.
+    Uniform sampling with the same mean of samples N leaves a relMSE of mean(a) / N against the allocation's
+    mean(a / n), so mean(a) / mean(a / n) spp give uniform the same relMSE. The gain is that of the best
+    allocation, n_p ~ sqrt(a_p): mean(a) / mean(sqrt a)^2 (Cauchy-Schwarz), whatever the allocation asked for. Not
+    the expected allocation's own gain: a_p from min_spp samples misses the rare bright paths (caustics through
+    glass) that later rounds find, so that figure comes out near 1 where adaptive sampling measurably wins 2x,
+    whereas the spread of sqrt(a) already separates the scenes: 1.13-1.21 on the diffuse Cornell box and our Veach
+    MIS scene (where adaptive sampling lost 10-30 % of the time), 1.01 in the furnace, 1.46 with the glass spheres
+    and 4.2 on the rough plates (where it won 2.2-2.6x) at 16 spp (benchmarks/README.md).
+    Over the pixels whose samples vary: an exact pixel (background, a light seen directly) is cheap and needs no
+    samples either way, and counting it would credit adaptive sampling with savings that cost no time (in the
+    furnace, 1.7x fewer samples bought nothing)."""
+    n0 = film.count.astype(np.float64)
+    a_rgb = film.variance() * n0[..., None] / (film.image.astype(np.float64) ** 2 + RELMSE_EPS)
+    noisy = a_rgb.mean(axis=-1) > 0
+    if not noisy.any():
+        return 1.0, int(film.count.max())
+    a = _pool(a_rgb.mean(axis=-1))[noisy]
+    # the rule's samples: its test takes the largest channel and the variance's confidence bound, at about n
+    a_test = _pool(a_rgb.max(axis=-1))[noisy]
+    e2 = opts.target_error ** 2
+    n = np.full(a.shape, float(opts.min_spp))
+    for _ in range(2):   # the bound's factor at the samples the last step gave (1.15-2: two steps settle it)
+        b = a_test * variance_bound(np.ceil(n).astype(np.int64))
+        n = np.sqrt(b * opts.min_spp / e2) if opts.allocation == "relmse" else b / e2
+        n = np.clip(n, opts.min_spp, opts.max_spp)
+    per_sample = float(np.mean(a / n))
+    gain = float(a.mean() / np.sqrt(a).mean() ** 2)
+    return gain, int(np.clip(np.ceil(a.mean() / per_sample), opts.min_spp, opts.max_spp))
+
+
+def pooled_error_at(film, pixels: np.ndarray) -> np.ndarray:
+    """pooled_error at the flat pixel indices `pixels` only, the very same values: the rounds near the end test a
+    few hundred pixels, and the whole image's test cost each round more than its launch (15 % of an adaptive
+    render of the rough plates)."""
+    from .film import Film
+
+    h, w = film.count.shape
+    y, x = np.divmod(np.asarray(pixels, np.int64), w)
+    # the 3 x 3 neighbours in pooled_error's order, clamped at the border as its edge padding repeats it
+    nb = np.stack([np.clip(y + i - 1, 0, h - 1) * w + np.clip(x + j - 1, 0, w - 1)
+                   for i in range(3) for j in range(3)], axis=-1)
+    at, inverse = np.unique(nb, return_inverse=True)
+    flat = lambda a: a.reshape(h * w, *a.shape[2:])[at][None]  # noqa: E731  (a one-row film of those pixels)
+    sub = Film(len(at), 1, flat(film.sum_wl), flat(film.sum_w), flat(film.sum_wl2), flat(film.count),
+               flat(film.dropped))
+    err2 = np.minimum(relative_error(sub)[0] ** 2, 1e12)[inverse.reshape(nb.shape)]
+    return np.sqrt(sum(err2[:, k] for k in range(9)) / 9.0)   # summed in pooled_error's order: equal bits
 
 
 def converged(film, target_error: float, allocation: str = "error", min_spp: int = 16) -> np.ndarray:
@@ -158,6 +247,7 @@ def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: 
     notice = None if bar is None else "\nclrender: Ctrl-C: stopping after the launch in flight (Ctrl-C again aborts)\n"
     t_start = last_partial = time.perf_counter()
     rounds = 0
+    switch = {}                                # the switch to uniform sampling, once decided (metadata)
 
     def film_now(snapshot: bool = False):
         st = copy.copy(stats) if snapshot else stats
@@ -168,7 +258,7 @@ def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: 
         f.metadata.update(adaptive=True, target_error=opts.target_error, allocation=opts.allocation,
                           min_spp=opts.min_spp,
                           max_spp=opts.max_spp, spp_mean=round(float(done.mean()), 3), rounds=rounds,
-                          converged=round(float(conv.mean()), 6))
+                          converged=round(float(conv.mean()), 6), **switch)
         return f
 
     conv = np.zeros((r.height, r.width), bool)
@@ -176,12 +266,15 @@ def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: 
     with _SigintFlag(notice) as flag:
         try:
             prev = 0
-            for mark in marks:
+            while marks:
+                mark = marks.pop(0)
                 if on_round is not None:
                     on_round(rounds, mark, len(active))
                 if bar is not None:
                     bar.set_postfix_str(f"{len(active)} pixels to {mark} spp")
-                cl.enqueue_copy(r.queue, d_list, active)
+                listed = len(active) < n   # all pixels: the range kernel, no list to upload
+                if listed:
+                    cl.enqueue_copy(r.queue, d_list, active)
                 step = mark - prev
                 off = 0
                 while off < len(active):
@@ -192,12 +285,12 @@ def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: 
                         cnt = min(cnt, max(LOCAL_SIZE, fit // LOCAL_SIZE * LOCAL_SIZE))
                     cnt = min(cnt, len(active) - off)
                     t0 = time.perf_counter()
-                    r.launch(off, cnt, prev, step, seed & 0xFFFFFFFF, pixel_list=d_list)
+                    r.launch(off, cnt, prev, step, seed & 0xFFFFFFFF, pixel_list=d_list if listed else None)
                     wait_for(r.queue)
                     dt = time.perf_counter() - t0
                     seconds_per_sample = dt / (cnt * step)
                     stats.launches += 1
-                    done[active[off:off + cnt]] = mark
+                    done[active[off:off + cnt] if listed else slice(off, off + cnt)] = mark
                     off += cnt
                     if flag.requested:
                         stats.interrupted = stop = True
@@ -212,13 +305,40 @@ def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: 
                 if stop:
                     break
                 prev = mark
-                film = film_now()
-                conv = converged(film, opts.target_error, opts.allocation, opts.min_spp)
-                keep = ~conv.reshape(-1)[active]
-                active = active[keep]
-                if len(active) == 0:
-                    break
-                if partial is not None and mark < opts.max_spp and \
+                if not switch:                 # (once switched, a uniform render: no tests)
+                    film = film_now()
+                    if rounds == 1 and marks and mark >= SWITCH_MIN_SPP:
+                        gain, uniform_spp = predicted_allocation(film, opts)
+                        if gain < opts.uniform_below:
+                            # Even noise: adaptive allocation cannot win back the time its rounds cost. Every
+                            # pixel on to the spp that gives uniform sampling the allocation's expected relMSE, in
+                            # rounds over ranges (the same checkpoints: progress, Ctrl-C and time limits as before).
+                            switch = dict(uniform_after=mark, uniform_spp=max(mark, uniform_spp),
+                                          predicted_gain=round(gain, 4))
+                            marks = [m for m in marks if m < uniform_spp] + [uniform_spp] \
+                                if uniform_spp > mark else []
+                            if progress:
+                                print(f"clrender: adaptive: the noise is even (potential gain {gain:.2f} < "
+                                      f"{opts.uniform_below:g}): a uniform render of {switch['uniform_spp']} spp",
+                                      file=sys.stderr)
+                            if bar is not None:
+                                bar.total = rounds + len(marks)
+                                bar.refresh()
+                    if not switch and len(active) * 8 < n:   # few pixels left: test only those
+                        bound = opts.target_error
+                        if opts.allocation == "relmse":
+                            bound = bound * np.sqrt(mark / float(opts.min_spp))
+                        met = pooled_error_at(film, active) <= bound
+                        conv.reshape(-1)[active] = met   # (the others met the target in earlier rounds)
+                        active = active[~met]
+                        if len(active) == 0:
+                            break
+                    elif not switch:
+                        conv = converged(film, opts.target_error, opts.allocation, opts.min_spp)
+                        active = active[~conv.reshape(-1)[active]]
+                        if len(active) == 0:
+                            break
+                if partial is not None and marks and \
                         time.perf_counter() - last_partial >= partial[0]:
                     partial[1](film_now(snapshot=True))
                     last_partial = time.perf_counter()
@@ -249,6 +369,9 @@ def add_render_arguments(r) -> None:
                    help="error (default): every pixel to the target error; relmse: the least relMSE of the whole "
                         "image for its samples (a pixel's bound grows as sqrt(its samples / min-spp): noisy pixels "
                         "get more samples, not all they would need)")
+    g.add_argument("--always-adaptive", action="store_true",
+                   help="never finish as a uniform render (by default, when after the first round the noise is "
+                        f"even, potential gain below {UNIFORM_BELOW}, every pixel goes on to one sample count)")
 
 
 def options_from_args(args, scene) -> AdaptiveOptions | None:
@@ -258,9 +381,10 @@ def options_from_args(args, scene) -> AdaptiveOptions | None:
 
     wanted = args.adaptive or args.target_error is not None
     if not wanted:
-        if args.min_spp is not None or args.max_spp is not None or args.allocation != "error":
-            raise ClrenderError("--min-spp, --max-spp and --allocation are options of adaptive sampling: add "
-                                "--adaptive or --target-error E")
+        if args.min_spp is not None or args.max_spp is not None or args.allocation != "error" or \
+                args.always_adaptive:
+            raise ClrenderError("--min-spp, --max-spp, --allocation and --always-adaptive are options of adaptive "
+                                "sampling: add --adaptive or --target-error E")
         return None
     if scene is None:   # before the distributed renders
         if getattr(args, "cluster", None) or getattr(args, "sample_range", None):
@@ -272,6 +396,6 @@ def options_from_args(args, scene) -> AdaptiveOptions | None:
     try:
         return AdaptiveOptions.make(0.01 if args.target_error is None else args.target_error, args.min_spp,
                                     args.max_spp if args.max_spp is not None else args.spp, scene.sample_count,
-                                    args.allocation)
+                                    args.allocation, 0.0 if args.always_adaptive else UNIFORM_BELOW)
     except ValueError as e:
         raise ClrenderError(f"adaptive sampling: {e}") from None

@@ -185,12 +185,15 @@ class Renderer:
 
     def render_adaptive(self, target_error: float = 0.01, min_spp: int | None = None, max_spp: int | None = None,
                         seed: int = 0, time_limit: float | None = None, progress: bool = False,
-                        partial=None, on_round=None, allocation: str = "error") -> Film:
+                        partial=None, on_round=None, allocation: str = "error",
+                        uniform_below: float | None = None) -> Film:
         """Adaptive sampling: rounds over the pixels whose estimate's relative error is still above
-        `target_error` (clrender/adaptive.py); `max_spp` defaults to the scene's sample count."""
-        from .adaptive import AdaptiveOptions, render_adaptive
+        `target_error` (clrender/adaptive.py); `max_spp` defaults to the scene's sample count; where the noise is
+        even it finishes as a uniform render (`uniform_below`: the potential gain below which; 0: never)."""
+        from .adaptive import UNIFORM_BELOW, AdaptiveOptions, render_adaptive
 
-        opts = AdaptiveOptions.make(target_error, min_spp, max_spp, self.scene.sample_count, allocation)
+        opts = AdaptiveOptions.make(target_error, min_spp, max_spp, self.scene.sample_count, allocation,
+                                    UNIFORM_BELOW if uniform_below is None else uniform_below)
         return render_adaptive(self, opts, seed=seed, time_limit=time_limit, progress=progress, partial=partial,
                                on_round=on_round)
 

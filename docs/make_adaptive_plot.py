@@ -35,7 +35,9 @@ def main():
     scene = clrender.load_scene(ROOT / "scenes" / "mis" / "mis_path_mis.xml")
     w, h = scene.width, scene.height
     scene.camera.width, scene.camera.height = a.res * w // max(w, h), a.res * h // max(w, h)
-    film = Renderer(scene).render_adaptive(target_error=0.1, min_spp=16, max_spp=512, seed=1)
+    # uniform_below=0: the plot shows where the stopping rule sends samples; left to itself, a render of this scene
+    # finishes as a uniform one (its noise is too even to gain: clrender/adaptive.py)
+    film = Renderer(scene).render_adaptive(target_error=0.1, min_spp=16, max_spp=512, seed=1, uniform_below=0)
     c = film.count
     lo, hi = np.log2(16), np.log2(512)
     left = Image.fromarray(to_srgb8(film.image))

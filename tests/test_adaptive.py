@@ -8,6 +8,9 @@
   with a uniform render of the same total samples.
 - The stopping rule: a pixel stops when it meets the target, never before min_spp; a time limit keeps true counts.
 - The command line: the count layer in the EXR; refused combinations exit with status 2 and say why.
+- Even noise: after the first round a render whose potential gain is small (the closed furnace) finishes as the
+  uniform render of one spp, the very image of a uniform render; an uneven one (the Cornell box) stays adaptive;
+  with the switch off, the stopping rule keeps the furnace's mean exact.
 """
 from pathlib import Path
 
@@ -15,7 +18,7 @@ import numpy as np
 import pytest
 
 import clrender
-from clrender.adaptive import AdaptiveOptions, pooled_error
+from clrender.adaptive import UNIFORM_BELOW, AdaptiveOptions, pooled_error, predicted_allocation, variance_bound
 from clrender.renderer import Renderer
 from clrender.testing.stats import compare_films, compare_mean_to_value
 
@@ -214,3 +217,83 @@ def test_python_api(cornell):
         clrender.render(cornell, target_error=0.1, cluster="local:1")
     with pytest.raises(TypeError, match="target_error"):
         clrender.render(cornell, max_spp=8)
+
+
+@pytest.fixture(scope="module")
+def furnace(tmp_path_factory):
+    d = tmp_path_factory.mktemp("furnace")
+    (d / "f.xml").write_text(furnace_scene(d, "path_mis").replace('value="4"', 'value="16"'))
+    return clrender.load_scene(d / "f.xml")
+
+
+def test_the_switch_measures_the_spread_of_the_noise(cornell, furnace):
+    """predicted_allocation's gain after a first round of 16 spp: about 1 in the furnace (every pixel sees the
+    same walls), well above the threshold in the Cornell box (light, walls, shadowed corners); and the uniform spp
+    it asks for is the one the stopping rule would spend: in the furnace, where a_p (the relative variance of one
+    sample) is about the same everywhere, a / E^2 times the variance's confidence bound at that count."""
+    opts = AdaptiveOptions.make(0.02, None, 4096)
+    even, n = predicted_allocation(Renderer(furnace).render(spp=16, seed=3), opts)
+    assert even < 1.1 and even < UNIFORM_BELOW
+    f = Renderer(furnace).render(spp=256, seed=4)
+    a = (f.variance() * 256 / (f.image.astype(np.float64) ** 2 + 1e-2)).mean()
+    assert n == pytest.approx(a / 0.02 ** 2 * variance_bound(n), rel=0.15)
+    uneven, _ = predicted_allocation(Renderer(cornell).render(spp=16, seed=3), opts)
+    assert uneven > UNIFORM_BELOW + 0.05
+
+
+def test_even_noise_finishes_as_a_uniform_render(furnace):
+    """In the furnace the render switches after its first round and its image is the uniform render's at the spp
+    it went to, every pixel at that count; metadata say so. Cut into small launches, the same."""
+    r = Renderer(furnace)
+    film = r.render_adaptive(target_error=0.05, max_spp=4096, seed=11)
+    m = film.metadata
+    assert m["uniform_after"] == 16 and m["predicted_gain"] < UNIFORM_BELOW
+    n = m["uniform_spp"]
+    assert 16 < n < 4096 and np.all(film.count == n) and m["spp"] == n
+    assert m["rounds"] == len([c for c in AdaptiveOptions.make(0.05, None, 4096).checkpoints() if c < n]) + 1
+    uniform = r.render(spp=n, seed=11)
+    np.testing.assert_allclose(film.image, uniform.image, rtol=2e-5, atol=1e-7)
+    small = Renderer(furnace)
+    small.launch_pixels = 8
+    cut = small.render_adaptive(target_error=0.05, max_spp=4096, seed=11)
+    assert cut.stats.launches > film.stats.launches
+    np.testing.assert_array_equal(cut.image, film.image)
+
+
+def test_uneven_noise_stays_adaptive(cornell, adaptive_film):
+    assert "uniform_after" not in adaptive_film.metadata
+    assert len(np.unique(adaptive_film.count)) > 2
+
+
+def test_without_the_switch_the_stopping_rule_keeps_the_furnace_exact(furnace):
+    film = Renderer(furnace).render_adaptive(target_error=0.02, max_spp=4096, seed=11, uniform_below=0)
+    assert "uniform_after" not in film.metadata and film.count.min() < film.count.max()
+    res = compare_mean_to_value(film, 2.0)
+    assert res.passed, res.message
+
+
+def test_command_line_says_when_it_went_uniform(tmp_path, capsys):
+    from clrender.cli import main
+
+    (tmp_path / "f.xml").write_text(furnace_scene(tmp_path, "path_mis").replace('value="4"', 'value="16"'))
+    scene = str(tmp_path / "f.xml")
+    out = str(tmp_path / "f.exr")
+    assert main(["render", scene, "-o", out, "-q", "--target-error", "0.05", "--max-spp", "1024"]) == 0
+    assert "even noise: uniform from 16 spp" in capsys.readouterr().err
+    assert main(["render", scene, "-o", out, "-q", "--target-error", "0.05", "--max-spp", "1024",
+                 "--always-adaptive"]) == 0
+    assert "even noise" not in capsys.readouterr().err
+    assert main(["render", scene, "-o", out, "-q", "--always-adaptive"]) == 2
+    assert "add --adaptive" in capsys.readouterr().err
+
+
+def test_the_few_pixels_test_is_the_whole_images(cornell, adaptive_film):
+    """pooled_error_at (the late rounds' test of their few pixels) gives pooled_error's very values, at the border
+    and inside."""
+    from clrender.adaptive import pooled_error_at
+
+    h, w = adaptive_film.count.shape
+    full = pooled_error(adaptive_film).reshape(-1)
+    pixels = np.array([0, w - 1, w, 5 * w + 7, h * w - 1, h * w - w, 17 * w + 16, 5 * w + 8])
+    np.testing.assert_array_equal(pooled_error_at(adaptive_film, pixels), full[pixels])
+    np.testing.assert_array_equal(pooled_error_at(adaptive_film, np.arange(h * w)), full)

@@ -64,7 +64,7 @@ def cmd_render(args) -> int:
         if adaptive is not None:
             film = renderer.render_adaptive(adaptive.target_error, adaptive.min_spp, adaptive.max_spp, seed=args.seed,
                                             time_limit=args.time_limit, progress=progress, partial=partial,
-                                            allocation=adaptive.allocation)
+                                            allocation=adaptive.allocation, uniform_below=adaptive.uniform_below)
         else:
             film = renderer.render(spp=args.spp, seed=args.seed, time_limit=args.time_limit, progress=progress,
                                    partial=partial)
@@ -88,6 +88,9 @@ def cmd_render(args) -> int:
     if adaptive is not None:
         msg += (f"; adaptive: {film.metadata['spp_mean']:.1f} spp on average, {film.metadata['converged']:.1%} of "
                 f"the pixels within {adaptive.target_error:g}")
+        if "uniform_after" in film.metadata:
+            msg += (f" (even noise: uniform from {film.metadata['uniform_after']} spp, potential gain "
+                    f"{film.metadata['predicted_gain']:.2f})")
     if s.interrupted:
         msg += " [interrupted: partial image]"
     if s.dropped:
