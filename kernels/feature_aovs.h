@@ -8,6 +8,9 @@
    (sum w albedo, sum w depth), (sum w normal, sum w), (sum w position, 0). */
 #ifndef CLRENDER_FEATURE_AOVS_H
 #define CLRENDER_FEATURE_AOVS_H
+/* The features do not depend on the integrator, so the BSDF queries come from here and not from whichever
+   integrator this program was built with: ao, av, normals or simple never include lighting.h themselves. */
+#include "integrators/lighting.h"
 
 #define FEATURE_MAX_DELTA_BOUNCES 16
 

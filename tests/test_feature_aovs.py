@@ -7,6 +7,8 @@ position of the first hit, in both executors, and `--aov` on the command line.
 - Through a perfect mirror: the albedo and normal are those of the diffuse ceiling the mirror shows, the depth and
   position those of the mirror.
 - Without --aov the program is the one it always was (no CLR_FEATURE_AOVS define).
+- Every integrator's kernel writes the same features (they describe the camera's first hits, not the integrator's
+  light transport): the diffuse plane's albedo, normal and position under each.
 """
 import numpy as np
 import pytest
@@ -15,7 +17,9 @@ import clrender
 from clrender.film import read_exr
 from clrender.renderer import Renderer
 
-from analytic_scenes import RHO, X0, camera, plane_mesh
+from clrender.scene.registry import _REGISTRY, instantiate
+
+from analytic_scenes import RHO, X0, camera, plane_mesh, point_light_scene
 
 CENTRE, RADIUS = np.array([0.3, -0.2, 0.1]), 0.7
 
@@ -63,6 +67,42 @@ def test_through_a_mirror(tmp_path):
     np.testing.assert_allclose(film.aov("albedo"), np.broadcast_to(RHO, (2, 2, 3)), rtol=1e-5)
     np.testing.assert_allclose(film.aov("normal"), np.broadcast_to([0, 0, -1], (2, 2, 3)), atol=1e-6)
     np.testing.assert_allclose(film.aov("position"), np.broadcast_to(X0, (2, 2, 3)), atol=2e-3)   # the mirror's
+
+
+#: the properties an integrator requires (simple's come with analytic_scenes.point_light_scene)
+REQUIRED = {"av": {"length": ("float", 1.0)}, "aov": {"aovs": ("string", "dd.y:depth")}}
+#: integrators whose kernels include kernels/integrators/lighting.h themselves, as path_mis does (the default run's
+#: tests above): feature_aovs.h compiled with them before it included lighting.h too, so they only guard against a
+#: change to that header and run with the long suites
+LIGHTING_KERNELS = {"path_mis", "aov", "direct", "direct_ems", "direct_mats", "direct_mis", "material", "path_ems", "path_mats",
+                    "whitted", "direct_mitsuba", "path_mitsuba"}
+
+
+def _kernels():
+    """(format, type) of one integrator per kernel of kernels/integrators/ (moment renders the one it holds)."""
+    seen = {}
+    for (fmt, tag, name), cls in sorted(_REGISTRY.items()):
+        kernel = getattr(cls, "kernel", None)
+        if tag == "integrator" and kernel and kernel not in seen:
+            seen[kernel] = (fmt, name)
+    for kernel, (fmt, name) in sorted(seen.items()):
+        marks = pytest.mark.slow if kernel in LIGHTING_KERNELS else ()
+        yield pytest.param(fmt, name, id=kernel, marks=marks)
+
+
+@pytest.mark.parametrize("fmt,name", list(_kernels()))
+def test_every_integrator_writes_them(tmp_path, fmt, name):
+    """ao, av, normals and simple include no lighting.h of their own, and the features did not compile with them."""
+    xml = tmp_path / "s.xml"
+    xml.write_text(point_light_scene(tmp_path, "simple" if name == "simple" else "path_mis"))
+    scene = clrender.load_scene(xml)
+    if name != "simple":
+        scene.integrator = instantiate("integrator", name, REQUIRED.get(name, {}), fmt=fmt)
+    film = Renderer(scene, feature_aovs=True).render(spp=4, seed=5)
+    np.testing.assert_allclose(film.aov("albedo"), np.broadcast_to(RHO, (2, 2, 3)), rtol=1e-5)
+    np.testing.assert_allclose(film.aov("normal"), np.broadcast_to([0, 0, 1], (2, 2, 3)), atol=1e-6)
+    np.testing.assert_allclose(film.aov("position"), np.broadcast_to(X0, (2, 2, 3)), atol=2e-3)
+    assert np.all(film.aov("depth") > 0)
 
 
 def test_without_features_the_program_is_unchanged(tmp_path):

@@ -210,7 +210,43 @@ def test_renders_with_an_unwritable_home_and_names_an_unwritable_pocl_cache(tmp_
     env["POCL_CACHE_DIR"] = "/proc/clrender-no-cache"
     proc = subprocess.run(run + ["-o", str(tmp_path / "b.exr")], env=env, capture_output=True, text=True,
                           timeout=600)
-    assert proc.returncode == 2 and "POCL_CACHE_DIR" in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+    assert "POCL_CACHE_DIR" in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+    from clrender.device import context, intel_cpu
+
+    context._cl()
+    if not intel_cpu.state["installed"]:
+        assert proc.returncode == 2, proc.stderr
+        return
+    # With the intel-cpu extra, its runtime renders instead, with a warning that says why PoCL did not load; and
+    # on that runtime, which pyopencl caches binaries for (PoCL caches its own), with the home unwritable
+    assert proc.returncode == 0 and "PoCL did not load; rendering on Intel" in proc.stderr, proc.stderr
+    del env["POCL_CACHE_DIR"]
+    proc = subprocess.run(run + ["-o", str(tmp_path / "c.exr"), "--device", "intel"], env=env, capture_output=True,
+                          text=True, timeout=600)
+    assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr
+
+
+def test_pyopencl_caches_off_with_a_warning_where_nothing_can_be_written(monkeypatch, caplog, tmp_path):
+    """Where neither $XDG_CACHE_HOME nor the temporary folder can be written, pyopencl's fallback was a traceback
+    (Intel's CPU runtime, whose binaries pyopencl caches): its caches are turned off instead, with a warning; where
+    the temporary folder can be written they go there, silently."""
+    from clrender.device import context
+
+    caches = context._pyopencl_caches.__wrapped__   # the function, not its once-per-process cache
+    monkeypatch.delenv("PYOPENCL_NO_CACHE", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", "/proc/clrender-no-xdg")
+    monkeypatch.setattr(context, "_temp_cache_root", lambda: "/proc/clrender-no-tmp")
+    with caplog.at_level("WARNING", logger="clrender"):
+        caches()
+    assert os.environ.get("PYOPENCL_NO_CACHE") == "1"
+    assert "/proc/clrender-no-xdg" in caplog.text and "pyopencl's caches are off" in caplog.text
+    monkeypatch.delenv("PYOPENCL_NO_CACHE")
+    caplog.clear()
+    tmp = str(tmp_path)
+    monkeypatch.setattr(context, "_temp_cache_root", lambda: tmp)
+    with caplog.at_level("WARNING", logger="clrender"):
+        caches()
+    assert os.environ["XDG_CACHE_HOME"] == tmp and "PYOPENCL_NO_CACHE" not in os.environ and not caplog.text
 
 
 def test_a_vanishing_sun_packs_without_numpy_warnings(tmp_path):

@@ -12,6 +12,9 @@ marker). A plugin needs, in its own file:
 The markers are read from the source with `ast` (no test file is imported or run here). What is not yet there is
 listed in GAPS with its reason, and those cases are strict xfails: a gap that gets filled fails as XPASS until its
 line is removed, so the list only shrinks.
+
+Each aspect must also have a test in the default run (`pytest`, which leaves out tests marked slow), so that
+marking a long suite slow never leaves a plugin untested by default; SLOW_ONLY lists the exceptions with reasons.
 """
 import ast
 from pathlib import Path
@@ -32,6 +35,13 @@ NEEDS = {"bsdfs": ("sampling", "render"), "emitters": ("sampling", "render"), "s
 #: (folder, plugin, aspect) -> why it is missing today
 GAPS = {
     ("shapes", "instance", "sampling"): "an instance holds no emitter (refused, as in Mitsuba): nothing of it is sampled",
+}
+
+_SLOW_BUILD = "its program alone takes 15-25 s to build on 2 cores; its sampling test is in the default run"
+#: (folder, plugin, aspect) -> why the default run has no test of it (the slow suites have)
+SLOW_ONLY = {
+    ("bsdfs", "principled", "render"): _SLOW_BUILD,
+    ("bsdfs", "principledthin", "render"): _SLOW_BUILD,
 }
 
 
@@ -55,26 +65,56 @@ def _marker_args(node) -> tuple | None:
     return None
 
 
-def declared(path: Path) -> set[tuple]:
+def _is_slow(node) -> bool:
+    """`pytest.mark.slow`, alone or in a list or tuple of marks."""
+    if isinstance(node, (ast.List, ast.Tuple)):
+        return any(_is_slow(n) for n in node.elts)
+    return isinstance(node, ast.Attribute) and node.attr == "slow" and isinstance(node.value, ast.Attribute) \
+        and node.value.attr == "mark"
+
+
+def _all_params_slow(deco) -> bool:
+    """A `parametrize` whose values are a literal list of `pytest.param(..., marks=<slow>)`, every one slow (values
+    given by a name, such as a module's CASE_PARAMS, count as in the default run: those lists keep default cases)."""
+    if not (isinstance(deco, ast.Call) and isinstance(deco.func, ast.Attribute) and deco.func.attr == "parametrize"
+            and len(deco.args) >= 2 and isinstance(deco.args[1], (ast.List, ast.Tuple))):
+        return False
+    return all(isinstance(v, ast.Call) and isinstance(v.func, ast.Attribute) and v.func.attr == "param"
+               and any(k.arg == "marks" and _is_slow(k.value) for k in v.keywords) for v in deco.args[1].elts)
+
+
+def _slow(decorators) -> bool:
+    return any(_is_slow(d) or _all_params_slow(d) for d in decorators)
+
+
+def declared(path: Path, default_run: bool = False) -> set[tuple]:
     """Every (plugin, aspect) the `plugin` markers of a test file's tests declare: on a test function (also in a
-    test class) or in the module's `pytestmark`."""
+    test class) or in the module's `pytestmark`. With ``default_run``, only those of tests the default `pytest`
+    runs: not marked slow on the function, its class or the module, nor only through slow parameters."""
     tree = ast.parse(path.read_text(), str(path))
     out = set()
-
-    def tests(body):
-        for node in body:
-            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name.startswith("test"):
-                yield node
-            elif isinstance(node, ast.ClassDef) and node.name.startswith("Test"):
-                yield node
-                yield from tests(node.body)
-
-    for node in tests(tree.body):
-        out |= {a for d in node.decorator_list if (a := _marker_args(d))}
+    module_slow = False
+    module_marks = set()
     for node in tree.body:
         if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "pytestmark" for t in node.targets):
-            out |= {a for n in ast.walk(node.value) if (a := _marker_args(n))}
-    return out
+            module_marks |= {a for n in ast.walk(node.value) if (a := _marker_args(n))}
+            module_slow = module_slow or _is_slow(node.value)
+    if default_run and module_slow:
+        return set()
+
+    def tests(body, slow=False):
+        for node in body:
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name.startswith("test"):
+                yield node, slow or _slow(node.decorator_list)
+            elif isinstance(node, ast.ClassDef) and node.name.startswith("Test"):
+                cls_slow = slow or _slow(node.decorator_list)
+                yield node, cls_slow
+                yield from tests(node.body, cls_slow)
+
+    for node, slow in tests(tree.body):
+        if not (default_run and slow):
+            out |= {a for d in node.decorator_list if (a := _marker_args(d))}
+    return out | module_marks
 
 
 def _cases():
@@ -94,12 +134,20 @@ def test_every_plugin_has_its_tests(folder, name, aspect):
     assert (name, aspect) in declared(path), \
         f"{folder[:-1]} plugin {name!r}: no {aspect} test in tests/{folder}/test_{name}.py " \
         f"(a test marked @pytest.mark.plugin({name!r}, {aspect!r}))"
+    if (folder, name, aspect) not in SLOW_ONLY:
+        assert (name, aspect) in declared(path, default_run=True), \
+            f"{folder[:-1]} plugin {name!r}: its {aspect} tests in tests/{folder}/test_{name}.py are all marked " \
+            f"slow; the default run must keep one (or list it in SLOW_ONLY with the reason)"
 
 
 def test_gaps_name_registered_plugins():
-    """A GAPS line for a plugin or aspect that does not exist would hide nothing and mislead."""
-    for folder, name, aspect in GAPS:
+    """A GAPS or SLOW_ONLY line for a plugin or aspect that does not exist would hide nothing and mislead; a
+    SLOW_ONLY line whose plugin has a default-run test again is stale."""
+    for folder, name, aspect in {**GAPS, **SLOW_ONLY}:
         assert name in plugins(folder) and aspect in NEEDS[folder], (folder, name, aspect)
+    for folder, name, aspect in SLOW_ONLY:
+        assert (name, aspect) not in declared(TESTS / folder / f"test_{name}.py", default_run=True), \
+            f"{folder}/{name}/{aspect} has a default-run test now: remove its SLOW_ONLY line"
 
 
 def test_markers_name_registered_plugins_and_known_aspects():
@@ -123,6 +171,26 @@ def test_the_check_finds_what_is_missing(tmp_path):
         "class TestC:\n    @pytest.mark.plugin('c', 'eval')\n    def test_two(self):\n        pass\n"
         "@pytest.mark.plugin('d', 'sampling')\ndef helper():\n    '''pytest.mark.plugin(\"e\", \"render\")'''\n")
     assert declared(tmp_path / "test_x.py") == {("a", "render"), ("b", "sampling"), ("c", "eval")}
+
+
+def test_the_check_sees_slow_marks(tmp_path):
+    """A test marked slow (itself, its class, or every one of its literal parameters) is not in the default run;
+    one with some default parameters, or with parameters given by a name, is."""
+    (tmp_path / "test_x.py").write_text(
+        "import pytest\n"
+        "@pytest.mark.plugin('a', 'render')\n@pytest.mark.slow\ndef test_a():\n    pass\n"
+        "@pytest.mark.slow\nclass TestB:\n    @pytest.mark.plugin('b', 'render')\n    def test_b(self):\n"
+        "        pass\n"
+        "@pytest.mark.plugin('c', 'render')\n@pytest.mark.parametrize('x', [pytest.param(1, marks=pytest.mark.slow), "
+        "pytest.param(2, marks=[pytest.mark.slow])])\ndef test_c(x):\n    pass\n"
+        "@pytest.mark.plugin('d', 'render')\n@pytest.mark.parametrize('x', [pytest.param(1, marks=pytest.mark.slow), "
+        "2])\ndef test_d(x):\n    pass\n"
+        "@pytest.mark.plugin('e', 'sampling')\n@pytest.mark.parametrize('x', CASES)\ndef test_e(x):\n    pass\n")
+    assert declared(tmp_path / "test_x.py", default_run=True) == {("d", "render"), ("e", "sampling")}
+    assert {m[0] for m in declared(tmp_path / "test_x.py")} == set("abcde")
+    (tmp_path / "test_y.py").write_text("import pytest\npytestmark = [pytest.mark.slow, pytest.mark.plugin('a', "
+                                        "'render')]\n@pytest.mark.plugin('b', 'render')\ndef test_b():\n    pass\n")
+    assert declared(tmp_path / "test_y.py", default_run=True) == set()
 
 
 def test_sidak_families_count_their_files_cases():

@@ -51,39 +51,70 @@ def _host_cpu_override() -> str | None:
     return None
 
 
-def _default_pocl_cache() -> str:
-    """~/.cache/clrender/pocl, or a folder in the temporary directory where the home is not writable (a container
-    run as another user): PoCL without a writable cache does not load at all, and pyopencl, which keeps its own
-    caches under $XDG_CACHE_HOME (default ~/.cache), fails on its first kernel launch; it is pointed there too."""
-    home = os.path.join(os.path.expanduser("~"), ".cache", "clrender", "pocl")
-    try:
-        os.makedirs(home, exist_ok=True)
-        if os.access(home, os.W_OK | os.X_OK):
-            return home
-    except OSError:
-        pass
+def _cannot_write(folder: str) -> str | None:
+    """None if the folder exists or can be made and a file can be written in it (what PoCL and pyopencl will do),
+    else why not."""
     import tempfile
 
-    root = os.path.join(tempfile.gettempdir(), f"clrender-cache-{os.getuid()}")
-    os.environ.setdefault("XDG_CACHE_HOME", root)
-    return os.path.join(root, "clrender", "pocl")
+    try:
+        os.makedirs(folder, exist_ok=True)
+        fd, probe = tempfile.mkstemp(dir=folder)
+        os.close(fd)
+        os.unlink(probe)
+        return None
+    except OSError as e:
+        return e.strerror or str(e)
+
+
+def _writable(*folders: str) -> bool:
+    return not any(_cannot_write(f) for f in folders)
+
+
+def _temp_cache_root() -> str:
+    """Where the caches go when the home's cannot be written (a container run as another user)."""
+    import tempfile
+
+    return os.path.join(tempfile.gettempdir(), f"clrender-cache-{os.getuid()}")
+
+
+def _default_pocl_cache() -> str:
+    """~/.cache/clrender/pocl, or a folder in the temporary directory where the home is not writable: PoCL
+    without a writable cache does not load at all."""
+    home = os.path.join(os.path.expanduser("~"), ".cache", "clrender", "pocl")
+    return home if _writable(home) else os.path.join(_temp_cache_root(), "clrender", "pocl")
+
+
+@functools.lru_cache(maxsize=None)   # once per process: pyopencl reads the environment when imported
+def _pyopencl_caches() -> None:
+    """Give pyopencl caches it can write, or none. It keeps built binaries (for drivers without a cache of their
+    own: Intel's CPU runtime, not PoCL) and, through pytools' PersistentDict, the kernel-argument setters of the
+    first launch under $XDG_CACHE_HOME (default ~/.cache). Where that cannot be written its fallback is itself a
+    traceback (pyopencl 2026.1 reads os.environ["PYOPENCL_CACHE_FAILURE_FATAL"], a KeyError unless set) and the
+    invoker cache fails on the first launch: so point $XDG_CACHE_HOME at the temporary folder, and where that is
+    not writable either turn pyopencl's caches off (PYOPENCL_NO_CACHE, read when pyopencl is imported) with a
+    warning. Every device then renders; each build just compiles again."""
+    if os.environ.get("PYOPENCL_NO_CACHE"):
+        return
+    xdg = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    if _writable(os.path.join(xdg, "pyopencl"), os.path.join(xdg, "pytools")):
+        return
+    root = _temp_cache_root()
+    if _writable(os.path.join(root, "pyopencl"), os.path.join(root, "pytools")):
+        os.environ["XDG_CACHE_HOME"] = root
+        return
+    import logging
+
+    os.environ["PYOPENCL_NO_CACHE"] = "1"
+    logging.getLogger("clrender").warning(
+        "neither %s nor %s can be written: pyopencl's caches are off (every program compiles again); set "
+        "XDG_CACHE_HOME to a writable folder to keep them", xdg, root)
 
 
 def _pocl_cache_problem() -> str | None:
     """Why PoCL may have failed to load: its cache folder cannot be written."""
     d = os.environ.get("POCL_CACHE_DIR")
-    if not d:
-        return None
-    import tempfile
-
-    try:  # what PoCL does: create the folder and write in it
-        os.makedirs(d, exist_ok=True)
-        fd, probe = tempfile.mkstemp(dir=d)
-        os.close(fd)
-        os.unlink(probe)
-        return None
-    except OSError as e:
-        return f"PoCL needs a writable POCL_CACHE_DIR, and '{d}' is not ({e.strerror or e})"
+    why = _cannot_write(d) if d else None
+    return f"PoCL needs a writable POCL_CACHE_DIR, and '{d}' is not ({why})" if why else None
 
 
 def _cl():
@@ -91,6 +122,7 @@ def _cl():
     # PoCL reads its environment when it initialises, so this must happen before the first platform query.
     if "POCL_CACHE_DIR" not in os.environ:
         os.environ["POCL_CACHE_DIR"] = _default_pocl_cache()
+    _pyopencl_caches()
     if "POCL_LLVM_CPU_NAME" not in os.environ:
         cpu = _host_cpu_override()
         if cpu:
@@ -194,6 +226,11 @@ def choose_device(spec: str | int | None = None):
         for p, d in pocl + intel + others:
             why = build_check(p, d)
             if why is None:
+                if not pocl and (hint := _pocl_cache_problem()):   # the user's POCL_CACHE_DIR kept PoCL away
+                    import logging
+
+                    logging.getLogger("clrender").warning("%s: PoCL did not load; rendering on %s instead", hint,
+                                                          describe(p, d))
                 return p, d
             problems.append(f"{describe(p, d)}: {why}")
         if any("unknown target cpu" in w.lower() for w in problems):

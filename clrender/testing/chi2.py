@@ -119,28 +119,36 @@ def _partition(edges: np.ndarray, sub: int, extra: np.ndarray) -> np.ndarray:
     return nodes
 
 
-def refined_direction_grid(res: int, sub: int = 8, peaks=(), n_fine: int = 400):
+def refined_direction_grid(res: int, sub: int = 8, peaks=(), n_fine: int = 400, max_points: int | None = None):
     """Integration points for the (res, 2 res) direction cells.
 
     `peaks`: (direction, angular half-width) pairs; around each, n_fine extra nodes in theta (uniform in
     angle, so fine near the poles too) and in phi (over width / sin(theta), at most the whole circle).
+    `max_points`: where the tensor partition would hold more points (many wide peaks: it grows with the square
+    of their number), n_fine shrinks until it does not.
     Returns (dirs (N,3), weights = solid angle of each point's sub-rectangle (N,), cell index (N,))."""
     z_edges = np.linspace(-1.0, 1.0, res + 1)
     p_edges = np.linspace(0.0, 2 * np.pi, 2 * res + 1)
-    z_extra, p_extra = [np.empty(0)], [np.empty(0)]
-    for d, width in peaks:
-        d = np.asarray(d, np.float64)
-        d = d / np.linalg.norm(d)
-        th = np.arccos(np.clip(d[2], -1, 1))
-        ths = np.linspace(max(th - width, 0.0), min(th + width, np.pi), n_fine)
-        z_extra.append(np.cos(ths))
-        s_lo = np.sin(max(th - width, 0.0))
-        s_hi = np.sin(min(th + width, np.pi))
-        span = min(width / max(min(s_lo, s_hi), 1e-9), np.pi)
-        ph = np.arctan2(d[1], d[0])
-        p_extra.append(np.mod(ph + np.linspace(-span, span, n_fine), 2 * np.pi))
-    zn = _partition(z_edges, sub, np.concatenate(z_extra))
-    pn = _partition(p_edges, sub, np.concatenate(p_extra))
+
+    def nodes(n_fine):
+        z_extra, p_extra = [np.empty(0)], [np.empty(0)]
+        for d, width in peaks:
+            d = np.asarray(d, np.float64)
+            d = d / np.linalg.norm(d)
+            th = np.arccos(np.clip(d[2], -1, 1))
+            ths = np.linspace(max(th - width, 0.0), min(th + width, np.pi), n_fine)
+            z_extra.append(np.cos(ths))
+            s_lo = np.sin(max(th - width, 0.0))
+            s_hi = np.sin(min(th + width, np.pi))
+            span = min(width / max(min(s_lo, s_hi), 1e-9), np.pi)
+            ph = np.arctan2(d[1], d[0])
+            p_extra.append(np.mod(ph + np.linspace(-span, span, n_fine), 2 * np.pi))
+        return _partition(z_edges, sub, np.concatenate(z_extra)), _partition(p_edges, sub, np.concatenate(p_extra))
+
+    zn, pn = nodes(n_fine)
+    while max_points is not None and len(zn) * len(pn) > max_points and n_fine > 2:
+        n_fine = max(2, int(n_fine * 0.9 * np.sqrt(max_points / (len(zn) * len(pn)))))
+        zn, pn = nodes(n_fine)
     zm, dz = 0.5 * (zn[1:] + zn[:-1]), np.diff(zn)
     pm, dp = 0.5 * (pn[1:] + pn[:-1]), np.diff(pn)
     zi = np.clip(((zm + 1.0) * 0.5 * res).astype(np.int64), 0, res - 1)

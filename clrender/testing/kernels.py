@@ -1,8 +1,8 @@
 """Running BSDFs and warps on the device, in bulk, for statistical tests.
 
 Every helper builds its program once per context (``program.build_program`` caches), launches with one
-fixed local size (64) and a global size padded to a multiple of it, and splits large batches into launches
-of at most ``CHUNK`` work-items so each stays short. Random numbers come from the counter-based Sampler of
+fixed local size (64) and a global size padded to a multiple of it and to at least MIN_GLOBAL, and splits large
+batches into launches of at most ``CHUNK`` work-items so each stays short. Random numbers come from the counter-based Sampler of
 kernels/rng.h keyed by (seed, global sample index, 0), so a batch is reproducible however it is split.
 
 The BSDF helpers take any Bsdf row from a plugin's ``.pack()`` (or an array of rows plus a per-sample
@@ -48,8 +48,16 @@ def _kernel(ctx, name, source=BSDF_SRC, defines=None):
     return k
 
 
+#: the smallest global size of a launch. PoCL compiles a kernel again, as a "smallgrid" variant, for a launch
+#: narrower than 65535 work-items (seen in its cache: <local>-goffs0-smallgrid beside <local>-goffs0); for the
+#: test programs, which hold every plugin, that second compile of bsdf_sample_batch took as long as the first
+#: (minutes on 2 cores) for a few thousand samples. Every launch at least this wide keeps one compiled variant;
+#: the extra work-items return at once (`if (i >= n) return`).
+MIN_GLOBAL = 1 << 16
+
+
 def padded(n: int, local: int = LOCAL) -> int:
-    return max(local, (n + local - 1) // local * local)
+    return max(MIN_GLOBAL, (n + local - 1) // local * local)
 
 
 class BsdfRows(np.ndarray):

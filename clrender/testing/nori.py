@@ -29,6 +29,7 @@ from ..device.kernelargs import KernelArgs
 from ..errors import SceneError, SourceLocation
 from ..scene.registry import register
 from .chi2 import bin_directions, chi2_test, expected_from_grid, refined_direction_grid, sidak
+from .kernels import LOCAL, padded
 
 LUM = np.array([0.212671, 0.715160, 0.072169])
 
@@ -279,7 +280,7 @@ class Runner:
             m = min(chunk, n - s)
             d_out = cl.Buffer(self.ctx, mf.WRITE_ONLY, m * 16)
             args.set(n=np.uint32(m), first=np.uint32(s), out=d_out)
-            cl.enqueue_nd_range_kernel(self.queue, k, (-(-m // 64) * 64,), (64,))
+            cl.enqueue_nd_range_kernel(self.queue, k, (padded(m),), (LOCAL,))   # one compiled variant
             cl.enqueue_copy(self.queue, out[s:s + m], d_out)
         self.queue.finish()
         return out[:, :3].astype(np.float64)
