@@ -27,6 +27,12 @@ MAX_WAVE_SLOTS = 1 << 17     # paths in flight at once in the wavefront (device 
 TARGET_LAUNCH_SECONDS = 0.2  # passes are sized to about this: keeps progress, Ctrl-C and time limits responsive
 
 
+#: PoCL compiles a work-group function of its own ("smallgrid") for a launch narrower than 65535 work-items, beside
+#: the generic one (clrender/testing/kernels.py MIN_GLOBAL): the megakernel's launches are at least this wide, so
+#: every image size runs the one generic compile (the extra work-items return at once)
+MIN_MEGAKERNEL_GLOBAL = 1 << 16
+
+
 def _round_up(n: int) -> int:
     return max(LOCAL_SIZE, -(-n // LOCAL_SIZE) * LOCAL_SIZE)
 
@@ -64,7 +70,7 @@ class MegakernelExecutor:
         self.list_kernel = cl.Kernel(program, "render_list")
         self.list_args = KernelArgs(self.list_kernel).set_scene(scene_bufs)
         self.list_args.set(cam=camera, filter_cdf=filter_cdf)
-        self.global_size = _round_up(launch_pixels)
+        self.global_size = max(MIN_MEGAKERNEL_GLOBAL, _round_up(launch_pixels))
 
     def bind(self, film: dict) -> None:
         """The film's accumulator buffers, by their names in layout.FILM_ACCUMULATORS."""
