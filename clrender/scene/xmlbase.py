@@ -12,6 +12,7 @@ is blanked out (not removed) when whitespace precedes it, so offsets stay those 
 """
 from __future__ import annotations
 
+import abc
 import bisect
 import codecs
 import logging
@@ -196,7 +197,7 @@ def read_bytes(data: bytes, filename: str, force_encoding: str | None) -> tuple[
 # --------------------------------------------------------------------------------------------------
 # Pass two: what both builders do with an element
 # --------------------------------------------------------------------------------------------------
-class XmlBuilder:
+class XmlBuilder(abc.ABC):
     """The located reading of attributes, ``$name`` substitution, values and transforms, for a builder of one
     format. ``defines`` fill ``$name``; ``used_defines`` collects every ``$name`` the file asked for (whether -D or a
     <default> filled it); a builder may share both with others (the Mitsuba builder's included files)."""
@@ -347,9 +348,10 @@ class XmlBuilder:
             result = self.transform_op(op) @ result  # each op is left-multiplied onto the ones before it
         return result
 
+    @abc.abstractmethod
     def transform_op(self, op: Elem) -> Transform:
-        """The transform of one child of a ``<transform>`` (the format's ops and their attributes)."""
-        raise NotImplementedError
+        """The transform of one child of a ``<transform>`` (the format's ops and their attributes): each format's
+        builder (nori_xml.py, mitsuba_xml.py) defines its own."""
 
     def lookat(self, op: Elem, origin, target, up) -> Transform:
         warnings: list[str] = []
