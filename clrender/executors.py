@@ -12,6 +12,7 @@ between stages (small blocking reads), so it returns when its work is done.
 """
 from __future__ import annotations
 
+from .device.program import MIN_GENERIC_GLOBAL
 from .errors import ClrenderError
 
 
@@ -25,12 +26,6 @@ DRIVERS = ("auto", "megakernel", "wavefront")
 LOCAL_SIZE = 64              # one fixed work-group size: every new one costs PoCL a fresh compile
 MAX_WAVE_SLOTS = 1 << 17     # paths in flight at once in the wavefront (device memory: ~300 bytes each)
 TARGET_LAUNCH_SECONDS = 0.2  # passes are sized to about this: keeps progress, Ctrl-C and time limits responsive
-
-
-#: PoCL compiles a work-group function of its own ("smallgrid") for a launch narrower than 65535 work-items, beside
-#: the generic one (clrender/testing/kernels.py MIN_GLOBAL): the megakernel's launches are at least this wide, so
-#: every image size runs the one generic compile (the extra work-items return at once)
-MIN_MEGAKERNEL_GLOBAL = 1 << 16
 
 
 def _round_up(n: int) -> int:
@@ -70,7 +65,8 @@ class MegakernelExecutor:
         self.list_kernel = cl.Kernel(program, "render_list")
         self.list_args = KernelArgs(self.list_kernel).set_scene(scene_bufs)
         self.list_args.set(cam=camera, filter_cdf=filter_cdf)
-        self.global_size = max(MIN_MEGAKERNEL_GLOBAL, _round_up(launch_pixels))
+        # at least PoCL's generic width: one compiled work-group function whatever the image size
+        self.global_size = max(MIN_GENERIC_GLOBAL, _round_up(launch_pixels))
 
     def bind(self, film: dict) -> None:
         """The film's accumulator buffers, by their names in layout.FILM_ACCUMULATORS."""

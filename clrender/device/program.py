@@ -18,6 +18,12 @@ from pathlib import Path
 from ..errors import DeviceError
 
 
+#: The narrowest launch that runs PoCL's generic work-group function. PoCL compiles a kernel again, as a "smallgrid"
+#: variant, for a launch narrower than 65535 work-items (seen in its cache: <local>-goffs0-smallgrid beside
+#: <local>-goffs0); a program launched both ways is compiled twice (for the test programs, which hold every plugin,
+#: minutes on 2 cores). Launches at least this wide keep one compiled variant; their extra work-items return at once.
+MIN_GENERIC_GLOBAL = 1 << 16
+
 @functools.lru_cache(maxsize=None)
 def kernels_dir() -> Path:
     """The folder holding render.cl and its headers (installed package data, or the source tree)."""

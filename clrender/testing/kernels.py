@@ -17,7 +17,7 @@ import numpy as np
 
 from .. import plugins  # noqa: F401  (the test programs hold every plugin)
 from ..device import codegen, layout
-from ..device.program import build_program
+from ..device.program import MIN_GENERIC_GLOBAL, build_program
 
 LOCAL = 64
 CHUNK = 1 << 20
@@ -48,12 +48,7 @@ def _kernel(ctx, name, source=BSDF_SRC, defines=None):
     return k
 
 
-#: the smallest global size of a launch. PoCL compiles a kernel again, as a "smallgrid" variant, for a launch
-#: narrower than 65535 work-items (seen in its cache: <local>-goffs0-smallgrid beside <local>-goffs0); for the
-#: test programs, which hold every plugin, that second compile of bsdf_sample_batch took as long as the first
-#: (minutes on 2 cores) for a few thousand samples. Every launch at least this wide keeps one compiled variant;
-#: the extra work-items return at once (`if (i >= n) return`).
-MIN_GLOBAL = 1 << 16
+MIN_GLOBAL = MIN_GENERIC_GLOBAL   # one compiled work-group function per kernel (device/program.py)
 
 
 def padded(n: int, local: int = LOCAL) -> int:
