@@ -10,11 +10,13 @@ aspect ratio). Per scene, in one run:
 - a reference: clrender, uniform, --reference-spp, another seed; every relMSE below has the reference's own
   expected share, mean(var_ref / (ref^2 + 1e-2)) from its per-pixel variance, taken off;
 - the target relMSE R: that of clrender's uniform render at --spp;
-- uniform: renders of 4, 8, ... --spp spp, their (render seconds, relMSE);
+- uniform: renders of 4, 8, ... --spp spp, their (render seconds, relMSE), with the film adaptive sampling uses
+  (filter importance sampling), and "uniform_splat" the same with the default splatting film (kernels/splat.cl:
+  with a wide filter about a third of the variance per pixel), the render a user gets without adaptive sampling;
 - adaptive: renders with target errors 0.4, 0.2, 0.1 and 1.5, 1, 0.7 x sqrt(R) (so that a quiet scene's curve
   reaches R too; no promise of R: relMSE is a mean that fireflies dominate, while the target bounds each pixel's
   standard error), max spp 16 x --spp, their (render seconds, including the rounds' host-side tests, mean spp,
-  relMSE; whether it finished as a uniform render, clrender/adaptive.py's switch where the noise is even);
+  relMSE, rounds; whether it finished as a uniform render, clrender/adaptive.py's switch where the noise is even);
 - the potential gain of any per-pixel allocation over uniform sampling, mean(a) / mean(sqrt a)^2 with a the
   reference's relative variance of one sample per pixel: a bound on the samples ratio adaptive allocation can reach
   on the plain relMSE (Cauchy-Schwarz), measured where the estimate of a is best;
@@ -99,20 +101,24 @@ def bench_scene(name, xml_clr: Path, xml_mi: Path | None, res: int, spp: int, re
     if name == "veach_mis":
         w, h = scene.width, scene.height
         scene.camera.width, scene.camera.height = res * w // max(w, h), res * h // max(w, h)
-    r = Renderer(scene)
+    # adaptive sampling samples the filter; "uniform" is the same film, "uniform_splat" the default splatting one
+    r = Renderer(scene, reconstruction="sampling")
+    rs = Renderer(scene, reconstruction="splat")
+    rs.render(spp=1)
     r.render(spp=1)
     r.render_adaptive(target_error=0.1, max_spp=16)   # the list kernel's first launch, outside the timings
     say(f"{name}: reference, {ref_spp} spp")
     ref_film = r.render(spp=ref_spp, seed=12345)
     ref, ref_var = ref_film.image.astype(np.float64), ref_film.variance()
     out = {"width": r.width, "height": r.height, "potential_gain": potential_gain(ref_film),
-           "uniform": [], "adaptive": [], "adaptive_relmse": [], "mitsuba": []}
+           "uniform": [], "uniform_splat": [], "adaptive": [], "adaptive_relmse": [], "mitsuba": []}
     # the target relMSE (R) first: the adaptive target errors depend on it
     target = corrected_relmse(r.render(spp=spp, seed=7).image, ref, ref_var)["relmse"]
     say(f"{name}: uniform at {spp} spp: relMSE {target:.4g}; uniform and adaptive renders x {repeat}")
     # the fixed targets, and three around sqrt(R) (each pixel at about the uniform render's error)
     errors = sorted({*TARGET_ERRORS, *(round(float(np.sqrt(target)) * k, 4) for k in (1.5, 1.0, 0.7))}, reverse=True)
     runs = [("uniform", s, lambda s=s: r.render(spp=s, seed=7)) for s in spp_ladder(spp)]
+    runs += [("uniform_splat", s, lambda s=s: rs.render(spp=s, seed=7)) for s in spp_ladder(spp)]
     runs += [(key, e, lambda e=e, a=allocation: r.render_adaptive(target_error=e, max_spp=16 * spp, seed=7,
                                                                    allocation=a))
              for key, allocation in (("adaptive", "error"), ("adaptive_relmse", "relmse")) for e in errors]
@@ -125,10 +131,11 @@ def bench_scene(name, xml_clr: Path, xml_mi: Path | None, res: int, spp: int, re
             if rep:
                 continue
             point.update(corrected_relmse(f.image, ref, ref_var))
-            if key == "uniform":
+            if key in ("uniform", "uniform_splat"):
                 point["spp"] = x
             else:
                 point.update(target_error=x, spp_mean=float(f.count.mean()), converged=f.metadata["converged"],
+                             rounds=f.metadata["rounds"],
                              uniform_after=f.metadata.get("uniform_after"),
                              predicted_gain=f.metadata.get("predicted_gain"))
             out[key].append(point)
@@ -141,7 +148,7 @@ def bench_scene(name, xml_clr: Path, xml_mi: Path | None, res: int, spp: int, re
     for metric in ("relmse", "relmse_robust"):
         target = out["uniform"][-1][metric]
         times = {k: time_to([(p["seconds"], p[metric]) for p in out[k]], target) if out[k] else None
-                 for k in ("uniform", "adaptive", "adaptive_relmse", "mitsuba")}
+                 for k in ("uniform", "uniform_splat", "adaptive", "adaptive_relmse", "mitsuba")}
         # samples (mean spp) to the target: free of the shared machine's timing noise, blind to per-sample costs
         spp = {k: time_to([(p.get("spp_mean", p.get("spp")), p[metric]) for p in out[k]], target)
                for k in ("uniform", "adaptive", "adaptive_relmse")}
@@ -150,6 +157,9 @@ def bench_scene(name, xml_clr: Path, xml_mi: Path | None, res: int, spp: int, re
                        "relmse_allocation": {"speedup_over_uniform": times["uniform"] / times["adaptive_relmse"],
                                              "samples_ratio": spp["uniform"] / spp["adaptive_relmse"]},
                        "speedup_over_uniform": times["uniform"] / times["adaptive"],
+                       # the default uniform render (a splatting film) against the better adaptive allocation
+                       "splat_over_best_adaptive": times["uniform_splat"] / min(times["adaptive"],
+                                                                                times["adaptive_relmse"]),
                        "speedup_over_mitsuba": None if times["mitsuba"] is None
                        else times["mitsuba"] / times["adaptive"]}
     return out
@@ -215,7 +225,7 @@ def main(argv=None):
                          load_average_end=os.getloadavg(), commit=_commit())
     print(f"{'scene':16} {'size':>8} {'metric':>13} {'target':>9} {'uniform s':>10} {'adaptive s':>10} "
           f"{'mitsuba s':>10} {'vs uniform':>10} {'vs mitsuba':>10} {'spp ratio':>9} {'relmse alloc: time, spp':>24} "
-          f"{'bound':>6} {'uniform finish':>14}")
+          f"{'bound':>6} {'uniform finish':>14} {'splat s':>8} {'best adaptive vs splat':>22}")
     for name, r in results.items():
         for metric in ("relmse", "relmse_robust"):
             m = r[metric]
@@ -225,7 +235,8 @@ def main(argv=None):
             print(f"{name:16} {r['width']:>4}x{r['height']:<3} {metric:>13} {m['target']:9.4g} {t['uniform']:10.2f} "
                   f"{t['adaptive']:10.2f} {mi:>10} {m['speedup_over_uniform']:9.2f}x {smi:>10} "
                   f"{m['samples_ratio']:8.2f}x {m['relmse_allocation']['speedup_over_uniform']:11.2f}x "
-                  f"{m['relmse_allocation']['samples_ratio']:8.2f}x {r['potential_gain']:5.2f}x {switched(r):>14}")
+                  f"{m['relmse_allocation']['samples_ratio']:8.2f}x {r['potential_gain']:5.2f}x {switched(r):>14} "
+                  f"{t['uniform_splat']:8.2f} {m['splat_over_best_adaptive']:21.2f}x")
     print(f"wrote {path}", file=sys.stderr)
 
 

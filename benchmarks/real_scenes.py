@@ -1,9 +1,8 @@
 """A development harness over public scene sets: clrender and Mitsuba 3 on the same real scenes, side by side.
 
     python benchmarks/real_scenes.py FOLDER [FOLDER ...] [--res 96] [--spp 16] [--pairs 1] [--variant scalar_rgb]
-                                     [--keep-sampler] [--upgrade-0x] [--resolve-path] [--drop NAME ...]
-                                     [--only SUBSTRING ...]
-                                     [--skip SUBSTRING ...] [--json OUT]
+                                     [--keep-sampler] [--drop NAME ...] [--only SUBSTRING ...]
+                                     [--skip SUBSTRING ...] [--json OUT] [--save DIR]
 
 Not part of the test-suite, and nothing of these sets is ever committed: bring them onto your machine, keep them
 outside the work tree and name their folders. Every `*.xml` under a folder whose root is a `<scene>` with a
@@ -15,6 +14,13 @@ outside the work tree and name their folders. Every `*.xml` under a folder whose
   its documentation and test-suite.
 - Course scene sets in Mitsuba format, e.g. BachiLi/lajolla_public (UCSD CSE 272: Crytek Sponza as 37 serialized
   shapes, Veach's MIS scene, matpreview, Cornell boxes).
+- Other renderers' evaluation scenes in Mitsuba form, e.g. PearCoding/Ignis (scenes/evaluation/mitsuba, Mitsuba 2
+  files: area, point and environment lights over planes and a room; they look for their meshes in
+  scenes/evaluation/meshes and mitsuba/meshes, while the repository keeps some in scenes/meshes: put them there).
+- Research scenes, e.g. VElysianP/mitsuba_scenes (Mitsuba 0.5 files from BSDF and luminaire papers; the ones that
+  ask for `path`: layered_kitchen, layered_shoes, leaves_status, shelf_conductor; the others ask for `bdpt` or
+  `photonmapper`, which neither Mitsuba 3 nor clrender has).
+Bring a set onto your machine from its public repository (a clone, or a `git archive` of it) outside the work tree.
 
 Per scene it reports:
 - read: whether clrender (and Mitsuba) load it, else the first line of the error;
@@ -31,10 +37,17 @@ Per scene it reports:
   then rest on that pixel's few samples and swing from pair to pair (bsdf_spheres/test_pointlight_path at 96 px,
   64 spp, over 16 pairs of seeds: noise 0.17 to 2.79, blocks 0.13 to 4.1, for the same renderers); rerun it
   with more --pairs;
-- with --upgrade-0x, Mitsuba 0.x scenes (which clrender refuses, and whose <lookAt> Mitsuba 3 refuses) are read
-  by both from a textual upgrade to 3.x names without the 0.x-only properties (DROPPED_0X), marked (0.x); with
-  --resolve-path, files found through a scene's <path> folders get absolute names and the <path>s go, marked (path);
-  --drop NAME... leaves those properties out (e.g. a pinhole's focus_distance, which Mitsuba ignores), marked (-N);
+- what Mitsuba needed: clrender reads the scene as the user has it (Mitsuba 0.x files and `<path>` included);
+  only the film's size, the sample count and the sampler differ from the user's file. Mitsuba reads that same copy
+  where it can; where Mitsuba 3.9.1 refuses it, it gets a copy of its own changed as little as it takes, and the
+  row says how: `(Mitsuba: lookAt)` (a 0.x `<lookAt>`, which Mitsuba 3 refuses while it upgrades the rest of a
+  0.x file itself), `(Mitsuba: -name)` (properties it reports as unreferenced left out: 0.x's `high_quality_edges`,
+  `max_smooth_angle`, ...; clrender uses or ignores them with a warning, see README's "Older files"),
+  `(Mitsuba: ldrfilm)` (0.x's ldrfilm as an hdrfilm: both compare linear images). Where both refuse a property
+  (a 3.x file with 0.x's `high_quality_edges`: Bitterli's Cornell boxes), `--drop NAME` leaves it out of both
+  copies, marked `(both: -N)`;
+- clrender's warnings (a ptracer rendered by path, 0.x properties ignored, degenerate triangles dropped): the first
+  in a line under the row, all of them in the JSON;
 - speed: Mitsuba's render seconds / clrender's (above 1: clrender is faster), render only (no loading, no
   kernel build), both on this machine's CPU.
 
@@ -51,6 +64,7 @@ from __future__ import annotations
 import argparse
 import datetime as dt
 import json
+import logging
 import os
 import re
 import subprocess
@@ -66,17 +80,19 @@ LLVM = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
 if "DRJIT_LIBLLVM_PATH" not in os.environ and Path(LLVM).is_file():
     os.environ["DRJIT_LIBLLVM_PATH"] = LLVM
 sys.path.insert(0, str(ROOT))
+from clrender.scene.mitsuba_legacy import camel_to_snake  # noqa: E402
 from clrender.testing.stats import block_sums  # noqa: E402
 
 BLOCK = 16
-#: Mitsuba 0.x properties that Mitsuba 3 has no counterpart for (hdrfilm's edge filtering and banner, the
-#: sampler's dimension count, 0.x's normal smoothing of serialized meshes, which leaves the file's normals)
-DROPPED_0X = ("high_quality_edges", "banner", "dimension", "max_smooth_angle", "attach_log")
 PREFIX = "_real_scenes_"
 #: above this share of the summed per-pixel variance in one pixel, the noise and block columns are unreliable
 #: (bsdf_spheres/test_pointlight_path at 96 px, 64 spp: a point light's sub-pixel highlight, 0.45 to 0.94 of it
 #: over 16 pairs; 0.01, 0.09 and 0.17 in bsdf_spheres' constant, envmap and arealight scenes at 96 px, 16 spp)
 TOP_PIXEL_WARN = 0.25
+#: a block's standard error is at least this share of its mean: the two renderers' float32 sums and constants (a
+#: spectrum's RGB) differ at 1e-7 to 1e-5 where a block has no noise (Ignis' emissive-plane.xml: an area light seen
+#: head on, 1.0206675 against 1.0206677, read as 20 standard errors of its float noise before this floor)
+FLOAT_FLOOR = 1e-4
 
 
 def find_scenes(folders, only=(), skip=()):
@@ -115,10 +131,11 @@ def defaults_of(text):
     return dict(re.findall(r'<default\s+name="([^"]+)"\s+value="([^"]*)"', text))
 
 
-def resized(text, res, keep_sampler, spp=16):
+def resized(text, res, keep_sampler, spp=16, outer=None):
     """The scene's XML with its film scaled to `res` pixels along the longer side and (unless keep_sampler) an
-    independent sampler; the film's sizes may be numbers or $names with <default>s."""
-    defaults = defaults_of(text)
+    independent sampler; the film's sizes may be numbers or $names with <default>s (of this file, or for an
+    included file, of the text `outer` that includes it)."""
+    defaults = defaults_of(text) | defaults_of(outer or "")   # the first given (the outer file's) wins
 
     def size(name):
         m = re.search(rf'<integer\s+name="{name}"\s+value="([^"]+)"\s*/>', text)
@@ -145,54 +162,51 @@ def resized(text, res, keep_sampler, spp=16):
     return text, (nw, nh)
 
 
-def inline_includes(text, folder, depth=0):
-    """<include filename="..."/> replaced by the included file's children (for films defined in an include)."""
+def resized_includes(text, folder, dirs, args, written, depth=0, outer=None):
+    """The scene's text with each <include> of a file that holds a film or a sampler pointed at a resized copy of
+    that file written beside it (PREFIX + its name; appended to `written`), recursively: the scene's structure stays
+    as the user has it (an included file's <default>s stay in their file, where the first one given wins)."""
     def repl(m):
-        p = folder / m.group(1)
-        try:
-            inner = p.read_text()
-        except OSError:
+        name = m.group(2)
+        for p in [folder / name] + [d / name for d in dirs]:
+            if p.is_file():
+                break
+        else:
             return m.group(0)
-        inner = re.sub(r"<\?xml[^>]*\?>", "", inner)
-        inner = re.sub(r"^\s*(<!--.*?-->\s*)*<scene[^>]*>", "", inner, flags=re.S)
-        inner = inner[:inner.rfind("</scene>")] if "</scene>" in inner else inner
-        return inline_includes(inner, p.parent, depth + 1) if depth < 4 else inner
-    return re.sub(r'<include\s+filename="([^"]+)"\s*/>', repl, text)
-
-
-def upgraded(text):
-    """A Mitsuba 0.x scene's text in 3.x form, for both renderers (--upgrade-0x): version 3.0.0, camelCase property
-    names in snake_case (intIOR -> int_ior, toWorld -> to_world), <lookAt> as <lookat>, and the 0.x-only properties
-    that Mitsuba 3 refuses (DROPPED_0X) left out. Textual, for comparison runs only; clrender's own reader refuses
-    0.x files and says so."""
-    m = re.search(r'<scene\s+version="(0\.[^"]*)"', text)
-    if not m:
-        return text, False
-    text = text.replace(m.group(0), '<scene version="3.0.0"')
-    text = re.sub(r'(\bname=")([A-Za-z0-9_]+)(")', lambda q: q.group(1) + re.sub(
-        r"([a-z0-9])([A-Z])", r"\1_\2", q.group(2)).lower() + q.group(3), text)
-    text = re.sub(r'<\w+\s+name="(%s)"\s+value="[^"]*"\s*/>' % "|".join(DROPPED_0X), "", text)
-    return re.sub(r"<(/?)lookAt\b", r"<\1lookat", text), True
-
-
-def resolved_paths(text, folder, dirs=None):
-    """The scene's text with its <path value="..."/> elements removed and every relative filename that is not found
-    beside the scene made absolute from the first of those folders that holds it (--resolve-path: for comparison
-    runs only, like --upgrade-0x)."""
-    dirs = (dirs or []) + [folder / m for m in re.findall(r'<path\s+value="([^"]+)"\s*/>', text)]
-    if not dirs:
-        return text, False
-    text = re.sub(r'<path\s+value="[^"]+"\s*/>', "", text)
-
-    def repl(m):
-        f = m.group(2)
-        if os.path.isabs(f) or f.startswith("$") or (folder / f).exists():
+        inner = p.read_text()
+        inner = resized_includes(inner, p.parent, dirs, args, written, depth + 1, outer) if depth < 4 else inner
+        if "<film" not in inner and "<sampler" not in inner and inner == p.read_text():
             return m.group(0)
-        for d in dirs:
-            if (d / f).exists():
-                return m.group(1) + str((d / f).resolve()) + m.group(3)
-        return m.group(0)
-    return re.sub(r'((?:name="filename"\s+value="|<include\s+filename="))([^"]+)(")', repl, text), True
+        copy = p.parent / f"{PREFIX}{p.name}"
+        copy.write_text(resized(inner, args.res, args.keep_sampler, args.spp, outer)[0])
+        written.append(copy)
+        return m.group(1) + str(Path(name).parent / copy.name) + m.group(3)
+    return re.sub(r'(<include\s+filename=")([^"]+)(")', repl, text)
+
+
+def for_mitsuba(text, error):
+    """Mitsuba's copy of the scene, changed as little as it takes to get past `error` (what Mitsuba 3.9.1 said of
+    the last copy), and a word for the table saying what was changed; None where nothing here helps. Mitsuba 3
+    upgrades 0.x files itself except for <lookAt>, which it refuses; it also refuses 0.x-only properties
+    (`high_quality_edges`, `max_smooth_angle`, ...) as unreferenced, and `ldrfilm`, all of which clrender reads."""
+    if "unexpected <lookAt>" in error:
+        return re.sub(r"<(/?)lookAt\b", r"<\1lookat", text), "lookAt"
+    if 'Plugin "ldrfilm" not found' in error:
+        return re.sub(r'<film\s+type="ldrfilm"', '<film type="hdrfilm"', text), "ldrfilm"
+    if "unreferenced propert" in error:
+        names = set(re.findall(r'^\s*- \w+ "([^"]+)"', error, flags=re.M))
+        if names:
+            def drop(m):
+                return "" if camel_to_snake(m.group(1)) in names else m.group(0)
+            text, n = re.subn(r'<\w+\s+name="([^"]+)"\s+value="[^"]*"\s*/>', drop, text)
+            if n:
+                return text, "-" + ",".join(sorted(names))
+    return None
+
+
+def include_dirs(text, folder):
+    """The folders a scene's <path value="..."/> elements name (relative ones from the file's folder)."""
+    return [folder / m for m in re.findall(r'<path\s+value="([^"]+)"\s*/>', text)]
 
 
 def first_line(e):
@@ -201,20 +215,47 @@ def first_line(e):
 
 
 def block_stats(a, b):
-    """From the renders a (clrender) and b (Mitsuba), two or more each with different seeds: the RMS block
-    difference of their means over its expected RMS, the worst block in those units, per-pixel noise ratios (all
-    and the 8 noisiest blocks), the variance of the image mean's difference, and the share of the summed
-    per-pixel variance that the single noisiest pixel holds. Variances are the renders' sample variances, so
-    one pair each gives the pair-difference formulas ((x1 - x2)^2 / 4 for the variance of a pair's mean)."""
+    """From the renders a (clrender) and b (Mitsuba), two or more each with different seeds: the RMS over blocks of
+    each block's mean difference in units of its own standard error (`blocks`), the largest of those (`worst`),
+    per-pixel noise ratios (all and the 8 noisiest blocks), the variance of the image mean's difference, the share
+    of the summed per-pixel variance that the single noisiest pixel holds, and (for comparison) the RMS block
+    difference and worst block in units of the image's RMS block noise (`blocks_pooled`, `worst_pooled`: how they
+    were measured before 2026-12-03's third run).
+
+    A block's standard error: one pair of renders gives each block's mean difference two draws per renderer, too
+    few to estimate its variance from (a ratio of a normal to so uncertain a scale has heavy tails); its pixels'
+    per-pair variances, summed over the block, give its shape with hundreds of degrees of freedom, and one factor
+    per renderer, fitted over the whole image (the mean over blocks of their pair variances over those sums), brings in
+    the correlation between neighbouring pixels (Mitsuba splats each sample over the filter's footprint, so its
+    block means are noisier than independent pixels would make them; clrender's filter importance sampling gives a
+    factor near 1). Measured in the image's RMS block noise instead, a block far noisier than the image's average
+    (the ceiling around a Cornell box's light) reads as a large difference where it is within its own noise
+    (Bitterli's cbox/scene.xml at 128 px, 32 spp: worst 16.9 pooled, 3.4 in its own units)."""
     lum_a, lum_b = ([x[..., :3].mean(axis=2) for x in r] for r in (a, b))
     n = block_sums(lum_a[0], BLOCK)[1]
     ma, mb = (np.stack([block_sums(x, BLOCK)[0] / n for x in lum]) for lum in (lum_a, lum_b))
     diff = ma.mean(axis=0) - mb.mean(axis=0)
-    expected = ma.var(axis=0, ddof=1) / len(ma) + mb.var(axis=0, ddof=1) / len(mb)  # var of the means' difference
-    scale = np.sqrt(expected.mean())
-    blocks = float(np.sqrt((diff ** 2).mean()) / scale) if scale > 0 else (0.0 if not diff.any() else np.inf)
-    worst = float(np.abs(diff).max() / scale) if scale > 0 else blocks
     pa, pb = (np.var(np.stack(lum), axis=0, ddof=1) for lum in (lum_a, lum_b))   # per-pixel variance of a render
+
+    def var_of_block_means(m, p):
+        """Each block mean's variance (of one render), shaped by its pixels' variances and scaled to the blocks'
+        own pair variances over the image."""
+        shape = block_sums(p, BLOCK)[0] / n ** 2
+        own = m.var(axis=0, ddof=1)
+        some = shape > 0
+        # the mean of the blocks' ratios, not the ratio of sums, which the few noisiest blocks' pair variances
+        # (a couple of degrees of freedom) would decide
+        return shape * (own[some] / shape[some]).mean() if some.any() else own
+
+    expected = var_of_block_means(ma, pa) / len(ma) + var_of_block_means(mb, pb) / len(mb)
+    # noiseless blocks (a constant emitter seen head on) differ by float rounding, which is no difference
+    expected = expected + (FLOAT_FLOOR * np.maximum(np.abs(ma.mean(axis=0)), np.abs(mb.mean(axis=0)))) ** 2
+    z = np.divide(diff, np.sqrt(expected), out=np.where(diff == 0, 0.0, np.inf), where=expected > 0)
+    blocks, worst = float(np.sqrt((z ** 2).mean())), float(np.abs(z).max())
+    pooled = ma.var(axis=0, ddof=1) / len(ma) + mb.var(axis=0, ddof=1) / len(mb)
+    scale = np.sqrt(pooled.mean())
+    blocks_pooled = float(np.sqrt((diff ** 2).mean()) / scale) if scale > 0 else (0.0 if not diff.any() else np.inf)
+    worst_pooled = float(np.abs(diff).max() / scale) if scale > 0 else blocks_pooled
     na, nb = block_sums(pa, BLOCK)[0], block_sums(pb, BLOCK)[0]
     noise = float(np.sqrt(na.sum() / max(nb.sum(), 1e-30)))
     top = np.argsort(nb.ravel())[-8:]
@@ -225,46 +266,78 @@ def block_stats(a, b):
     var_mean = float(((w ** 2) * expected).sum())
     total = pa + pb
     top_pixel = float(total.max() / total.sum()) if total.sum() > 0 else 0.0
-    return blocks, worst, noise, noise_worst, var_mean, top_pixel
+    return blocks, worst, noise, noise_worst, var_mean, top_pixel, blocks_pooled, worst_pooled
+
+
+class Warnings(logging.Handler):
+    """clrender's warnings while a scene is read and rendered, for its row (what clrender did differently from the
+    file or from Mitsuba: a ptracer rendered by path, 0.x properties ignored, degenerate triangles dropped)."""
+
+    def __init__(self):
+        super().__init__(logging.WARNING)
+        self.messages = []
+
+    def emit(self, record):
+        self.messages.append(record.getMessage())
 
 
 def run_scene(path, args, mi):
+    warnings = Warnings()
+    logger = logging.getLogger("clrender")
+    logger.addHandler(warnings)
+    try:
+        row = _run_scene(path, args, mi)
+    finally:
+        logger.removeHandler(warnings)
+    tmp = f"{PREFIX}{path.stem}.xml"
+    row["clrender_warnings"] = [m.replace(tmp, path.name) for m in warnings.messages]
+    return row
+
+
+def _run_scene(path, args, mi):
     import clrender
     from clrender.renderer import Renderer
 
     row = {"scene": str(path), "read": None, "mitsuba_read": None, "rendered": None, "agrees": None}
     text = path.read_text()
-    dirs = [path.parent / m for m in re.findall(r'<path\s+value="([^"]+)"\s*/>', text)]
-    if args.resolve_path:
-        text, row["paths_resolved"] = resolved_paths(text, path.parent)
-    if "<film" not in text or (args.resolve_path and dirs):   # included files' names go through the <path>s too
-        text = inline_includes(text, path.parent)
-        if args.resolve_path:       # the included files' names, through the main file's <path>s
-            text = resolved_paths(text, path.parent, dirs)[0]
-    if args.upgrade_0x:
-        text, row["upgraded"] = upgraded(text)
-    if args.drop:
+    written = []        # resized copies of included files that hold the film or the sampler
+    text = resized_includes(text, path.parent, include_dirs(text, path.parent), args, written, outer=text)
+    if args.drop:   # a property both refuse (Bitterli's 3.x Cornell boxes keep 0.x's high_quality_edges)
         text, n = re.subn(r'<\w+\s+name="(%s)"\s+value="[^"]*"\s*/>' % "|".join(map(re.escape, args.drop)), "", text)
         row["dropped"] = n
     text, (w, h) = resized(text, args.res, args.keep_sampler, args.spp)
     row["size"] = [w, h]
     tmp = path.parent / f"{PREFIX}{path.stem}.xml"
+    tmp_mi = path.parent / f"{PREFIX}{path.stem}_mitsuba.xml"
     tmp.write_text(text)
     try:
         try:
             scene = clrender.load_scene(tmp)
             row["read"] = "yes"
+            row["size"] = [scene.width, scene.height]
         except BaseException as e:     # SceneError and anything else: the harness reports, never stops
             if isinstance(e, KeyboardInterrupt):
                 raise
             row["read"] = "no: " + first_line(e).replace(str(tmp), path.name).replace(tmp.name, path.name)
             scene = None
-        try:
-            msc = mi.load_file(str(tmp))
-            row["mitsuba_read"] = "yes"
-        except Exception as e:
-            row["mitsuba_read"] = "no: " + first_line(e)
-            msc = None
+        # Mitsuba reads clrender's copy where it can, else a copy changed as little as it takes (for_mitsuba),
+        # and the row says what it needed
+        msc, mtext, needed = None, text, []
+        for _ in range(6):
+            try:
+                msc = mi.load_file(str(tmp if mtext is text else tmp_mi))
+                row["mitsuba_read"] = "yes"
+                break
+            except Exception as e:
+                row["mitsuba_read"] = "no: " + first_line(e).replace(str(tmp_mi), path.name).replace(
+                    str(tmp), path.name)
+                fixed = for_mitsuba(mtext, str(e))
+                if fixed is None:
+                    break
+                mtext, what = fixed
+                needed.append(what)
+                tmp_mi.write_text(mtext)
+        row["mitsuba_needed"] = needed
         c, tc = None, None
         if scene is not None:
             try:
@@ -278,7 +351,7 @@ def run_scene(path, args, mi):
                 if isinstance(e, KeyboardInterrupt):
                     raise
                 row["rendered"] = "no: " + first_line(e)
-        if msc is not None:
+        if msc is not None and c is not None:     # (nothing to compare with where clrender stopped)
             t0 = time.perf_counter()
             m = [np.array(mi.render(msc, spp=args.spp, seed=s), np.float64) for s in range(1, 2 * args.pairs + 1)]
             tm = time.perf_counter() - t0
@@ -290,16 +363,24 @@ def run_scene(path, args, mi):
                     row["agrees"] = f"no: sizes differ ({c[0].shape[1]}x{c[0].shape[0]} vs {m[0].shape[1]}x{m[0].shape[0]})"
                 else:
                     mc, mm = np.mean([x.mean() for x in c]), np.mean([x[..., :3].mean() for x in m])
-                    blocks, worst, noise, noise_worst, var_mean, top_pixel = block_stats(c, m)
+                    blocks, worst, noise, noise_worst, var_mean, top_pixel, bp, wp = block_stats(c, m)
                     ratio = mc / mm if mm > 0 else (1.0 if mc == 0 else np.inf)
                     se = np.sqrt(var_mean) / mm if mm > 0 else 0.0
                     row.update(mean_ratio=float(ratio), mean_ratio_se=float(se), blocks=blocks, worst_block=worst,
                                noise=noise, noise_worst=noise_worst, noise_top_pixel=top_pixel,
+                               blocks_pooled=bp, worst_block_pooled=wp,
                                speed=tm / tc if tc else None)
+                    if args.save:   # the renders' means, for a look at where they differ
+                        args.save.mkdir(parents=True, exist_ok=True)
+                        np.savez_compressed(args.save / f"{path.parent.name}_{path.stem}.npz",
+                                            clrender=np.mean(c, axis=0)[..., :3], mitsuba=np.mean(m, axis=0)[..., :3],
+                                            clrender_var=np.var(np.stack(c)[..., :3], axis=0, ddof=1),
+                                            mitsuba_var=np.var(np.stack(m)[..., :3], axis=0, ddof=1))
                     ok = (abs(ratio - 1) <= max(3 * se, 0.01)) and blocks < 1.5
                     row["agrees"] = "yes" if ok else "no"
     finally:
-        tmp.unlink(missing_ok=True)
+        for f in [tmp, tmp_mi] + written:
+            f.unlink(missing_ok=True)
     return row
 
 
@@ -307,8 +388,9 @@ def fmt(row):
     def g(k, f="{:.3f}"):
         v = row.get(k)
         return "" if v is None else f.format(v)
-    name = Path(row["scene"]).parent.name + "/" + Path(row["scene"]).name + (" (0.x)" if row.get("upgraded") else "") + \
-        (" (path)" if row.get("paths_resolved") else "") + (f" (-{row['dropped']})" if row.get("dropped") else "")
+    name = Path(row["scene"]).parent.name + "/" + Path(row["scene"]).name + \
+        (f" (Mitsuba: {', '.join(dict.fromkeys(row['mitsuba_needed']))})" if row.get("mitsuba_needed") else "") + \
+        (f" (both: -{row['dropped']})" if row.get("dropped") else "")
     mean = "" if "mean_ratio" not in row else f"{row['mean_ratio']:.3f} ± {row['mean_ratio_se']:.3f}"
     noise = "" if "noise" not in row else f"{row['noise']:.2f} / {row['noise_worst']:.2f}"
     blocks = "" if "blocks" not in row else f"{row['blocks']:.2f} ({row['worst_block']:.1f})"
@@ -327,17 +409,16 @@ def main(argv=None):
     ap.add_argument("--spp", type=int, default=16, help="samples per pixel of each render (default 16)")
     ap.add_argument("--variant", default="scalar_rgb", help="Mitsuba variant (default scalar_rgb)")
     ap.add_argument("--keep-sampler", action="store_true", help="keep each scene's sampler (default: independent)")
-    ap.add_argument("--upgrade-0x", action="store_true",
-                    help="render Mitsuba 0.x scenes from a textual 3.x upgrade (both renderers; marked '(0.x)')")
-    ap.add_argument("--resolve-path", action="store_true",
-                    help="resolve <path> folders textually for both renderers (marked '(path)')")
     ap.add_argument("--drop", nargs="*", default=(), metavar="NAME",
-                    help="leave these properties out of every copy, for both renderers (rows marked '(-N)')")
+                    help="leave these properties out of both renderers' copies, where both refuse them (rows marked "
+                         "'(both: -N)')")
     ap.add_argument("--only", nargs="*", default=(), help="only scenes whose path contains one of these")
     ap.add_argument("--skip", nargs="*", default=(), help="leave out scenes whose path contains one of these")
     ap.add_argument("--pairs", type=int, default=1,
                     help="pairs of renders per renderer (default 1; more where one pixel holds the noise)")
     ap.add_argument("--json", type=Path, help="write the rows and the settings here")
+    ap.add_argument("--save", type=Path, metavar="DIR",
+                    help="write each compared scene's mean images and per-pixel variances to DIR/<folder>_<name>.npz")
     args = ap.parse_args(argv)
     if args.pairs < 1:
         ap.error(f"--pairs must be at least 1, got {args.pairs}")
@@ -358,6 +439,10 @@ def main(argv=None):
         row = run_scene(path, args, mi)
         rows.append(row)
         print(fmt(row), flush=True)
+        if row["clrender_warnings"]:
+            first = row["clrender_warnings"][0].split(": ", 1)[-1]
+            more = len(row["clrender_warnings"]) - 1
+            print(f"  (clrender warned: {first[:200]}{f'; and {more} more' if more else ''})", flush=True)
         if row.get("noise_top_pixel", 0) > TOP_PIXEL_WARN:
             print(f"  ({Path(row['scene']).name}: one pixel holds {100 * row['noise_top_pixel']:.0f} % of the "
                   f"per-pixel variance, so its noise and blocks rest on that pixel's few samples and swing "

@@ -22,10 +22,13 @@ def load_scene(path, nori_dialect=None, **defines):
 
 
 def render(scene, spp=None, seed=0, device=None, time_limit=None, progress=False, cluster=None, target_error=None,
-           min_spp=None, max_spp=None, driver="auto", **cluster_options):
+           min_spp=None, max_spp=None, driver="auto", reconstruction="auto", **cluster_options):
     """Render a loaded scene on an OpenCL device and return its Film.
 
     ``driver``: "megakernel", "wavefront" (the path integrators) or "auto" (clrender/executors.py).
+    ``reconstruction``: the film's, "splat" (Mitsuba's and Nori's: each sample weighted into every pixel within
+    the filter's radius), "sampling" (filter importance sampling) or "auto" (splat where it can run: the
+    megakernel, uniform sampling, a filter wider than a box); the same expected image, see Renderer.
     With ``target_error=E`` the render is adaptive (clrender/adaptive.py): rounds over the pixels whose relative error
     is still above E, from ``min_spp`` (16) up to ``max_spp`` (default: ``spp``, else the scene's sample count)
     samples per pixel; ``film.count`` says where the samples went. One process only (not with ``cluster=``).
@@ -38,7 +41,9 @@ def render(scene, spp=None, seed=0, device=None, time_limit=None, progress=False
             raise ValueError("adaptive sampling (target_error=) runs in one process, not on a cluster")
         from .renderer import Renderer
 
-        return Renderer(scene, device=device, driver=driver).render_adaptive(
+        if reconstruction == "splat":
+            raise ValueError("adaptive sampling samples the filter: reconstruction='sampling' or 'auto'")
+        return Renderer(scene, device=device, driver=driver, reconstruction="sampling").render_adaptive(
             target_error, min_spp, spp if max_spp is None else max_spp, seed=seed, time_limit=time_limit,
             progress=progress)
     if min_spp is not None or max_spp is not None:
@@ -47,13 +52,14 @@ def render(scene, spp=None, seed=0, device=None, time_limit=None, progress=False
         from .cluster import render as _cluster_render
 
         return _cluster_render(scene, spp=spp, seed=seed, cluster=cluster, device=device,
-                               time_limit=time_limit, progress=progress, driver=driver, **cluster_options)
+                               time_limit=time_limit, progress=progress, driver=driver,
+                               reconstruction=reconstruction, **cluster_options)
     if cluster_options:
         raise TypeError(f"{', '.join(cluster_options)}: options of cluster renders only (pass cluster=)")
     from .renderer import render as _render
 
     return _render(scene, spp=spp, seed=seed, device=device, time_limit=time_limit, progress=progress,
-                   driver=driver)
+                   driver=driver, reconstruction=reconstruction)
 
 
 __all__ = ["load_scene", "render", "__version__"]

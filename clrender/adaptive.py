@@ -1,15 +1,20 @@
 """Adaptive sampling to a target error: render in rounds, each over only the pixels whose estimate is not yet good
 enough, until every pixel meets the target, at `max_spp`, at the time limit or at Ctrl-C.
 
-The rounds end at fixed sample counts (`checkpoints`: `min_spp`, then a quarter more each round, up to `max_spp`),
-the same for every pixel and every run. A pixel's samples are numbered 0, 1, 2, ... as in a uniform render (its
-n samples are those a uniform render of n spp gives it), and a round adds the samples of one checkpoint interval to
-each listed pixel in one kernel call (kernels/render.cl render_list, wavefront.cl's listed launches): its sums
-depend only on its own samples and the checkpoints, never on how the list is cut into launches, on the executor's
-wave size or on timing. So whether a pixel goes on after a round is a function of its own (and its neighbours')
-samples, and the same seed and options give the same image and the same per-pixel counts however the work is
-split (tests/test_adaptive.py). A time limit or Ctrl-C stops between launches; the image keeps its true
-per-pixel counts (``film.count``, the EXR's ``count`` layer).
+A pixel is tested only at fixed sample counts (`checkpoints`: `min_spp`, then a quarter more each, up to
+`max_spp`), the same for every pixel and every run. The first round takes every pixel to `min_spp`; after each
+round, a pixel that failed its test goes on to the checkpoint its pooled error predicts it needs (next_counts: the
+error falls as 1/sqrt(n)), at least the next one and at most twice its samples, all in the next round's one launch
+(kernels/render.cl render_spans: each listed pixel with its own first sample and count; without it, the wavefront
+and the feature AOVs' pass, one list launch per distinct span). So a render needs a handful of rounds instead of one
+per checkpoint: each round costs 10-20 ms of fixed work (the film's download, the test, the launch and its wait) and
+the late ones, over a few hundred pixels, leave cores idle. A pixel's samples are numbered 0, 1, 2, ... as in a
+uniform render (its n samples are those a uniform render of n spp gives it), and its sums depend only on its own
+samples and the spans it got them in, never on how the list is cut into launches, on the executor's wave size or
+on timing. So whether a pixel goes on after a round is a function of its own (and its neighbours') samples, and the
+same seed and options give the same image and the same per-pixel counts however the work is split
+(tests/test_adaptive.py). A time limit or Ctrl-C stops between launches; the image keeps its true per-pixel counts
+(``film.count``, the EXR's ``count`` layer).
 
 The stopping rule, per pixel after each round, is a confidence test: the pixel has converged when, with 95 %
 confidence in its sample variance, the standard error of its estimate is within `target_error` of its value in
@@ -59,6 +64,10 @@ UNIFORM_BELOW = 1.3
 #: ... decided only after a first round of at least this many samples: fewer hide the spread (the test Cornell box,
 #: 1.39-1.44 from 16 samples, looks 1.19 from 4)
 SWITCH_MIN_SPP = 16
+
+#: after the first round a pixel's samples at most double from one test to the next: the prediction of its need
+#: (next_counts) from 16 samples is a rough one (the variance's confidence bound alone is 2x there)
+MAX_ROUND_GROWTH = 2.0
 
 #: how the samples are shared out: "error", every pixel to the target error; "relmse", the least relMSE of the image
 ALLOCATIONS = ("error", "relmse")
@@ -112,10 +121,18 @@ def variance_bound(counts) -> np.ndarray:
     from scipy.stats import chi2
 
     # the quantile once per distinct count (chi2.ppf per pixel took 11 % of an adaptive render of a 128 x 128
-    # Cornell box, and 10 % of one of the rough plates in predicted_allocation)
+    # Cornell box, and 10 % of one of the rough plates in predicted_allocation), and once per process: the counts
+    # are the checkpoints, and each chi2.ppf call costs about a millisecond, several per round
     counts, inverse = np.unique(np.asarray(counts), return_inverse=True)
-    dof = np.maximum(counts - 1, 1)
-    return np.where(counts >= 2, dof / chi2.ppf(1.0 - CONFIDENCE, dof), np.inf)[inverse].reshape(np.shape(inverse))
+    new = [int(c) for c in counts if int(c) not in _BOUNDS]
+    if new:
+        dof = np.maximum(np.array(new, np.float64) - 1, 1)
+        _BOUNDS.update(zip(new, np.where(np.array(new) >= 2, dof / chi2.ppf(1.0 - CONFIDENCE, dof), np.inf)))
+    return np.array([_BOUNDS[int(c)] for c in counts], np.float64)[inverse].reshape(np.shape(inverse))
+
+
+#: variance_bound's factor by sample count, as computed so far
+_BOUNDS: dict[int, float] = {}
 
 
 def relative_error(film) -> np.ndarray:
@@ -185,19 +202,30 @@ def pooled_error_at(film, pixels: np.ndarray) -> np.ndarray:
     """pooled_error at the flat pixel indices `pixels` only, the very same values: the rounds near the end test a
     few hundred pixels, and the whole image's test cost each round more than its launch (15 % of an adaptive
     render of the rough plates)."""
+    return _pooled(_pooled_terms(film, pixels)[0])
+
+
+def _pooled_terms(film, pixels: np.ndarray):
+    """((m, 9) squared relative errors of each of `pixels`' 3 x 3 neighbours in pooled_error's order, clamped at
+    the border as its edge padding repeats it; (m, 9) their flat indices), from the whole image's errors or, for
+    fewer than an eighth of the pixels, from those of their neighbourhoods alone."""
     from .film import Film
 
     h, w = film.count.shape
     y, x = np.divmod(np.asarray(pixels, np.int64), w)
-    # the 3 x 3 neighbours in pooled_error's order, clamped at the border as its edge padding repeats it
     nb = np.stack([np.clip(y + i - 1, 0, h - 1) * w + np.clip(x + j - 1, 0, w - 1)
                    for i in range(3) for j in range(3)], axis=-1)
+    if len(nb) * 8 >= h * w:
+        return np.minimum(relative_error(film) ** 2, 1e12).reshape(-1)[nb], nb
     at, inverse = np.unique(nb, return_inverse=True)
     flat = lambda a: a.reshape(h * w, *a.shape[2:])[at][None]  # noqa: E731  (a one-row film of those pixels)
     sub = Film(len(at), 1, flat(film.sum_wl), flat(film.sum_w), flat(film.sum_wl2), flat(film.count),
                flat(film.dropped))
-    err2 = np.minimum(relative_error(sub)[0] ** 2, 1e12)[inverse.reshape(nb.shape)]
-    return np.sqrt(sum(err2[:, k] for k in range(9)) / 9.0)   # summed in pooled_error's order: equal bits
+    return np.minimum(relative_error(sub)[0] ** 2, 1e12)[inverse.reshape(nb.shape)], nb
+
+
+def _pooled(terms: np.ndarray) -> np.ndarray:
+    return np.sqrt(sum(terms[:, k] for k in range(9)) / 9.0)   # summed in pooled_error's order: equal bits
 
 
 def converged(film, target_error: float, allocation: str = "error", min_spp: int = 16) -> np.ndarray:
@@ -215,12 +243,47 @@ def converged(film, target_error: float, allocation: str = "error", min_spp: int
     return pooled_error(film) <= bound
 
 
+def next_counts(counts, scaling, frozen, opts: "AdaptiveOptions", marks=None) -> np.ndarray:
+    """The sample count at which each pixel that failed its test at `counts` samples is tested next: the checkpoint
+    at or above the count its pooled error predicts, at least the next checkpoint and at most MAX_ROUND_GROWTH times
+    `counts` (where that is a checkpoint beyond the next).
+
+    The pooled error squared is `scaling` + `frozen`: the share (of the 3 x 3 mean) of the neighbours that go on
+    with the pixel, and of those that have stopped, whose errors stay. The first falls as 1/n times the variance
+    bound's factor vb (2 at 16 samples, 1.15 at 256) as they get samples: the model at n samples is
+    F + S (c / n) vb(n) / vb(c), and the pixel goes to the first candidate checkpoint where the model meets the
+    allocation's bound (E^2, or E^2 n / min_spp for "relmse"), or to the last (the cap: where the stopped neighbours
+    alone miss the bound, it goes on to max_spp anyway). Without the frozen share, pixels beside stopped ones missed
+    their target by a few per cent at every checkpoint on the rough plates: ten rounds more."""
+    marks = np.asarray(opts.checkpoints() if marks is None else marks, np.int64)
+    c = np.asarray(counts, np.int64)
+    S, F = np.asarray(scaling, np.float64), np.asarray(frozen, np.float64)
+    i_lo = np.minimum(np.searchsorted(marks, c, side="right"), len(marks) - 1)   # the next checkpoint
+    i_hi = np.maximum(np.searchsorted(marks, MAX_ROUND_GROWTH * c, side="right") - 1, i_lo)
+    choice = i_hi.copy()
+    vb_c = variance_bound(c)
+    for j in range(int((i_hi - i_lo).max(initial=0)), -1, -1):   # the candidates, down: the least that meets wins
+        i = np.minimum(i_lo + j, i_hi)
+        n = marks[i]
+        meets = F + S * c / n * variance_bound(n) / vb_c <= _bound(n, opts) ** 2
+        choice = np.where(meets, i, choice)
+    return marks[choice]
+
+
+def _bound(counts, opts: "AdaptiveOptions"):
+    """The pooled error a pixel of `counts` samples must meet (converged's bound)."""
+    if opts.allocation == "relmse":
+        return opts.target_error * np.sqrt(np.maximum(counts, 1) / float(opts.min_spp))
+    return np.full(np.shape(counts), opts.target_error)
+
+
 def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: float | None = None,
                     progress: bool = False, partial=None, on_round=None):
     """The adaptive render of `renderer`'s scene (see the module's docstring); returns its Film, whose ``count``
     holds each pixel's samples and whose metadata adds ``adaptive``, ``target_error``, ``min_spp``, ``max_spp``,
     ``spp_mean``, ``converged`` (the fraction of pixels that met the target) and ``rounds``. ``partial`` as
-    Renderer.render's; ``on_round(round, checkpoint, n_active)`` is called before each round."""
+    Renderer.render's; ``on_round(round, samples, n_pixels)`` is called before each round (`samples`: the most
+    any of its pixels goes to)."""
     import pyopencl as cl
 
     from .interrupt import PassFlag as _SigintFlag
@@ -233,21 +296,26 @@ def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: 
     ex = r.executor
     stats = r.start_stats()
     d_list = cl.Buffer(r.ctx, cl.mem_flags.READ_ONLY, max(4, 4 * n))
+    # one launch per round with each pixel's own samples (the megakernel's render_spans); otherwise (the wavefront,
+    # the feature AOVs' pass) a list launch per distinct span: the same sums either way
+    spans_kernel = getattr(ex, "spans", False) and getattr(r, "_features", None) is None
+    d_spans = cl.Buffer(r.ctx, cl.mem_flags.READ_ONLY, max(8, 8 * n)) if spans_kernel else None
     ex.warm_list(d_list)
     wait_for(r.queue)
     done = np.zeros(n, np.int64)               # each pixel's samples so far (its next sample's number)
-    active = np.arange(n, dtype=np.uint32)
     marks = opts.checkpoints()
     seconds_per_sample = None                  # per pixel-sample, measured over the launches so far
     bar = None
     if progress:
         from tqdm import tqdm
 
+        # the most rounds there can be (one per checkpoint); a render usually takes a handful
         bar = tqdm(total=len(marks), unit="round", desc="adaptive", dynamic_ncols=True, leave=True)
     notice = None if bar is None else "\nclrender: Ctrl-C: stopping after the launch in flight (Ctrl-C again aborts)\n"
     t_start = last_partial = time.perf_counter()
     rounds = 0
     switch = {}                                # the switch to uniform sampling, once decided (metadata)
+    conv = np.zeros((r.height, r.width), bool)
 
     def film_now(snapshot: bool = False):
         st = copy.copy(stats) if snapshot else stats
@@ -261,85 +329,121 @@ def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: 
                           converged=round(float(conv.mean()), 6), **switch)
         return f
 
-    conv = np.zeros((r.height, r.width), bool)
+    def run_round(pixels, target, flag) -> bool:
+        """Launches that take each of `pixels` from its samples so far to `target`; True when the render must
+        stop (Ctrl-C, time limit) after the launch in flight."""
+        nonlocal seconds_per_sample
+        start = done[pixels]
+        if len(pixels) == n and np.all(start == start[0]) and np.all(target == target[0]):
+            segments = [(0, n)]                # all pixels, one span: range launches, no list to upload
+            listed = False
+        else:
+            listed = True
+            if spans_kernel:                   # the longest first: the launch's tail is its short spans
+                order = np.argsort(start - target, kind="stable")
+                segments = [(0, len(pixels))]
+                spans = np.stack([start, target - start], axis=-1)[order].astype(np.uint32)
+                cl.enqueue_copy(r.queue, d_spans, spans)
+            else:                              # grouped by span, one list launch per group
+                order = np.lexsort((target, start))
+                key = (start * (opts.max_spp + 1) + target)[order]
+                cuts = [0, *np.flatnonzero(np.diff(key)) + 1, len(pixels)]
+                segments = list(zip(cuts, cuts[1:]))
+            pixels, start, target = pixels[order], start[order], target[order]
+            cl.enqueue_copy(r.queue, d_list, pixels.astype(np.uint32))
+        steps = target - start
+        for a, b in segments:
+            off = a
+            cum = np.cumsum(steps[a:b])
+            while off < b:
+                # Launches of about TARGET_LAUNCH_SECONDS; their size does not change any pixel's sums.
+                cnt = r.launch_pixels
+                if seconds_per_sample is not None:
+                    before = cum[off - a - 1] if off > a else 0
+                    fit = int(np.searchsorted(cum, before + TARGET_LAUNCH_SECONDS / max(seconds_per_sample, 1e-15),
+                                              side="right")) - (off - a)
+                    cnt = min(cnt, max(LOCAL_SIZE, fit // LOCAL_SIZE * LOCAL_SIZE))
+                cnt = min(cnt, b - off)
+                t0 = time.perf_counter()
+                if not listed:
+                    r.launch(off, cnt, int(start[off]), int(steps[off]), seed & 0xFFFFFFFF)
+                elif spans_kernel:
+                    ex.launch_spans(off, cnt, d_list, d_spans, seed & 0xFFFFFFFF)
+                else:
+                    r.launch(off, cnt, int(start[off]), int(steps[off]), seed & 0xFFFFFFFF, pixel_list=d_list)
+                wait_for(r.queue)
+                dt = time.perf_counter() - t0
+                seconds_per_sample = dt / max(int(steps[off:off + cnt].sum()), 1)
+                stats.launches += 1
+                done[pixels[off:off + cnt]] = target[off:off + cnt]
+                off += cnt
+                if flag.requested:
+                    stats.interrupted = True
+                    return True
+                if time_limit is not None and time.perf_counter() - t_start + dt > time_limit:
+                    return True
+        return False
+
     stop = False
     with _SigintFlag(notice) as flag:
         try:
-            prev = 0
-            while marks:
-                mark = marks.pop(0)
+            pixels = np.arange(n, dtype=np.int64)
+            target = np.full(n, marks[0], np.int64)
+            uniform_marks = []
+            while len(pixels):
                 if on_round is not None:
-                    on_round(rounds, mark, len(active))
+                    on_round(rounds, int(target.max()), len(pixels))
                 if bar is not None:
-                    bar.set_postfix_str(f"{len(active)} pixels to {mark} spp")
-                listed = len(active) < n   # all pixels: the range kernel, no list to upload
-                if listed:
-                    cl.enqueue_copy(r.queue, d_list, active)
-                step = mark - prev
-                off = 0
-                while off < len(active):
-                    # Launches of about TARGET_LAUNCH_SECONDS; their size does not change any pixel's sums.
-                    cnt = r.launch_pixels
-                    if seconds_per_sample is not None:
-                        fit = int(TARGET_LAUNCH_SECONDS / max(seconds_per_sample * step, 1e-12))
-                        cnt = min(cnt, max(LOCAL_SIZE, fit // LOCAL_SIZE * LOCAL_SIZE))
-                    cnt = min(cnt, len(active) - off)
-                    t0 = time.perf_counter()
-                    r.launch(off, cnt, prev, step, seed & 0xFFFFFFFF, pixel_list=d_list if listed else None)
-                    wait_for(r.queue)
-                    dt = time.perf_counter() - t0
-                    seconds_per_sample = dt / (cnt * step)
-                    stats.launches += 1
-                    done[active[off:off + cnt] if listed else slice(off, off + cnt)] = mark
-                    off += cnt
-                    if flag.requested:
-                        stats.interrupted = stop = True
-                    elif time_limit is not None and time.perf_counter() - t_start + dt > time_limit:
-                        stop = True
-                    if stop:
-                        break
+                    bar.set_postfix_str(f"{len(pixels)} pixels to {int(target.min())}-{int(target.max())} spp")
+                stop = run_round(pixels, target, flag)
                 rounds += 1
                 stats.passes += 1
                 if bar is not None:
                     bar.update(1)
                 if stop:
                     break
-                prev = mark
-                if not switch:                 # (once switched, a uniform render: no tests)
-                    film = film_now()
-                    if rounds == 1 and marks and mark >= SWITCH_MIN_SPP:
-                        gain, uniform_spp = predicted_allocation(film, opts)
-                        if gain < opts.uniform_below:
-                            # Even noise: adaptive allocation cannot win back the time its rounds cost. Every
-                            # pixel on to the spp that gives uniform sampling the allocation's expected relMSE, in
-                            # rounds over ranges (the same checkpoints: progress, Ctrl-C and time limits as before).
-                            switch = dict(uniform_after=mark, uniform_spp=max(mark, uniform_spp),
-                                          predicted_gain=round(gain, 4))
-                            marks = [m for m in marks if m < uniform_spp] + [uniform_spp] \
-                                if uniform_spp > mark else []
-                            if progress:
-                                print(f"clrender: adaptive: the noise is even (potential gain {gain:.2f} < "
-                                      f"{opts.uniform_below:g}): a uniform render of {switch['uniform_spp']} spp",
-                                      file=sys.stderr)
-                            if bar is not None:
-                                bar.total = rounds + len(marks)
-                                bar.refresh()
-                    if not switch and len(active) * 8 < n:   # few pixels left: test only those
-                        bound = opts.target_error
-                        if opts.allocation == "relmse":
-                            bound = bound * np.sqrt(mark / float(opts.min_spp))
-                        met = pooled_error_at(film, active) <= bound
-                        conv.reshape(-1)[active] = met   # (the others met the target in earlier rounds)
-                        active = active[~met]
-                        if len(active) == 0:
+                if switch:                     # a uniform render: no tests
+                    if not uniform_marks:
+                        break
+                    target = np.full(n, uniform_marks.pop(0), np.int64)
+                    continue
+                film = film_now()
+                if rounds == 1 and len(marks) > 1 and marks[0] >= SWITCH_MIN_SPP:
+                    gain, uniform_spp = predicted_allocation(film, opts)
+                    if gain < opts.uniform_below:
+                        # Even noise: adaptive allocation cannot win back the time its rounds cost. Every pixel
+                        # on to the spp that gives uniform sampling the allocation's expected relMSE, in rounds
+                        # over ranges (the checkpoints below it: progress, Ctrl-C and time limits as before).
+                        switch = dict(uniform_after=marks[0], uniform_spp=max(marks[0], uniform_spp),
+                                      predicted_gain=round(gain, 4))
+                        uniform_marks = [m for m in marks[1:] if m < uniform_spp] + [uniform_spp] \
+                            if uniform_spp > marks[0] else []
+                        if progress:
+                            print(f"clrender: adaptive: the noise is even (potential gain {gain:.2f} < "
+                                  f"{opts.uniform_below:g}): a uniform render of {switch['uniform_spp']} spp",
+                                  file=sys.stderr)
+                        if bar is not None:
+                            bar.total = rounds + len(uniform_marks)
+                            bar.refresh()
+                        if not uniform_marks:
                             break
-                    elif not switch:
-                        conv = converged(film, opts.target_error, opts.allocation, opts.min_spp)
-                        active = active[~conv.reshape(-1)[active]]
-                        if len(active) == 0:
-                            break
-                if partial is not None and marks and \
-                        time.perf_counter() - last_partial >= partial[0]:
+                        target = np.full(n, uniform_marks.pop(0), np.int64)
+                        continue
+                # the test, of the pixels this round added to (the others met the target in earlier rounds)
+                # (few pixels: the errors of their neighbourhoods only)
+                terms, nb = _pooled_terms(film, pixels)
+                met = _pooled(terms) <= _bound(done[pixels], opts)
+                conv.reshape(-1)[pixels] = met
+                going_on = ~met & (done[pixels] < opts.max_spp)
+                goes = np.zeros(n, bool)
+                goes[pixels[going_on]] = True
+                terms, goes = terms[going_on], goes[nb[going_on]]
+                pixels = pixels[going_on]
+                # Each pixel on to the count its error predicts, in one launch (the fewer rounds, the less of
+                # their fixed cost and of small launches' idle cores); tested there as before.
+                target = next_counts(done[pixels], (terms * goes).sum(axis=1) / 9.0,
+                                     (terms * ~goes).sum(axis=1) / 9.0, opts, marks)
+                if partial is not None and len(pixels) and time.perf_counter() - last_partial >= partial[0]:
                     partial[1](film_now(snapshot=True))
                     last_partial = time.perf_counter()
         finally:

@@ -217,13 +217,16 @@ def _payload(scene, files, defines, dialect, say):
     buffers = pack_scene(loaded)
     if key is None:
         key = packed_hash(buffers, integ, w, h)
-    return ShippedScene(key, buffers, integ, w, h, spp), key, w, h, spp, integ
+    from .renderer import samples_border
+
+    return ShippedScene(key, buffers, integ, w, h, spp, samples_border(loaded)), key, w, h, spp, integ
 
 
 def render(scene, spp: int | None = None, seed: int = 0, cluster="local", *, start_sample: int = 0,
            files: str = "ship", defines: dict | None = None, dialect: str | None = None,
            device=None, tasks: int | None = None, bands: int | None = None, time_limit: float | None = None,
-           progress: bool = False, say=None, on_result=None, partial=None, driver: str = "auto"):
+           progress: bool = False, say=None, on_result=None, partial=None, driver: str = "auto",
+           reconstruction: str = "auto"):
     """Render on a Dask cluster and return the Film (``film.count`` holds the true per-pixel counts).
 
     ``scene``: a loaded Scene (shipped) or the path of its XML file (shipped or, with ``files="shared"``,
@@ -235,7 +238,8 @@ def render(scene, spp: int | None = None, seed: int = 0, cluster="local", *, sta
     tasks after that many seconds. ``partial=(seconds, callback)``: while tasks are outstanding, every that
     many seconds, ``callback`` gets the film of the tasks finished so far (true per-pixel counts, metadata
     ``partial`` set), so a killed client leaves its work behind. ``driver``: how workers run passes
-    (clrender/executors.py; both give the same image).
+    (clrender/executors.py; both give the same image); ``reconstruction``: the film's (Renderer's argument;
+    a splatting film's bands render their halo's samples too, so the image is the one-process film's).
     """
     from .interrupt import PassFlag as _SigintFlag
     from .renderer import RenderStats
@@ -247,13 +251,15 @@ def render(scene, spp: int | None = None, seed: int = 0, cluster="local", *, sta
     client, close, what, local = connect(cluster)
     try:
         return _render(client, what, local, scene, spp, seed, start_sample, files, defines, dialect, device,
-                       tasks, bands, time_limit, progress, say, on_result, partial, RenderStats, _SigintFlag, driver)
+                       tasks, bands, time_limit, progress, say, on_result, partial, RenderStats, _SigintFlag, driver,
+                       reconstruction)
     finally:
         close()
 
 
 def _render(client, what, local, scene, spp, seed, start_sample, files, defines, dialect, device, n_tasks, bands,
-            time_limit, progress, say, on_result, partial, RenderStats, SigintFlag, driver="auto"):
+            time_limit, progress, say, on_result, partial, RenderStats, SigintFlag, driver="auto",
+            reconstruction="auto"):
     from .version import __version__
     from .parts import Accumulator
 
@@ -301,7 +307,8 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
 
     def submit(task, workers=None):
         index, pixels, s0, cnt = task
-        f = client.submit(render_task, payload, index, pixels, s0, cnt, seed, plan, driver, pure=False,
+        f = client.submit(render_task, payload, index, pixels, s0, cnt, seed, plan, driver, reconstruction,
+                          pure=False,
                           key=f"clrender-{key[:12]}-{seed}-{s0}-{pixels[0]}-{os.urandom(4).hex()}",
                           workers=workers, allow_other_workers=False)
         pending[f] = task, (payload if shipped is not None else None)
@@ -327,6 +334,8 @@ def _render(client, what, local, scene, spp, seed, start_sample, files, defines,
             meta["stopped_by"] = stopped_by
         if partial:
             meta["partial"] = True
+        if acc.sum_w2 is not None:
+            meta["film"] = "splat"
         film = acc.film(meta)
         film.stats = stats
         return film

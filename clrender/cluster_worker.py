@@ -42,12 +42,14 @@ class ShippedScene:
     width: int
     height: int
     sample_count: int
+    #: the film's sample_border (Mitsuba): the Renderer's film then samples the filter (renderer.samples_border)
+    sample_border: bool = False
 
     def scene(self):
         # What Renderer reads from a Scene; the Scene object itself (plugin classes made at run time) does
         # not pickle, and the packed tables are all the kernels see.
         return SimpleNamespace(integrator=SimpleNamespace(kernel=self.integrator), width=self.width,
-                               height=self.height, sample_count=self.sample_count)
+                               height=self.height, sample_count=self.sample_count, sample_border=self.sample_border)
 
 
 @dataclass(frozen=True)
@@ -82,25 +84,27 @@ def _device_spec(plan, worker_name):
         return plan[0]
 
 
-def _renderer_for(payload, spec, worker, driver="auto"):
+def _renderer_for(payload, spec, worker, driver="auto", reconstruction="auto"):
     from . import plugins  # noqa: F401  (a worker is a composition root: shipped tables need the plugins' code)
     from .renderer import Renderer
 
-    key = (payload.key, spec, driver)
+    key = (payload.key, spec, driver, reconstruction)
     with _CACHE_LOCK:
         if key in _CACHE:
             _CACHE.move_to_end(key)
             return _CACHE[key]
         try:
             if isinstance(payload, ShippedScene):
-                renderer = Renderer(payload.scene(), device=spec, buffers=payload.buffers, driver=driver)
+                renderer = Renderer(payload.scene(), device=spec, buffers=payload.buffers, driver=driver,
+                                    reconstruction=reconstruction)
             else:
                 got = payload.source.content_hash()
                 if got != payload.key:
                     raise TaskFailed("scene", worker, spec or "default device",
                                      f"the scene files at {payload.source.path} differ from the client's "
                                      f"(hash {got} != {payload.key}); use the same files or files='ship'")
-                renderer = Renderer(payload.source.load(), device=spec, driver=driver)
+                renderer = Renderer(payload.source.load(), device=spec, driver=driver,
+                                    reconstruction=reconstruction)
         except TaskFailed:
             raise
         except DeviceError as exc:
@@ -116,14 +120,14 @@ def _renderer_for(payload, spec, worker, driver="auto"):
         return _CACHE[key]
 
 
-def render_task(payload, index, pixels, start, count, seed, plan, driver="auto"):
-    """One task on a worker: samples start..start+count-1 of pixels [pixels[0], pixels[1]), by `driver`
-    (clrender/executors.py)."""
+def render_task(payload, index, pixels, start, count, seed, plan, driver="auto", reconstruction="auto"):
+    """One task on a worker: samples start..start+count-1 of pixels [pixels[0], pixels[1]), by `driver` with the
+    film's `reconstruction` (clrender/executors.py)."""
     from .version import __version__
 
     worker, name = _worker_identity()
     spec = _device_spec(plan, name)
-    renderer, lock = _renderer_for(payload, spec, worker, driver)
+    renderer, lock = _renderer_for(payload, spec, worker, driver, reconstruction)
     p0, p1 = pixels
     t0 = time.perf_counter()
     with lock:  # one Renderer per device: tasks of a multi-threaded worker take turns
@@ -131,7 +135,7 @@ def render_task(payload, index, pixels, start, count, seed, plan, driver="auto")
             acc = renderer.render_accumulators(spp=count, seed=seed, start_sample=start, pixels=(p0, p1))
         except Exception as exc:
             with _CACHE_LOCK:
-                _CACHE.pop((payload.key, spec, driver), None)
+                _CACHE.pop((payload.key, spec, driver, reconstruction), None)
             raise TaskFailed("device", worker, renderer.device_name, f"{type(exc).__name__}: {exc}") from None
     return {"index": index, "p0": p0, "start": start, "count": count, "accumulators": acc,
             "worker": worker, "device": renderer.device_name, "version": __version__,

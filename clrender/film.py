@@ -32,6 +32,10 @@ class Film:
     layers: tuple = ()
     #: (H, W, 12) sums of the feature AOVs (kernels/feature_aovs.h) when the Renderer rendered them, else None
     features: np.ndarray | None = None
+    #: a splatting film's (kernels/splat.cl) sums of w^2 L (H, W, 3) and w^2 (H, W), else None: its samples
+    #: reach several pixels with unequal weights, and variance() needs them
+    sum_w2l: np.ndarray | None = None
+    sum_w2: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         # Finite samples of absurd size (a reflectance of 3e38) overflow a pixel's float32 sums on the device, which
@@ -40,8 +44,9 @@ class Film:
             bad = ~(np.isfinite(self.sum_wl).all(axis=-1) & np.isfinite(self.sum_w))
         if bad.any():
             self.dropped = self.dropped + np.where(bad, self.count, 0).astype(np.asarray(self.dropped).dtype)
-            for a in (self.sum_wl, self.sum_wl2, self.sum_w, self.count):
-                a[bad] = 0
+            for a in (self.sum_wl, self.sum_wl2, self.sum_w, self.count, self.sum_w2l, self.sum_w2):
+                if a is not None:
+                    a[bad] = 0
             if "dropped_samples" in self.metadata:
                 self.metadata["dropped_samples"] = int(self.dropped.sum())
 
@@ -52,8 +57,10 @@ class Film:
         n = width * height
         a0 = acc["acc0"][:n].astype(np.float64).reshape(height, width, 4)
         a1 = acc["acc1"][:n].astype(np.float64).reshape(height, width, 4)
+        a2 = acc["acc2"][:n].astype(np.float64).reshape(height, width, 4) if "acc2" in acc else None
         return cls(width, height, a0[..., :3], a0[..., 3], a1[..., :3], a1[..., 3],
-                   acc["bad"][:n].reshape(height, width).astype(np.int64), dict(metadata or {}))
+                   acc["bad"][:n].reshape(height, width).astype(np.int64), dict(metadata or {}),
+                   sum_w2l=None if a2 is None else a2[..., :3], sum_w2=None if a2 is None else a2[..., 3])
 
     @property
     def image(self) -> np.ndarray:
@@ -67,13 +74,29 @@ class Film:
 
     def variance(self) -> np.ndarray:
         """Variance of each pixel's estimate (H, W, 3), treating sum(wL)/n as the mean of n samples
-        (exact for filters with constant weight, a close approximation otherwise)."""
+        (exact for filters with constant weight, a close approximation otherwise). A splatting film's: that of
+        the ratio V = sum(w L) / sum(w) over the samples that reach the pixel, to first order,
+        sum(w^2 (L - V)^2) / sum(w)^2, times n / (n - 1) for the effective count n = sum(w)^2 / sum(w^2)."""
+        if self.sum_w2 is not None:
+            return self._splat_variance()
         n = np.maximum(self.count, 1)[..., None]
         mean = self.sum_wl / n
         var = np.maximum(self.sum_wl2 / n - mean * mean, 0.0)
         scale = np.where(self.sum_w[..., None] != 0, n / np.where(self.sum_w[..., None] != 0,
                                                                     self.sum_w[..., None], 1), 0.0)
         return var / np.maximum(n - 1, 1) * scale * scale
+
+    def _splat_variance(self) -> np.ndarray:
+        w = self.sum_w[..., None]
+        w2 = self.sum_w2[..., None]
+        ok = (w != 0) & (w2 != 0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            v = np.where(ok, self.sum_wl / np.where(ok, w, 1), 0.0)
+            ss = np.maximum(self.sum_wl2 - 2.0 * v * self.sum_w2l + v * v * w2, 0.0)
+            n_eff = np.where(ok, w * w / np.where(ok, w2, 1), 0.0)
+            var = np.where(ok & (n_eff > 1.0), ss / np.where(ok, w * w, 1) * n_eff / np.maximum(n_eff - 1.0, 1e-12),
+                           0.0)
+        return var
 
     def aov(self, name: str) -> np.ndarray:
         """A layer beside the image, (H, W, 3) or (H, W) float32 (names: AOVS):

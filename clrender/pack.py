@@ -90,6 +90,7 @@ class PackContext:
         self._meshes, self._positions, self._faces = [], [], []
         self._n_vertices = self._n_triangles = 0
         self.textures = TextureTable()
+        self.camera_medium = NONE   # the camera's row of the media table (_pack_media)
 
     def add_table(self, name: str, dtype: str, rows) -> int:
         """Append `rows` to table `name`, whose element type must be `dtype` as SCENE_TABLES declares it (a
@@ -144,7 +145,14 @@ class PackContext:
         chunks = self._chunks[name]
         if not self._sizes[name]:
             return np.zeros((1,) + shape, np_type)
-        return np.ascontiguousarray(np.concatenate(chunks))
+        # filled in place, not np.concatenate: NumPy (1.23+) concatenates structured rows into a packed dtype without
+        # their padding (a Phase row came out 20 bytes, not 32, and the kernels read a second row's parameters wrong)
+        out = np.zeros((self._sizes[name],) + shape, np_type)
+        i = 0
+        for c in chunks:
+            out[i:i + len(c)] = c
+            i += len(c)
+        return out
 
 
 def _nonempty(a: np.ndarray, dtype=None, shape=None) -> np.ndarray:
@@ -197,6 +205,7 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
         ctx.add_table("bsdf_tables", "BsdfTable", ctx.textures.bsdf_tables_array())
     shape_rows = _pack_shapes(shapes, ctx, bsdf_rows, bsdf_of_shape, flags)
     emitter_rows, emitter_objs = _pack_emitters(scene, ctx, shape_rows)
+    media_tags, phase_tags = _pack_media(scene, ctx, shape_rows)
     geo = _pack_geometry(ctx, shape_rows, bvh_width, bvh_options)
     info, infinite = _pack_info(scene, ctx, geo, shape_rows, emitter_rows, emitter_objs, emitter_selection)
     camera, filter_cdf = scene.camera.pack()
@@ -222,7 +231,7 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     used = dispatch.PluginSet.from_tags(
         {"bsdf": {int(r["type"]) for r in bsdf_rows}, "mesh": set(shape_rows["type"].tolist()),
          "emitter": {int(r["type"]) for r in emitter_rows}, "texture": ctx.textures.tags,
-         "rfilter": {int(camera[0]["filter_type"])}},
+         "rfilter": {int(camera[0]["filter_type"])}, "medium": media_tags, "phase": phase_tags},
         {"bsdf": max((composite_depth(b) for b in {id(s.bsdf): s.bsdf for s in shapes}.values()), default=0)})
     return SceneBuffers(tables=tables, camera=camera, filter_cdf=filter_cdf, stats=stats, bvh_width=geo.width,
                         leaf_order=np.asarray(geo.order, np.int64), plugins=used,
@@ -263,6 +272,39 @@ def _pack_shapes(shapes, ctx: PackContext, bsdf_rows, bsdf_of_shape, flags) -> n
         if bsdf_rows[row["bsdf"]]["flags"] & flags["BSDF_UV"]:
             row["flags"] |= flags["SHAPE_NEEDS_UV"]
     return shape_rows
+
+
+def _pack_media(scene, ctx: PackContext, shape_rows) -> tuple[set, set]:
+    """The `media` and `phases` tables: each medium that a shape (interior, exterior) or the camera holds, packed
+    once however many hold it (by identity), its phase function likewise; the shapes' interior/exterior and
+    ctx.camera_medium get their rows (NONE: vacuum). Returns the type tags used (media, phases)."""
+    media: dict[int, int] = {}
+    phases: dict[int, int] = {}
+    tags: tuple[set, set] = (set(), set())
+
+    def row_of(medium) -> int:
+        if medium is None:
+            return NONE
+        if id(medium) not in media:
+            phase = medium.phase
+            if id(phase) not in phases:
+                prow = phase.pack()
+                phases[id(phase)] = ctx.add_table("phases", "Phase", prow)
+                tags[1].add(int(prow["type"]))
+            mrow = medium.pack(phases[id(phase)])
+            media[id(medium)] = ctx.add_table("media", "Medium", mrow)
+            tags[0].add(int(mrow["type"]))
+        return media[id(medium)]
+
+    for i, sh in enumerate(scene.shapes):
+        shape_rows[i]["interior"] = row_of(getattr(sh, "interior", None))
+        shape_rows[i]["exterior"] = row_of(getattr(sh, "exterior", None))
+    ctx.camera_medium = row_of(getattr(scene.camera, "medium", None))
+    spec = getattr(scene.integrator, "spec", None)
+    if media and getattr(spec, "type", None) == "prbvolpath":
+        raise SceneError('<integrator type="prbvolpath"> renders forward as path, which would ignore the scene\'s '
+                         'participating media: render media with volpath or volpathmis', spec.location)
+    return tags
 
 
 def _pack_emitters(scene, ctx: PackContext, shape_rows) -> tuple[list, list]:
@@ -368,5 +410,7 @@ def _pack_info(scene, ctx: PackContext, geo: _Geometry, shape_rows, emitter_rows
         powers = [em.selection_power(radius, float(shape_rows[i]["area"]) if i is not None else 0.0)
                   for em, i in emitter_objs]
         info["emitter_cdf"] = ctx.add_table("cdf", "float", selection_cdf(powers))
+    info["n_media"] = ctx.size("media")
+    info["camera_medium"] = ctx.camera_medium
     scene.integrator.pack(info[0])
     return info, infinite

@@ -14,7 +14,9 @@ beside an RGB preview of its own samples, and says in its header what it is a pa
     clrender.aovs          the layers asked for with --aov (comma-separated; "" when none)
 
 With feature AOVs (albedo, normal, depth, position) it also holds their twelve per-pixel sums as channels
-feature.0 .. feature.11 (kernels/feature_aovs.h's layout), which merge adds up like the image's.
+feature.0 .. feature.11 (kernels/feature_aovs.h's layout), which merge adds up like the image's. A splatting
+film's part (clrender.film "splat") also holds its sums of w^2 L and w^2 (sum_w2l.R/G/B, sum_w2); parts of the
+two films do not merge.
 
 Samples are numbered globally, so parts with disjoint ranges add up to the render of their union.
 """
@@ -32,7 +34,8 @@ from .scenesource import DEFAULT_DIALECT
 KIND = "accumulators"
 _SUM_CHANNELS = {"sum_wl": ("sum_wl.R", "sum_wl.G", "sum_wl.B"), "sum_wl2": ("sum_wl2.R", "sum_wl2.G", "sum_wl2.B")}
 #: header fields that every part of one frame must share
-MATCHING = ("scene_hash", "seed", "width", "height", "version", "dialect", "integrator", "aovs")
+MATCHING = ("scene_hash", "seed", "width", "height", "version", "dialect", "integrator", "aovs", "film")
+_SPLAT_CHANNELS = ("sum_w2l.R", "sum_w2l.G", "sum_w2l.B")
 FEATURE_CHANNELS = tuple(f"feature.{i}" for i in range(12))
 
 
@@ -49,6 +52,7 @@ class Accumulator:
         self.count = np.zeros(n, np.int64)
         self.dropped = np.zeros(n, np.int64)
         self.features = None   # (n, 12) once a film with feature AOVs is added
+        self.sum_w2l = self.sum_w2 = None   # once a splatting film is added (film.py)
 
     def add_raw(self, p0: int, acc: dict) -> None:
         """Add the device's accumulators of pixels p0.. (Renderer.render_accumulators), read as a Film of them
@@ -67,13 +71,20 @@ class Accumulator:
             if self.features is None:
                 self.features = np.zeros((self.width * self.height, 12))
             self.features[p0:p1] += film.features.reshape(-1, 12)
+        if film.sum_w2 is not None:
+            if self.sum_w2 is None:
+                self.sum_w2l, self.sum_w2 = np.zeros((len(self.sum_w), 3)), np.zeros(len(self.sum_w))
+            self.sum_w2l[p0:p1] += film.sum_w2l.reshape(-1, 3)
+            self.sum_w2[p0:p1] += film.sum_w2.reshape(-1)
 
     def film(self, metadata: dict) -> Film:
         h, w = self.height, self.width
         return Film(w, h, self.sum_wl.reshape(h, w, 3).copy(), self.sum_w.reshape(h, w).copy(),
                     self.sum_wl2.reshape(h, w, 3).copy(), self.count.reshape(h, w).copy(),
                     self.dropped.reshape(h, w).copy(), dict(metadata),
-                    features=None if self.features is None else self.features.reshape(h, w, 12).copy())
+                    features=None if self.features is None else self.features.reshape(h, w, 12).copy(),
+                    sum_w2l=None if self.sum_w2 is None else self.sum_w2l.reshape(h, w, 3).copy(),
+                    sum_w2=None if self.sum_w2 is None else self.sum_w2.reshape(h, w).copy())
 
 
 def write_part(film: Film, path, scene_hash: str, seed: int, sample_start: int, sample_count: int,
@@ -86,7 +97,7 @@ def write_part(film: Film, path, scene_hash: str, seed: int, sample_start: int, 
     meta = {"kind": KIND, "scene_hash": scene_hash, "seed": int(seed), "sample_start": int(sample_start),
             "sample_count": int(sample_count), "dialect": dialect or DEFAULT_DIALECT, "version": __version__,
             "integrator": film.metadata.get("integrator", ""), "width": film.width, "height": film.height,
-            "aovs": ",".join(film.layers)}
+            "aovs": ",".join(film.layers), "film": film.metadata.get("film", "sampling")}
     for k, v in (extra or {}).items():
         meta.setdefault(k, v)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
@@ -101,6 +112,9 @@ def write_part(film: Film, path, scene_hash: str, seed: int, sample_start: int, 
     if film.features is not None:
         for i, name in enumerate(FEATURE_CHANNELS):
             channels[name] = f32(film.features[..., i])
+    if film.sum_w2 is not None:
+        channels["sum_w2l"] = f32(film.sum_w2l)
+        channels["sum_w2"] = f32(film.sum_w2)
     return _atomic_write(Path(path), lambda tmp: OpenEXR.File(header, channels).write(str(tmp)))
 
 
@@ -136,6 +150,7 @@ def read_part(path) -> Part:
                             "a plain image holds no sample counts and cannot be merged")
     meta.setdefault("dialect", DEFAULT_DIALECT)  # parts written before the dialect was recorded
     meta.setdefault("aovs", "")  # and before the layers were
+    meta.setdefault("film", "sampling")  # and before films could splat
     for name, names in _SUM_CHANNELS.items():  # OpenEXR groups NAME.R/G/B into one (H, W, 3) array
         if name not in ch and all(c in ch for c in names):
             ch[name] = np.stack([ch[c] for c in names], -1)
@@ -156,9 +171,17 @@ def read_part(path) -> Part:
         if not all(c in ch for c in FEATURE_CHANNELS):
             raise ClrenderError(f"{path}: accumulator EXR has some feature AOV channels but not all twelve")
         features = np.stack([ch[c] for c in FEATURE_CHANNELS], -1).astype(np.float64)
+    splat = None
+    if meta["film"] == "splat":
+        if "sum_w2l" not in ch and all(c in ch for c in _SPLAT_CHANNELS):
+            ch["sum_w2l"] = np.stack([ch[c] for c in _SPLAT_CHANNELS], -1)
+        if "sum_w2l" not in ch or ch["sum_w2l"].ndim != 3 or "sum_w2" not in ch:
+            raise ClrenderError(f"{path}: a splatting film's accumulator EXR lacks its sum_w2l/sum_w2 channels")
+        splat = ch["sum_w2l"].astype(np.float64), ch["sum_w2"].astype(np.float64)
     film = Film(w, h, ch["sum_wl"].astype(np.float64), ch["sum_w"].astype(np.float64),
                 ch["sum_wl2"].astype(np.float64),
-                ch["count"].astype(np.int64), ch["dropped"].astype(np.int64), dict(meta), features=features)
+                ch["count"].astype(np.int64), ch["dropped"].astype(np.int64), dict(meta), features=features,
+                sum_w2l=None if splat is None else splat[0], sum_w2=None if splat is None else splat[1])
     return Part(path, meta, film)
 
 
@@ -202,6 +225,8 @@ def merge_parts(parts: list[Part], allow_missing: bool = False) -> Film:
         acc.add_film(p.film)
     spp = int(acc.count.min()) if acc.count.size else 0
     meta = {k: first.meta[k] for k in ("seed", "scene_hash", "version", "dialect", "integrator")}
+    if first.meta.get("film") == "splat":
+        meta["film"] = "splat"
     meta.update(spp=spp, spp_max=int(acc.count.max()) if acc.count.size else 0,
                 sample_ranges=format_ranges([(p.start, p.stop) for p in parts]), parts=len(parts),
                 dropped_samples=int(acc.dropped.sum()), missing=format_ranges(gaps) if gaps else "")

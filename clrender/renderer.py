@@ -18,8 +18,8 @@ from .version import __version__
 from .device import layout
 from .device.context import get_context
 from .device.program import build_program
-from .executors import (LOCAL_SIZE, TARGET_LAUNCH_SECONDS, MegakernelExecutor, WavefrontExecutor,
-                        choose_driver)
+from .executors import (LOCAL_SIZE, TARGET_LAUNCH_SECONDS, DriverError, MegakernelExecutor, SplatExecutor,
+                        WavefrontExecutor, choose_driver, choose_reconstruction)
 from .film import Film
 from .interrupt import Interrupted, PassFlag as _SigintFlag, wait_for  # noqa: F401  (Interrupted: the API)
 from .memcheck import check_film_fits
@@ -44,7 +44,22 @@ def render_defines(scene, buffers, extra: dict | None = None) -> dict:
         # no per-item loop is left in a stage kernel for them
         defines["CLR_SEARCH_STEPS"] = buffers.search_steps
         defines["CLR_N_INFINITE"] = int(buffers.tables["info"]["n_infinite"][0])
+        if int(buffers.tables["info"]["n_media"][0]):   # volpath's media code (kernels/integrators/media.h)
+            defines["CLR_MEDIA"] = 1
     return {**defines, **(extra or {})}
+
+
+def samples_border(scene) -> bool:
+    """Whether the scene's film places samples outside its window (Mitsuba's sample_border); a cluster worker's
+    shipped scene says so itself (cluster_worker.ShippedScene)."""
+    if hasattr(scene, "sample_border"):
+        return bool(scene.sample_border)
+    return bool(getattr(getattr(getattr(scene, "camera", None), "film", None), "sample_border", False))
+
+
+def splat_reach(camera_row) -> int:
+    """How many pixels away a splatted sample counts (kernels/splat.cl splat_reach, in the same float32)."""
+    return max(0, int(np.ceil(np.float32(camera_row["filter_radius"][0]) - np.float32(0.5))))
 
 
 @dataclass
@@ -72,10 +87,17 @@ class Renderer:
     rays it traced (``film.stats.rays``, ``film.metadata["rays_*"]``); normal builds compile no counting code.
     ``driver`` picks how passes run (clrender/executors.py): "megakernel", "wavefront" (path integrators only) or
     "auto" (the faster one; ``self.driver`` says which).
+    ``reconstruction``: how the film turns samples into pixels (executors.choose_reconstruction): "splat" is
+    Mitsuba's and Nori's film (kernels/splat.cl: each sample, placed uniformly in its pixel, counts in every pixel
+    within the filter's radius), "sampling" filter importance sampling (render.cl: each sample in one pixel),
+    "auto" splats wherever it can (``self.splat`` says which). The same expected image; a splatting film has
+    about a third of the noise variance per pixel with Mitsuba's default Gaussian filter, and neighbouring pixels'
+    noise is correlated. Adaptive sampling samples the filter (an auto Renderer builds that program when asked).
     """
 
     def __init__(self, scene, device=None, fast_math: bool = False, buffers=None, defines=None,
-                 count_rays: bool = False, driver: str = "auto", feature_aovs: bool = False):
+                 count_rays: bool = False, driver: str = "auto", feature_aovs: bool = False,
+                 reconstruction: str = "auto"):
         import pyopencl as cl
 
         self.scene = scene
@@ -95,7 +117,20 @@ class Renderer:
         #: the -D defines of the render program (`clrender bench` times builds of this very program)
         self.defines = render_defines(scene, self.buffers, defines)
         self.driver = choose_driver(driver, scene.integrator.kernel, self.count_rays)
-        main = '#include "wavefront.cl"\n' if self.driver == "wavefront" else '#include "render.cl"\n'
+        if self.driver == "wavefront" and "CLR_MEDIA" in self.defines:
+            raise DriverError("the wavefront driver does not render participating media (the scene has "
+                              f"{int(self.buffers.tables['info']['n_media'][0])}): use --driver megakernel")
+        self._init_args = dict(device=device, fast_math=fast_math, defines=defines, driver=driver,
+                                feature_aovs=feature_aovs)
+        self.reconstruction = reconstruction
+        self.splat = choose_reconstruction(reconstruction, self.driver, self.count_rays,
+                                           splat_reach(self.buffers.camera), self.feature_aovs,
+                                           samples_border(scene))
+        self._sampling = None
+        if self.splat:
+            self.defines["CLR_SPLAT"] = 1
+        main = '#include "splat.cl"\n' if self.splat else \
+            {"wavefront": '#include "wavefront.cl"\n', "megakernel": '#include "render.cl"\n'}[self.driver]
         self.program = build_program(self.ctx, main, defines=self.defines, fast_math=fast_math)
         self.build_seconds = time.perf_counter() - t0
         t0 = time.perf_counter()
@@ -108,9 +143,13 @@ class Renderer:
         self.width, self.height = scene.width, scene.height
         self.n_pixels = self.width * self.height
         self.launch_pixels = min(self.n_pixels, MAX_LAUNCH_PIXELS)
-        executor = WavefrontExecutor if self.driver == "wavefront" else MegakernelExecutor
-        self.executor = executor(self.ctx, self.queue, self.program, self._scene_bufs, self._camera, self._filter,
-                                 self.launch_pixels)
+        if self.splat:
+            self.executor = SplatExecutor(self.ctx, self.queue, self.program, self._scene_bufs, self._camera,
+                                          self.width, self.height, splat_reach(b.camera), self.launch_pixels)
+        else:
+            executor = WavefrontExecutor if self.driver == "wavefront" else MegakernelExecutor
+            self.executor = executor(self.ctx, self.queue, self.program, self._scene_bufs, self._camera,
+                                     self._filter, self.launch_pixels)
         self.global_size = -(-self.launch_pixels // LOCAL_SIZE) * LOCAL_SIZE   # the megakernel's launch shape
         self._features = None
         if self.feature_aovs:
@@ -119,7 +158,7 @@ class Renderer:
             self._features = KernelArgs(cl.Kernel(self.program, "feature_pass")).set_scene(self._scene_bufs)
             self._features.set(cam=self._camera, filter_cdf=self._filter)
             self._no_list = cl.Buffer(self.ctx, mf.READ_ONLY, 4)
-        if self.driver == "megakernel":   # the benchmarks launch render_pass themselves
+        if self.driver == "megakernel" and not self.splat:   # the benchmarks launch render_pass themselves
             self.kernel, self.args = self.executor.kernel, self.executor.args
         self.upload_seconds = time.perf_counter() - t0
         self._warm = False
@@ -148,6 +187,9 @@ class Renderer:
             # a counting-only buffer (the ray counters) is a one-element dummy the kernel never touches otherwise
             host[name] = np.zeros((n if self.count_rays or not counting_only else 1, *shape), dt)
             dev[name] = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=host[name])
+        if self.splat:   # a splatting film's sums of w^2 L and w^2 (Film.variance)
+            host["acc2"] = np.zeros((n, 4), np.float32)
+            dev["acc2"] = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=host["acc2"])
         self.executor.bind(dev)
         if self._features is not None:   # kernels/feature_aovs.h: three float4 per pixel
             feat = np.zeros((n, 12), np.float32)
@@ -157,6 +199,9 @@ class Renderer:
 
     def launch(self, off: int, count: int, sample_offset: int, spp: int, seed: int, pixel_list=None) -> None:
         """The executor's launch (clrender/executors.py), and the feature AOVs' of the same samples if asked for."""
+        if self.splat:
+            raise DriverError("a splatting film renders whole passes (render()); adaptive sampling and pixel "
+                              "lists need the filter-sampling film")
         self.executor.launch(off, count, sample_offset, spp, seed, pixel_list=pixel_list)
         self._launch_features(off, count, sample_offset, spp, seed, pixel_list)
 
@@ -192,6 +237,15 @@ class Renderer:
         even it finishes as a uniform render (`uniform_below`: the potential gain below which; 0: never)."""
         from .adaptive import UNIFORM_BELOW, AdaptiveOptions, render_adaptive
 
+        if self.splat:
+            if self.reconstruction != "auto":
+                raise DriverError("adaptive sampling samples the filter (a splatted sample would change its "
+                                  "neighbours' estimates): use --reconstruction sampling or auto")
+            if self._sampling is None:   # the same scene tables, the filter-sampling program
+                self._sampling = Renderer(self.scene, buffers=self.buffers, reconstruction="sampling",
+                                          **self._init_args)
+            return self._sampling.render_adaptive(target_error, min_spp, max_spp, seed, time_limit, progress,
+                                                  partial, on_round, allocation, uniform_below)
         opts = AdaptiveOptions.make(target_error, min_spp, max_spp, self.scene.sample_count, allocation,
                                     UNIFORM_BELOW if uniform_below is None else uniform_below)
         return render_adaptive(self, opts, seed=seed, time_limit=time_limit, progress=progress, partial=partial,
@@ -215,8 +269,7 @@ class Renderer:
         def band(done, seed, start_sample, stats, host, dev, p0, p1):
             self._download(host, dev, p0, p1)
             # copies: the band alone travels and stays, not the whole film's arrays behind it
-            return {name: host[name][p0:p1].copy() for name, *_, counting_only in layout.FILM_ACCUMULATORS
-                    if not counting_only}
+            return {name: host[name][p0:p1].copy() for name in self.accumulator_names()}
 
         return self._render(band, spp, seed, None, False, None, start_sample, pixels, None)
 
@@ -250,10 +303,18 @@ class Renderer:
                 while done < spp:
                     batch = min(per_pass, spp - done)
                     t0 = time.perf_counter()
-                    for off in range(p0, p1, self.launch_pixels):
-                        cnt = min(self.launch_pixels, p1 - off)
-                        self.launch(off, cnt, start_sample + done, batch, seed & 0xFFFFFFFF)
-                        stats.launches += 1
+                    if self.splat:
+                        batch = min(batch, self.executor.max_spp(p0, p1))
+                        stats.launches += self.executor.run_pass(p0, p1, start_sample + done, batch,
+                                                                 seed & 0xFFFFFFFF)
+                        for off in range(p0, p1, self.launch_pixels):
+                            self._launch_features(off, min(self.launch_pixels, p1 - off), start_sample + done,
+                                                  batch, seed & 0xFFFFFFFF)
+                    else:
+                        for off in range(p0, p1, self.launch_pixels):
+                            cnt = min(self.launch_pixels, p1 - off)
+                            self.launch(off, cnt, start_sample + done, batch, seed & 0xFFFFFFFF)
+                            stats.launches += 1
                     wait_for(self.queue)  # not queue.finish(): a second Ctrl-C must not wait for the pass
                     dt = time.perf_counter() - t0
                     done += batch
@@ -290,6 +351,12 @@ class Renderer:
         stats.seconds = time.perf_counter() - t_start
         return finish(done, seed, start_sample, stats, host, dev, p0, p1)
 
+    def accumulator_names(self) -> list[str]:
+        """The per-pixel sums a render of this renderer sends back (what a cluster task returns, without the ray
+        counters): layout.FILM_ACCUMULATORS', and a splatting film's acc2."""
+        names = [name for name, *_, counting_only in layout.FILM_ACCUMULATORS if not counting_only]
+        return names + (["acc2"] if self.splat else [])
+
     def _download(self, host, dev, p0, p1) -> None:
         """Copy pixels p0:p1 of the device's accumulators into `host` (only the rendered range: a band of a 4K film
         need not download the whole film)."""
@@ -315,6 +382,11 @@ class Renderer:
             "interrupted": stats.interrupted, "dropped_samples": stats.dropped, "start_sample": start_sample,
             "nori_dialect": getattr(self.scene, "nori_dialect", "upstream"),
         }
+        if self.splat:
+            meta["film"] = "splat"
+            rfilter = getattr(getattr(self.scene, "camera", None), "filter", None)
+            if rfilter is not None:
+                meta["splat_pool"] = round(rfilter.splat_pool_factor(), 4)
         if partial:
             meta["partial"] = True
         if self.count_rays:
@@ -351,7 +423,7 @@ def aov_channels(scene, spp: int | None = None, seed: int = 0, device=None, driv
 
 
 def render(scene, spp: int | None = None, seed: int = 0, device=None, time_limit: float | None = None,
-           progress: bool = False, driver: str = "auto") -> Film:
+           progress: bool = False, driver: str = "auto", reconstruction: str = "auto") -> Film:
     """Render a loaded scene; returns the Film (``film.image`` is the (H, W, 3) float32 image)."""
-    return Renderer(scene, device=device, driver=driver).render(spp=spp, seed=seed, time_limit=time_limit,
-                                                                progress=progress)
+    return Renderer(scene, device=device, driver=driver, reconstruction=reconstruction).render(
+        spp=spp, seed=seed, time_limit=time_limit, progress=progress)

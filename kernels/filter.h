@@ -1,4 +1,5 @@
-/* Reconstruction filters, applied by filter importance sampling: each camera sample is placed at an offset
+/* Reconstruction filters, applied by filter importance sampling (a splatting film evaluates the same profile:
+   kernels/splat.cl): each camera sample is placed at an offset
    (dx, dy) from its pixel's centre drawn from a tabulated density p(x)p(y) ~ |f(x)||f(y)|, and carries the
    weight f(dx)f(dy) / (p(dx)p(dy)). The film divides sum(w L) by sum(w), so a pixel converges to
    integral f L / integral f: the same limit as Nori's splatting of uniformly placed samples, except near the

@@ -79,3 +79,16 @@ __kernel void render_list(SCENE_ARGS, __global const Camera* cam, __global const
     render_pixel(&sd, cam, filter_cdf, acc0, acc1, bad, rays, pixel_list[pixel_offset + gid], sample_offset, spp,
                  seed);
 }
+
+/* The same with each listed pixel's own samples: entry i adds samples spans[i].x .. spans[i].x + spans[i].y - 1 to
+   pixel_list[i] (adaptive sampling after its first round: each pixel to the count its estimate predicts, in one
+   call, so a round is one launch however unequal the pixels' needs; a pixel's sums depend on its spans only). */
+__kernel void render_spans(SCENE_ARGS, __global const Camera* cam, __global const float* filter_cdf, FILM_ARGS,
+                           __global const uint* pixel_list, __global const uint2* spans, uint pixel_offset,
+                           uint pixel_count, uint seed) {
+    uint gid = get_global_id(0);
+    if (gid >= pixel_count) return;
+    SCENE_INIT(sd);
+    uint2 span = spans[pixel_offset + gid];
+    render_pixel(&sd, cam, filter_cdf, acc0, acc1, bad, rays, pixel_list[pixel_offset + gid], span.x, span.y, seed);
+}

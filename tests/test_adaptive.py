@@ -23,6 +23,14 @@ from clrender.renderer import Renderer
 from clrender.testing.stats import compare_films, compare_mean_to_value
 
 from analytic_scenes import furnace_scene
+from test_oclgrind import _run_under_oclgrind, needs_oclgrind
+
+
+def sampling_renderer(scene, **kw):
+    """Adaptive sampling samples the filter (clrender/executors.py choose_reconstruction): the uniform renders it is
+    compared with here are of the same film (a splatting film, the default elsewhere, is another estimator)."""
+    return Renderer(scene, reconstruction="sampling", **kw)
+
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 OPTS = dict(target_error=0.1, max_spp=64, seed=5)
@@ -41,7 +49,7 @@ def cornell():
 
 @pytest.fixture(scope="module")
 def adaptive_film(cornell):
-    return Renderer(cornell, driver="megakernel").render_adaptive(**OPTS)
+    return sampling_renderer(cornell, driver="megakernel").render_adaptive(**OPTS)
 
 
 def test_options_and_rounds():
@@ -66,7 +74,7 @@ def test_samples_go_where_the_noise_is(cornell, adaptive_film):
     assert adaptive_film.metadata["adaptive"] and adaptive_film.metadata["spp"] == 64
     assert adaptive_film.metadata["spp_mean"] == pytest.approx(count.mean(), abs=1e-3)
     # the pixels that stopped after the first round are those whose pooled error met the target after it
-    first = Renderer(cornell).render_adaptive(**{**OPTS, "max_spp": 16})
+    first = sampling_renderer(cornell).render_adaptive(**{**OPTS, "max_spp": 16})
     met = pooled_error(first) <= OPTS["target_error"]
     assert met.any() and not met.all()
     np.testing.assert_array_equal(count == 16, met)
@@ -75,7 +83,7 @@ def test_samples_go_where_the_noise_is(cornell, adaptive_film):
 def test_a_pixel_holds_the_samples_of_a_uniform_render(cornell, adaptive_film):
     """Per pixel, the adaptive value is the uniform render's at that pixel's count: samples 0..n-1, none reused."""
     count = adaptive_film.count
-    r = Renderer(cornell, driver="megakernel")
+    r = sampling_renderer(cornell, driver="megakernel")
     checked = 0
     for c in np.unique(count):
         uniform = r.render(spp=int(c), seed=OPTS["seed"])
@@ -89,8 +97,9 @@ def test_a_pixel_holds_the_samples_of_a_uniform_render(cornell, adaptive_film):
 def test_the_split_does_not_change_the_image(cornell, adaptive_film, driver):
     """Launches of 64 pixels (the megakernel) or waves of one sample per path slot (the wavefront) against whole-list
     launches: the very same image and counts."""
-    whole = adaptive_film if driver == "megakernel" else Renderer(cornell, driver=driver).render_adaptive(**OPTS)
-    split_renderer = Renderer(cornell, driver=driver)
+    whole = (adaptive_film if driver == "megakernel"
+             else sampling_renderer(cornell, driver=driver).render_adaptive(**OPTS))
+    split_renderer = sampling_renderer(cornell, driver=driver)
     split_renderer.launch_pixels = 64
     if driver == "wavefront":
         split_renderer.executor.slots = 100
@@ -101,7 +110,7 @@ def test_the_split_does_not_change_the_image(cornell, adaptive_film, driver):
 
 
 def test_both_executors_agree(cornell, adaptive_film):
-    wave = Renderer(cornell, driver="wavefront").render_adaptive(**OPTS)
+    wave = sampling_renderer(cornell, driver="wavefront").render_adaptive(**OPTS)
     same = wave.count == adaptive_film.count
     assert same.mean() > 0.99   # a decision at the threshold may flip with float rounding
     np.testing.assert_allclose(wave.image[same], adaptive_film.image[same], rtol=2e-4, atol=2e-6)
@@ -112,7 +121,7 @@ def test_furnace_is_exact(tmp_path):
     (Per pixel against 2 with the adaptive film's own variances is no fair test: a pixel that stopped early holds
     a hundred-odd samples of a skewed estimate, whose sample variance is itself noisy.)"""
     (tmp_path / "f.xml").write_text(furnace_scene(tmp_path, "path_mis").replace('value="4"', 'value="16"'))
-    r = Renderer(clrender.load_scene(tmp_path / "f.xml"))
+    r = sampling_renderer(clrender.load_scene(tmp_path / "f.xml"))
     film = r.render_adaptive(target_error=0.02, max_spp=4096, seed=11)
     assert film.count.min() > 16 and np.median(film.count) < 4096, "the stopping rule decided the pixels"
     res = compare_mean_to_value(film, 2.0)
@@ -123,13 +132,13 @@ def test_furnace_is_exact(tmp_path):
 
 
 def test_agrees_with_a_uniform_render_of_the_same_samples(cornell, adaptive_film):
-    uniform = Renderer(cornell).render(spp=int(round(adaptive_film.count.mean())), seed=99)
+    uniform = sampling_renderer(cornell).render(spp=int(round(adaptive_film.count.mean())), seed=99)
     res = compare_films(adaptive_film, uniform)
     assert res.passed, res.message
 
 
 def test_time_limit_keeps_true_counts(cornell):
-    r = Renderer(cornell)
+    r = sampling_renderer(cornell)
     r.launch_pixels = 64
     film = r.render_adaptive(target_error=0.001, max_spp=4096, seed=1, time_limit=0.3)
     assert film.count.max() < 4096
@@ -173,7 +182,7 @@ def test_ctrl_c_stops_after_the_launch_in_flight(cornell):
     import os
     import signal
 
-    r = Renderer(cornell)
+    r = sampling_renderer(cornell)
     r.launch_pixels = 64
 
     def press(rnd, mark, active):
@@ -194,8 +203,8 @@ def test_relmse_allocation_relaxes_with_the_samples(cornell):
     E * sqrt(n / min_spp). Checked at the first two rounds against renders that stop there (same samples, same
     decisions); and its noisiest pixels get fewer samples than the "error" allocation gives them."""
     opts = dict(OPTS, allocation="relmse")
-    full = Renderer(cornell).render_adaptive(**opts)
-    r = Renderer(cornell)
+    full = sampling_renderer(cornell).render_adaptive(**opts)
+    r = sampling_renderer(cornell)
     first, second = (r.render_adaptive(**{**opts, "max_spp": m}) for m in (16, 32))
     e = OPTS["target_error"]
     np.testing.assert_array_equal(full.count == 16, pooled_error(first) <= e)
@@ -204,13 +213,13 @@ def test_relmse_allocation_relaxes_with_the_samples(cornell):
     assert stopped_at_32.any()
     np.testing.assert_array_equal(full.count[went_on] == 32, stopped_at_32[went_on])
     assert full.metadata["allocation"] == "relmse"
-    plain = Renderer(cornell).render_adaptive(**OPTS)
+    plain = sampling_renderer(cornell).render_adaptive(**OPTS)
     assert full.count.sum() < plain.count.sum()
 
 
 def test_python_api(cornell):
     film = clrender.render(cornell, target_error=OPTS["target_error"], max_spp=32, seed=OPTS["seed"])
-    same = Renderer(cornell).render_adaptive(target_error=OPTS["target_error"], max_spp=32, seed=OPTS["seed"])
+    same = sampling_renderer(cornell).render_adaptive(target_error=OPTS["target_error"], max_spp=32, seed=OPTS["seed"])
     np.testing.assert_array_equal(film.count, same.count)
     assert film.layers == ("count",)
     with pytest.raises(ValueError, match="one process"):
@@ -232,19 +241,19 @@ def test_the_switch_measures_the_spread_of_the_noise(cornell, furnace):
     it asks for is the one the stopping rule would spend: in the furnace, where a_p (the relative variance of one
     sample) is about the same everywhere, a / E^2 times the variance's confidence bound at that count."""
     opts = AdaptiveOptions.make(0.02, None, 4096)
-    even, n = predicted_allocation(Renderer(furnace).render(spp=16, seed=3), opts)
+    even, n = predicted_allocation(sampling_renderer(furnace).render(spp=16, seed=3), opts)
     assert even < 1.1 and even < UNIFORM_BELOW
-    f = Renderer(furnace).render(spp=256, seed=4)
+    f = sampling_renderer(furnace).render(spp=256, seed=4)
     a = (f.variance() * 256 / (f.image.astype(np.float64) ** 2 + 1e-2)).mean()
     assert n == pytest.approx(a / 0.02 ** 2 * variance_bound(n), rel=0.15)
-    uneven, _ = predicted_allocation(Renderer(cornell).render(spp=16, seed=3), opts)
+    uneven, _ = predicted_allocation(sampling_renderer(cornell).render(spp=16, seed=3), opts)
     assert uneven > UNIFORM_BELOW + 0.05
 
 
 def test_even_noise_finishes_as_a_uniform_render(furnace):
     """In the furnace the render switches after its first round and its image is the uniform render's at the spp
     it went to, every pixel at that count; metadata say so. Cut into small launches, the same."""
-    r = Renderer(furnace)
+    r = sampling_renderer(furnace)
     film = r.render_adaptive(target_error=0.05, max_spp=4096, seed=11)
     m = film.metadata
     assert m["uniform_after"] == 16 and m["predicted_gain"] < UNIFORM_BELOW
@@ -253,7 +262,7 @@ def test_even_noise_finishes_as_a_uniform_render(furnace):
     assert m["rounds"] == len([c for c in AdaptiveOptions.make(0.05, None, 4096).checkpoints() if c < n]) + 1
     uniform = r.render(spp=n, seed=11)
     np.testing.assert_allclose(film.image, uniform.image, rtol=2e-5, atol=1e-7)
-    small = Renderer(furnace)
+    small = sampling_renderer(furnace)
     small.launch_pixels = 8
     cut = small.render_adaptive(target_error=0.05, max_spp=4096, seed=11)
     assert cut.stats.launches > film.stats.launches
@@ -266,7 +275,7 @@ def test_uneven_noise_stays_adaptive(cornell, adaptive_film):
 
 
 def test_without_the_switch_the_stopping_rule_keeps_the_furnace_exact(furnace):
-    film = Renderer(furnace).render_adaptive(target_error=0.02, max_spp=4096, seed=11, uniform_below=0)
+    film = sampling_renderer(furnace).render_adaptive(target_error=0.02, max_spp=4096, seed=11, uniform_below=0)
     assert "uniform_after" not in film.metadata and film.count.min() < film.count.max()
     res = compare_mean_to_value(film, 2.0)
     assert res.passed, res.message
@@ -297,3 +306,84 @@ def test_the_few_pixels_test_is_the_whole_images(cornell, adaptive_film):
     pixels = np.array([0, w - 1, w, 5 * w + 7, h * w - 1, h * w - w, 17 * w + 16, 5 * w + 8])
     np.testing.assert_array_equal(pooled_error_at(adaptive_film, pixels), full[pixels])
     np.testing.assert_array_equal(pooled_error_at(adaptive_film, np.arange(h * w)), full)
+
+
+def test_next_counts_predict_the_checkpoint_that_meets_the_bound():
+    """next_counts: the pooled error squared is S + F (the share that falls as vb(n) / n as the pixel and its
+    going-on neighbours get samples, and the stopped neighbours' share); the count it returns is the first checkpoint
+    at which the model meets the allocation's bound, within the next checkpoint .. twice the samples; where the
+    stopped neighbours alone miss the bound, the cap."""
+    from clrender.adaptive import MAX_ROUND_GROWTH, next_counts
+
+    rng = np.random.default_rng(1)
+    for allocation in ("error", "relmse"):
+        opts = AdaptiveOptions.make(0.1, None, 4096, allocation=allocation)
+        marks = np.array(opts.checkpoints())
+        c = rng.choice(marks[:-3], 400)
+        e2 = 0.01 * (allocation == "error" or c / 16.0)   # the bound squared at c
+        S = e2 * rng.uniform(0.5, 3.0, 400)
+        F = e2 * rng.uniform(0.0, 0.8, 400)
+        t = next_counts(c, S, F, opts)
+
+        def meets(n, m):
+            """Whether the model's pooled error squared at n samples meets the bound, for the pixels of mask m."""
+            bound2 = 0.01 if allocation == "error" else 0.01 * n / 16.0
+            return F[m] + S[m] * c[m] / n * variance_bound(n) / variance_bound(c[m]) <= bound2 * (1 + 1e-9)
+
+        lo = marks[np.searchsorted(marks, c, side="right")]                     # the next checkpoint
+        hi = np.maximum(lo, marks[np.searchsorted(marks, MAX_ROUND_GROWTH * c, side="right") - 1])
+        assert np.all(np.isin(t, marks)) and np.all((lo <= t) & (t <= hi))
+        inside = (t > lo) & (t < hi)
+        assert inside.sum() > 10, "the prediction, not only its limits, decided some"
+        assert np.all(meets(t[inside], inside))
+        before = marks[np.searchsorted(marks, t[inside]) - 1]
+        assert not np.any(meets(before, inside)), "the first checkpoint that meets it, not a later one"
+        capped = (t == hi) & (t > lo)
+        assert capped.any() and not np.any(meets(marks[np.searchsorted(marks, t[capped]) - 1], capped)), \
+            "the cap only where less does not meet the bound"
+    # stopped neighbours alone above the bound: no count meets it, the pixel doubles
+    opts = AdaptiveOptions.make(0.1, None, 4096)
+    np.testing.assert_array_equal(next_counts([64, 125], [1e-4, 1e-4], [0.011, 0.02], opts), [125, 243])
+
+
+def test_spans_launches_are_the_grouped_launches(cornell):
+    """The megakernel's render_spans (each pixel with its own samples in one launch) sums each pixel's samples as
+    one list launch per distinct span does (the wavefront's and the feature AOVs' way): the very same image and
+    counts, bit for bit; the rounds skip checkpoints (fewer rounds than checkpoints reached)."""
+    opts = dict(target_error=0.05, max_spp=1024, seed=3)
+    spans = sampling_renderer(cornell, driver="megakernel")
+    film = spans.render_adaptive(**opts)
+    grouped = sampling_renderer(cornell, driver="megakernel")
+    grouped.executor.spans = False
+    same = grouped.render_adaptive(**opts)
+    np.testing.assert_array_equal(same.count, film.count)
+    np.testing.assert_array_equal(same.image, film.image)
+    assert same.stats.launches > film.stats.launches
+    marks = AdaptiveOptions.make(0.05, None, 1024).checkpoints()
+    reached = [m for m in marks if m <= film.count.max()]
+    assert film.metadata["rounds"] < len(reached) - 2, (film.metadata["rounds"], reached)
+
+
+_RUN_SPANS = """
+import sys
+import numpy as np
+from clrender.bench import load_bench_scene
+from clrender.renderer import Renderer
+scene, _, _ = load_bench_scene(sys.argv[1], None, width=12, height=12)
+r = Renderer(scene, device="Oclgrind", driver="megakernel")
+r.launch_pixels = 64   # launches over parts of the list
+film = r.render_adaptive(target_error=0.3, min_spp=2, max_spp=16, seed=1, uniform_below=0)
+print("rendered", len(np.unique(film.count)), film.metadata["rounds"])
+"""
+
+
+@needs_oclgrind
+@pytest.mark.slow
+def test_spans_are_clean_under_oclgrind(tmp_path):
+    """render_spans over parts of a list of pixels with unequal spans: no out-of-bounds access, no race."""
+    proc, report = _run_under_oclgrind(tmp_path, [str(SCENES / "cornell" / "cornell_path_mis.xml")], _RUN_SPANS)
+    assert proc.returncode == 0, proc.stderr
+    counts, rounds = (int(x) for x in proc.stdout.split("rendered")[1].split())
+    marks = AdaptiveOptions.make(0.3, 2, 16).checkpoints()
+    assert counts >= 3 and rounds < len(marks), (proc.stdout, marks)   # rounds of unequal spans
+    assert report == "", report[:4000]

@@ -73,8 +73,25 @@ def test_the_wavefront_driver_on_workers_gives_the_one_process_image(client, tmp
     one = Renderer(clrender.load_scene(path), driver="wavefront").render(spp=6, seed=SEED)
     film = clrender.render(str(path), spp=6, seed=SEED, cluster=client, tasks=3, bands=2, driver="wavefront")
     assert_same_film(film, one)
-    mega = Renderer(clrender.load_scene(path), driver="megakernel").render(spp=6, seed=SEED)
+    mega = Renderer(clrender.load_scene(path), driver="megakernel", reconstruction="sampling").render(spp=6,
+                                                                                                      seed=SEED)
     np.testing.assert_allclose(film.image, mega.image, rtol=2e-4, atol=2e-6)
+
+
+def test_a_shipped_scene_keeps_its_films_reconstruction(client, tmp_path):
+    """Workers get the packed tables, not the Scene: a Mitsuba film with sample_border (which samples the filter,
+    renderer.samples_border) must still sample it there, and a splatting film splat, as in one process."""
+    from test_splat import scene_xml
+
+    for extra, splat in (('<boolean name="sample_border" value="true"/>', False), ("", True)):
+        path = tmp_path / f"s{int(splat)}.xml"
+        path.write_text(scene_xml(extra, res=12))
+        scene = clrender.load_scene(path)
+        one = Renderer(scene)
+        assert one.splat == splat
+        film = clrender.render(scene, spp=4, seed=SEED, cluster=client, tasks=2, bands=2)
+        assert (film.metadata.get("film") == "splat") == splat
+        np.testing.assert_allclose(film.image, one.render(spp=4, seed=SEED).image, rtol=2e-4, atol=2e-6)
 
 
 def test_sample_ranges_add_up(client, small):

@@ -191,7 +191,7 @@ def test_hide_emitters_hides_the_environment(tmp_path, type_name):
 
 # --- volpath, volpathmis, prb, prbvolpath on surfaces ---------------------------------------------------------------
 
-@pytest.mark.parametrize("type_name", ["volpath", "volpathmis", "prb", "prbvolpath"])
+@pytest.mark.parametrize("type_name", ["volpath", "volpathmis", "prb", "prbvolpath", "ptracer"])
 @pytest.mark.parametrize("max_depth", [2, -1])
 def test_volumetric_and_replay_path_tracers_give_the_furnace_series(tmp_path, type_name, max_depth):
     """Without media (and without null events) they estimate what path does: the furnace's series."""
@@ -217,6 +217,30 @@ def test_volpath_hide_emitters_hides_only_what_the_camera_sees_first(tmp_path):
     up = light_over_plane_from_below(tmp_path)
     assert np.all(render(tmp_path, up, "volpath", spp=16, hide_emitters=True).image == 0.0)
     np.testing.assert_allclose(render(tmp_path, up, "volpathmis", spp=16).image[0, 0], A.LE, rtol=1e-6)
+
+
+def test_ptracer_renders_the_path_image_and_says_so(caplog):
+    """Mitsuba's particle tracer is rendered by path with its max_depth and rr_depth: the same image for the same
+    seed, and a warning at the integrator's line (the twin integrator_ptracer holds it to Mitsuba's ptracer)."""
+    from pathlib import Path
+    scene_file = Path(__file__).resolve().parent / "mitsuba" / "scenes" / "integrator_ptracer.xml"
+    with caplog.at_level("WARNING", logger="clrender"):
+        ptracer = clrender.load_scene(scene_file, spp="8")
+    warned = [r.getMessage() for r in caplog.records if "ptracer" in r.getMessage()]
+    assert len(warned) == 1 and f"{scene_file}:8:" in warned[0] and "path tracer" in warned[0], warned
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="clrender"):
+        path = clrender.load_scene(scene_file, spp="8", integrator="path")
+    assert not caplog.records
+    a, b = clrender.render(ptracer, seed=5), clrender.render(path, seed=5)
+    assert (ptracer.integrator.max_depth, ptracer.integrator.rr_depth) == (3, 2)
+    np.testing.assert_array_equal(a.image, b.image)
+    assert a.image.mean() > 0
+
+
+def test_ptracer_refuses_hide_emitters():
+    with pytest.raises(SceneError, match="hide_emitters is not supported with ptracer"):
+        mitsuba_integrator("ptracer", hide_emitters=True)
 
 
 def test_prb_refuses_hide_emitters():

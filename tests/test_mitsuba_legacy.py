@@ -94,11 +94,26 @@ def err(xml: str, line: int, *fragments: str) -> SceneError:
     return e.value
 
 
-@pytest.mark.parametrize("kind", ["bdpt", "photonmapper", "ptracer", "mlt", "sppm"])
+@pytest.mark.parametrize("kind", ["bdpt", "photonmapper", "mlt", "sppm"])
 def test_old_integrators_we_do_not_have_are_named(kind):
     e = err(f'<scene version="0.5.0">\n  <integrator type="{kind}"/></scene>', 2, f"'{kind}'", "not available",
             "path, ")
     assert e.location.col == 21
+
+
+def test_old_ptracer_is_mitsuba_3s_ptracer(caplog):
+    """Mitsuba 3.9.1 reads a 0.6 ptracer as its own (max_depth 3, rr_depth 2 here): rendered by path, with the
+    warning, and 0.6-only parameters refused as Mitsuba refuses them."""
+    sensor = ('<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/>'
+              '<integer name="height" value="4"/></film></sensor><shape type="sphere"><emitter type="area"/></shape>')
+    with caplog.at_level("WARNING", logger="clrender"):
+        scene = create(parse_string('<scene version="0.6.0"><integrator type="ptracer"><integer name="maxDepth" '
+                                    f'value="3"/><integer name="rrDepth" value="2"/></integrator>{sensor}</scene>',
+                                    "old.xml"))
+    assert (scene.integrator.max_depth, scene.integrator.rr_depth) == (3, 2)
+    assert any("ptracer" in r.getMessage() and "path tracer" in r.getMessage() for r in caplog.records)
+    err('<scene version="0.6.0">\n<integrator type="ptracer"><integer name="granularity" value="100"/>'
+        f'</integrator>{sensor}</scene>', 2, "granularity")
 
 
 def test_legacy_errors_are_located():

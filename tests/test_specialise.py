@@ -112,7 +112,7 @@ def _rows(*dicts):
 
 def test_a_tag_outside_the_set_takes_the_default(ctx, queue):
     """A program for {diffuse} has no plastic code: a plastic row samples as the default (weight 0, wo = +z);
-    the diffuse row gives exactly the full program's samples."""
+    the diffuse row gives exactly the samples of the program for both rows' plugins (the test kernels' default)."""
     from clrender.testing.kernels import bsdf_sample_batch
 
     rows = _rows({"type": "diffuse"}, {"type": "plastic"})
@@ -120,13 +120,58 @@ def test_a_tag_outside_the_set_takes_the_default(ctx, queue):
     n = 256
     idx = np.arange(n, dtype=np.uint32) % 2
     spec = bsdf_sample_batch(ctx, queue, rows, (0.3, 0.2, 0.9), n, seed=5, row_index=idx, defines=only_diffuse)
-    full = bsdf_sample_batch(ctx, queue, rows, (0.3, 0.2, 0.9), n, seed=5, row_index=idx)
+    both = bsdf_sample_batch(ctx, queue, rows, (0.3, 0.2, 0.9), n, seed=5, row_index=idx)
     plastic = idx == 1
-    assert np.all(full.weight[plastic].max(axis=1) > 0)          # the full program has plastic
+    assert np.all(both.weight[plastic].max(axis=1) > 0)          # the rows' own program has plastic
     assert np.all(spec.weight[plastic] == 0)
     assert np.all(spec.wo[plastic] == (0.0, 0.0, 1.0))
-    for a, b in zip((spec.wo, spec.weight, spec.pdf, spec.f), (full.wo, full.weight, full.pdf, full.f)):
+    for a, b in zip((spec.wo, spec.weight, spec.pdf, spec.f), (both.wo, both.weight, both.pdf, both.f)):
         assert np.array_equal(a[~plastic], b[~plastic])
+
+
+def _set(defines):
+    return sorted(k[len("CLR_USE_"):].lower() for k in defines if k.startswith("CLR_USE_"))
+
+
+def test_the_test_kernels_hold_the_plugins_of_their_rows(tmp_path):
+    """clrender.testing.kernels builds its programs for the plugins the rows reach: a composite's children and its
+    depth, the textures of the side table (not its texel rows). pack_rows knows the exact depth; rows alone give a
+    bound that is never below it."""
+    from PIL import Image
+
+    from clrender.testing.kernels import pack_rows, rows_plugins
+    from clrender.testing.plugin_checks import mitsuba_bsdf_with_checkers
+
+    nested = create(spec_from_dict({"type": "twosided", "a": {"type": "blendbsdf", "weight": 0.3,
+                                                                "a": {"type": "diffuse"},
+                                                                "b": {"type": "roughplastic"}}}))
+    rows = pack_rows(nested)
+    exact = rows_plugins(rows).defines()
+    assert _set(exact) == ["bsdf_blendbsdf", "bsdf_diffuse", "bsdf_roughplastic", "bsdf_twosided"]
+    assert exact["BSDF_COMPOSITE_LEVELS"] == 2
+    assert rows_plugins(np.asarray(rows)).defines() == exact       # the bound: two composite rows, two levels
+    both = np.concatenate([np.asarray(rows), np.asarray(pack_rows(nested))])
+    assert rows_plugins(both).defines()["BSDF_COMPOSITE_LEVELS"] == 3   # four composite rows: at most 3 levels
+
+    checkers = mitsuba_bsdf_with_checkers("diffuse", ["reflectance"])
+    row = checkers.pack()
+    assert _set(rows_plugins(row, checkers.textures_table).defines()) == ["bsdf_diffuse", "texture_checkerboard_color"]
+    assert _set(rows_plugins(row).defines()) == ["bsdf_diffuse"]
+    assert _set(rows_plugins(pack_rows(checkers)).defines()) == ["bsdf_diffuse", "texture_checkerboard_color"]
+
+    # the one zero row of an empty texture table is no texture (its tag would read as a bitmap's)
+    plain = create(spec_from_dict({"type": "diffuse"}))
+    row = plain.pack()
+    assert len(plain.textures_table) == 1 and _set(rows_plugins(row, plain.textures_table).defines()) == ["bsdf_diffuse"]
+    # a bitmap's texel rows follow its own
+    img = np.zeros((4, 8, 3), np.uint8)
+    img[0, 0] = 200
+    Image.fromarray(img).save(tmp_path / "t.png")
+    bsdf = create(spec_from_dict({"type": "diffuse", "reflectance": {"type": "bitmap",
+                                                                     "filename": str(tmp_path / "t.png")}}))
+    row = bsdf.pack()
+    assert len(bsdf.textures_table) > 1
+    assert _set(rows_plugins(row, bsdf.textures_table).defines()) == ["bsdf_diffuse", "texture_bitmap"]
 
 
 @pytest.mark.slow   # the full render program (every plugin) takes about 2 minutes to build cold
@@ -177,3 +222,31 @@ __kernel void k(SCENE_ARGS, __global const Camera* cam, __global float4* out) {
             levels = {"bsdf": 1 if dispatch.is_composite(cls) else 0}
             defines = dispatch.PluginSet.from_tags({kind.tag: {dispatch.tag_of(cls)}}, levels).defines()
             build_program(ctx, src, defines=defines)
+
+
+@pytest.mark.slow   # the test program with every plugin: several minutes to build cold on 2 cores
+def test_every_plugin_in_one_test_program(ctx, queue):
+    """The test kernels' ALL_PLUGINS program (every BSDF and texture, composites three levels deep) builds, and on
+    a row of each BSDF plugin draws exactly the samples of the program for that row's own plugins."""
+    from bsdfs.perturbed_common import DATA, rows_of
+    from clrender.testing.kernels import ALL_PLUGINS, bsdf_sample_batch, pack_rows, rows_plugins
+    from clrender.testing.plugin_checks import bsdf_from_xml, mitsuba_bsdf_with_checkers
+
+    dicts = [{"type": t} for t in ("diffuse", "conductor", "dielectric", "thindielectric", "plastic", "roughplastic",
+                                   "roughconductor", "roughdielectric", "principled", "principledthin")]
+    dicts += [{"type": "twosided", "a": {"type": "diffuse"}},
+              {"type": "blendbsdf", "weight": 0.3, "a": {"type": "diffuse"}, "b": {"type": "conductor"}},
+              {"type": "mask", "opacity": 0.4, "a": {"type": "roughplastic"}}]
+    cases = [pack_rows(create(spec_from_dict(d))) for d in dicts]
+    cases += [rows_of(DATA["cases"][name]["dict"])[0] for name in ("normalmap-of-bumpmap", "blend-normalmap-bumpmap")]
+    cases += [pack_rows(bsdf_from_xml(f'<bsdf type="{t}"/>')) for t in ("microfacet", "mirror")]
+    cases.append(pack_rows(mitsuba_bsdf_with_checkers("roughplastic", ["diffuse_reflectance"])))
+    covered = {p for rows in cases for k, p in rows_plugins(rows).used if k == "bsdf"}
+    assert covered == {dispatch.prefix_of(c) for c in dispatch.plugins("bsdf")}, "a BSDF plugin has no row here"
+    for rows in cases:
+        wi = (0.3, 0.2, 0.9)
+        own = bsdf_sample_batch(ctx, queue, rows, wi, 4096, seed=3)
+        every = bsdf_sample_batch(ctx, queue, rows, wi, 4096, seed=3, defines=ALL_PLUGINS)
+        assert np.any(own.weight != 0)
+        for a, b in zip((own.wo, own.weight, own.pdf, own.f), (every.wo, every.weight, every.pdf, every.f)):
+            assert np.array_equal(a, b), sorted(rows_plugins(rows).used)

@@ -26,26 +26,31 @@ log = logging.getLogger("clrender")
 
 SCHEMA = "clrender-bench/1"
 RENDER_SOURCE = '#include "render.cl"\n'
+SPLAT_SOURCE = '#include "splat.cl"\n'
+
+
+def _source_and_kernel(defines: dict) -> tuple[str, str]:
+    """The program the Renderer builds for these defines (a splatting film's: splat.cl) and its heaviest kernel."""
+    return (SPLAT_SOURCE, "render_records") if "CLR_SPLAT" in defines else (RENDER_SOURCE, "render_pass")
 RELMSE_EPS = 1e-2
 
 
 # ------------------------------------------------------------------------------------------------------------
 # Builds
 # ------------------------------------------------------------------------------------------------------------
-def _first_launch(ctx, queue, program, global_size: int, local_size: int) -> float:
-    """Seconds for the first enqueue of render_pass with the renderer's launch shape (pixel_count = 0, so
+def _first_launch(ctx, queue, program, global_size: int, local_size: int, kernel: str = "render_pass") -> float:
+    """Seconds for the first enqueue of `kernel` with the renderer's launch shape (pixel_count = 0, so
     nothing runs; PoCL compiles the work-group function for this shape)."""
     import pyopencl as cl
 
     from ..device.kernelargs import KernelArgs
 
-    k = cl.Kernel(program, "render_pass")
+    k = cl.Kernel(program, kernel)
     args = KernelArgs(k)
     dummy = cl.Buffer(ctx, cl.mem_flags.READ_WRITE, 256)
-    counts = ("pixel_offset", "pixel_count", "sample_offset", "spp", "seed")
+    counts = ("pixel_offset", "pixel_count", "sample_offset", "spp", "seed", "rec_base")
     args.set(**{n: dummy for n in args.names() if n not in counts})
-    args.set(pixel_offset=np.uint32(0), pixel_count=np.uint32(0), sample_offset=np.uint32(0), spp=np.uint32(1),
-             seed=np.uint32(0))
+    args.set(**{n: np.uint32(1 if n == "spp" else 0) for n in args.names() if n in counts})
     t0 = time.perf_counter()
     cl.enqueue_nd_range_kernel(queue, k, (global_size,), (local_size,))
     queue.finish()
@@ -56,9 +61,10 @@ def _timed_build(ctx, queue, defines, fast_math, global_size, local_size) -> dic
     from ..device.program import build_program
 
     t0 = time.perf_counter()
-    prg = build_program(ctx, RENDER_SOURCE, defines=defines, fast_math=fast_math, use_cache=False)
+    source, kernel = _source_and_kernel(defines)
+    prg = build_program(ctx, source, defines=defines, fast_math=fast_math, use_cache=False)
     t_prog = time.perf_counter() - t0
-    t_launch = _first_launch(ctx, queue, prg, global_size, local_size)
+    t_launch = _first_launch(ctx, queue, prg, global_size, local_size, kernel)
     return {"program": t_prog, "first_launch": t_launch, "total": t_prog + t_launch}
 
 
@@ -246,6 +252,7 @@ def bench_one(prepared, dev: dict, *, spp=16, repeat=3, seed=0, reference=None, 
     say(f"{row['scene']} on {dev['name']}: building")
     r = Renderer(scene, device=dev["spec"], buffers=buffers, fast_math=fast_math, driver=driver)
     row["driver"] = r.driver
+    row["reconstruction"] = "splat" if r.splat else "sampling"
     row["upload_seconds"] = r.upload_seconds
     defines = r.defines  # exactly the program the renderer runs (integrator, BVH width, ...)
     build = {"first_build_seconds": r.build_seconds}

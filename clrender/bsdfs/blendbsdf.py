@@ -22,6 +22,8 @@ from .composite import Composite
 class BlendBsdf(Composite):
     kernel = "bsdfs/blendbsdf.h"
     PARAMS = [("weight", "float_texture"), ("first", "int"), ("second", "int")]
+    # null_transmission: the children's, blended (what volpath's shadow rays carry through it, as Mitsuba's)
+    METHODS = ("eval", "pdf", "sample", "null_transmission")
     owner = '<bsdf type="blendbsdf">'
 
     def __init__(self, props, children, spec):

@@ -22,6 +22,8 @@ class Mask(Composite):
     kernel = "bsdfs/mask.h"
     PARAMS = [("opacity", "float_texture"), ("child", "int")]
     FLAGS = ("DELTA", "TRANSMISSION")    # the pass-through
+    # null_transmission: what volpath's shadow rays carry through it (1 - opacity (1 - the child's))
+    METHODS = ("eval", "pdf", "sample", "null_transmission")
     owner = '<bsdf type="mask">'
 
     def __init__(self, props, children, spec):

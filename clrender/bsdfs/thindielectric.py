@@ -21,4 +21,5 @@ class ThinDielectric(MitsubaSmoothDielectric, Bsdf):
     kernel = "bsdfs/thindielectric.h"
     PARAMS = DIELECTRIC_PARAMS
     FLAGS = ("DELTA", "TRANSMISSION")
-    METHODS = ("sample",)
+    # null_transmission: the sheet's transmittance T, which volpath's shadow rays carry through it (as Mitsuba's)
+    METHODS = ("sample", "null_transmission")

@@ -158,13 +158,14 @@ class MitsubaPerspectiveCamera(PerspectiveCamera):
     its film sample (checked against Mitsuba 3.9.1 with and without a crop window); we add it to the crop window's
     offset. Blender's Mitsuba exporter writes it, mostly as 0.
     """
-    children = ("film", "sampler")
+    children = ("film", "sampler", "medium")
 
     def __init__(self, props, children, spec):
         from ..films.hdrfilm import HdrFilm
         from ..samplers.independent import MitsubaIndependentSampler
 
         self.film = self.sampler = None
+        self.medium = None   # the medium the camera sits in (a nested or referenced <medium>; None: vacuum)
         for c in children:
             slot = c.spec.tag
             if getattr(self, slot) is not None:

@@ -8,7 +8,7 @@ import sys
 import time
 
 from ..errors import ClrenderError
-from ..executors import DRIVERS, choose_driver
+from ..executors import DRIVERS, RECONSTRUCTIONS, choose_driver
 from .options import add_dialect_option, defines, seconds
 
 
@@ -45,7 +45,16 @@ def cmd_render(args) -> int:
     except ClrenderError as e:
         print(f"clrender: error: {args.scene}: --driver: {e}", file=sys.stderr)
         return 2
-    renderer = Renderer(scene, device=args.device, driver=args.driver, feature_aovs=needs_features(args, layers))
+    if adaptive is not None and args.reconstruction == "splat":
+        print(f"clrender: error: {args.scene}: adaptive sampling samples the filter (a splatted sample changes its "
+              "neighbours' estimates): --reconstruction sampling or auto", file=sys.stderr)
+        return 2
+    try:
+        renderer = Renderer(scene, device=args.device, driver=args.driver, feature_aovs=needs_features(args, layers),
+                            reconstruction="sampling" if adaptive is not None else args.reconstruction)
+    except ClrenderError as e:
+        print(f"clrender: error: {args.scene}: {e}", file=sys.stderr)
+        return 2
     args.ctrl_c.check()
     st = renderer.buffers.stats
     print(f"clrender: {args.scene}: {st['triangles']} triangles, {st['spheres']} spheres, "
@@ -204,6 +213,11 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--driver", choices=DRIVERS, default="auto",
                    help="how passes run: the megakernel, or the wavefront's stage kernels (path integrators); "
                         "auto: the faster (today the megakernel)")
+    r.add_argument("--reconstruction", choices=RECONSTRUCTIONS, default="auto",
+                   help="how the film makes pixels of samples: splat (as Mitsuba and Nori: each sample, placed "
+                        "uniformly in its pixel, weighted into every pixel within the filter's radius), sampling "
+                        "(filter importance sampling: each sample in one pixel, more noise with a wide filter), "
+                        "auto (default: splat, except adaptive renders, --driver wavefront and box filters)")
     r.add_argument("-D", "--define", action="append", metavar="NAME=VALUE", help="set $NAME in the scene")
     r.add_argument("--emitter-selection", choices=("uniform", "power"), default="uniform",
                    help="how light sampling picks an emitter in a Mitsuba scene: uniformly (default, as Mitsuba) or "

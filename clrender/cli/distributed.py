@@ -95,7 +95,8 @@ def cmd_render_distributed(args, defines: dict) -> int:
         film = cluster.render(source.path, spp=spp, seed=args.seed, cluster=args.cluster, start_sample=start,
                               files=args.scene_files, defines=defines, dialect=dialect, device=args.device,
                               tasks=args.tasks, time_limit=args.time_limit, progress=not args.quiet, say=say,
-                              partial=partial(args.partial_every), driver=args.driver)
+                              partial=partial(args.partial_every), driver=args.driver,
+                              reconstruction=args.reconstruction)
         scene_hash = film.metadata["scene_hash"]
     else:
         from ..renderer import Interrupted, Renderer
@@ -103,6 +104,7 @@ def cmd_render_distributed(args, defines: dict) -> int:
         t0 = time.perf_counter()
         scene_hash = source.content_hash()
         renderer = Renderer(source.load(), device=args.device, driver=args.driver,
+                            reconstruction=args.reconstruction,
                             feature_aovs=needs_features(args, layers))
         say(f"{args.scene}: load {time.perf_counter() - t0:.2f} s; device {renderer.device_name}")
         try:

@@ -85,6 +85,10 @@ BSDF = Kind(
         # (Mitsuba's BSDF::sh_frame, which aov's sh_normal shows)
         Method("normal", "vec3", "__global const Bsdf* b, const BsdfQuery* q", "b, q",
                "return v3(0.0f, 0.0f, 1.0f);"),
+        # the fraction of light that goes straight through (Mitsuba's eval_null_transmission: 1 for null, 1 - opacity
+        # for a mask): what volpath's shadow rays carry across the surface; 0 (the default) blocks them
+        Method("null_transmission", "vec3", "__global const Bsdf* b, const BsdfQuery* q", "b, q",
+               "return v3s(0.0f);"),
     ),
     after=("bsdfs/common.h", "texture.h"),
     # twosided(blendbsdf(mask(diffuse))) is three levels: each level is a switch over the composites that calls
@@ -145,7 +149,33 @@ RFILTER = Kind(
                     required=True),),
     after=("math.h",))
 
-KINDS = {k.tag: k for k in (TEXTURE, SHAPE, BSDF, EMITTER, INTEGRATOR, RFILTER)}
+# Phase functions: rows of the `phases` table that media point at (Medium.phase). wi points back along the path (to
+# where the light goes), wo toward where it comes from, both in world space (kernels/phase/common.h).
+PHASE = Kind(
+    tag="phase", struct="Phase", flags=(), dispatch_name="phase", row="ph",
+    methods=(
+        Method("eval", "float", "__global const Phase* ph, const PhaseQuery* q", "ph, q", "return 0.0f;",
+               required=True),
+        # sets q->wo and q->pdf; returns the weight eval / pdf
+        Method("sample", "float", "__global const Phase* ph, PhaseQuery* q, float2 u", "ph, q, u",
+               "q->pdf = 0.0f; return 0.0f;", required=True),
+    ),
+    after=("phase/common.h",))
+
+# Participating media: rows of the `media` table that shapes (interior, exterior) and the camera point at.
+# HOMOGENEOUS: sigma_t is the same everywhere (free flights are sampled in closed form, kernels/media.h);
+# SAMPLE_EMITTERS: scattering vertices sample lights (Mitsuba's sample_emitters); SPECTRAL_EXTINCTION: sigma_t
+# differs between the channels (Mitsuba's has_spectral_extinction; the estimator here is the same either way).
+MEDIUM = Kind(
+    tag="medium", struct="Medium", flags=("HOMOGENEOUS", "SAMPLE_EMITTERS", "SPECTRAL_EXTINCTION"),
+    dispatch_name="medium", row="m",
+    methods=(
+        Method("sigma_t", "vec3", "__global const Medium* m, vec3 p", "m, p", "return v3s(0.0f);", required=True),
+        Method("albedo", "vec3", "__global const Medium* m, vec3 p", "m, p", "return v3s(0.0f);", required=True),
+    ),
+    after=("math.h",))
+
+KINDS = {k.tag: k for k in (TEXTURE, SHAPE, BSDF, EMITTER, INTEGRATOR, RFILTER, PHASE, MEDIUM)}
 
 
 def prefix_of(cls) -> str:

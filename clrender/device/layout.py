@@ -70,7 +70,9 @@ ROWS: dict[str, Row] = {
                                  # table (NONE when not emitting); spheres: row of the spheres table
         ("count", "uint"),       # meshes: triangle count; spheres: 1
         ("cdf", "uint"),         # emitting meshes: offset of their triangle-area CDF in the `cdf` table
-        ("area", "float")),      # emitting shapes: total surface area
+        ("area", "float"),       # emitting shapes: total surface area
+        ("interior", "uint"),    # the medium inside (a row of `media`; NONE: vacuum), Mitsuba's interior
+        ("exterior", "uint")),   # the medium outside (on the side the normal points to)
         union_bytes=16),
     "Bsdf": Row(header=(("type", "uint"), ("flags", "uint"), ("pad", "uint", 2)), union_bytes=128),
     "Emitter": Row(header=(
@@ -86,8 +88,14 @@ ROWS: dict[str, Row] = {
         ("rr_depth", "uint"),         # Russian roulette starts at this depth
         ("n_infinite", "uint"),       # entries of the infinite-emitter index table
         ("emitter_cdf", "uint"),      # NONE: choose a light uniformly; else its selection CDF's offset in `cdf`
-        ("n_meshes", "uint")),        # rows of the mesh_vertices table
+        ("n_meshes", "uint"),         # rows of the mesh_vertices table
+        ("n_media", "uint"),          # rows of the media table (0: the scene is a vacuum)
+        ("camera_medium", "uint")),   # the medium the camera sits in (NONE: vacuum)
         union_bytes=32),
+    # a participating medium (clrender/media/), with the row of its phase function in `phases`
+    "Medium": Row(header=(("type", "uint"), ("flags", "uint"), ("phase", "uint"), ("pad", "uint")),
+                  union_bytes=32),
+    "Phase": Row(header=(("type", "uint"), ("pad", "uint", 3)), union_bytes=16),
 }
 # The scene's tables, in kernel-argument order: (name, element type, what it holds). The kernels' SceneData
 # struct, its SCENE_ARGS argument list (each table is the argument s_<name>) and SCENE_INIT are generated from
@@ -113,6 +121,8 @@ SCENE_TABLES: list[tuple[str, str, str]] = [
     ("cdf", "float", "emitting meshes' triangle-area CDFs, back to back (Shape.cdf)"),
     ("textures", "Texture", "one row per texture that a BSDF parameter refers to"),
     ("infinite", "uint", "indices of the infinite emitters (info->n_infinite of them)"),
+    ("media", "Medium", "one row per participating medium (shapes' interior/exterior, the camera's)"),
+    ("phases", "Phase", "the media's phase functions (Medium.phase)"),
     ("info", "SceneInfo", "scene-wide numbers and the integrator's parameters"),
 ]
 

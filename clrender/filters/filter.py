@@ -1,8 +1,10 @@
-"""What the reconstruction filters share: the 1-D table the kernel samples offsets from.
+"""What the reconstruction filters share: the profile both films evaluate, and the 1-D table the kernel samples
+offsets from.
 
-Filters are applied by filter importance sampling (see kernels/filter.h): the kernel draws a sample's
-offset from the pixel centre from a piecewise-constant density proportional to |f| and weights the sample by
-f/p, so every filter, negative lobes included, converges to the same image as Nori's splatting.
+A splatting film (kernels/splat.cl, the default) weights each sample, placed uniformly in its pixel, into every
+pixel within the radius by f(dx) f(dy), as Nori and Mitsuba do; a filter-sampling film (kernels/filter.h: adaptive
+renders, the wavefront driver, box filters) draws a sample's offset from the pixel centre from a piecewise-constant
+density proportional to |f| and weights the sample by f/p. Both converge to the same image, negative lobes included.
 """
 from __future__ import annotations
 
@@ -37,6 +39,21 @@ class Filter(abc.ABC):
     @abc.abstractmethod
     def eval(self, x: np.ndarray) -> np.ndarray:
         """The filter's 1-D profile f(x) (the kernel's filter_eval_1d computes the same)."""
+
+    def splat_pool_factor(self, n: int = 64) -> float:
+        """How much a splatting film (kernels/splat.cl) understates the variance of a sum of many pixels when each
+        pixel's variance is taken as independent: E[S1^2] / E[S2], S1 and S2 the sums of a sample's weights and
+        squared weights over the pixels it reaches, over sample positions uniform in the pixel (about 3 for
+        Mitsuba's Gaussian; 1 for a box)."""
+        reach = max(0, int(np.ceil(np.float32(self.radius) - np.float32(0.5))))
+        u = (np.arange(n) + 0.5) / n
+        t = np.arange(-reach, reach + 1)
+        w = self.eval(t[None, :] + 0.5 - u[:, None])          # (n positions, 2 reach + 1 offsets) per axis
+        w = np.where(np.abs(t[None, :] + 0.5 - u[:, None]) <= self.radius, w, 0.0)
+        s1 = w.sum(axis=1)
+        s2 = (w * w).sum(axis=1)
+        # 2-D weights are products: S1 = s1x s1y, S2 = s2x s2y over independent x and y
+        return float(np.mean(s1 ** 2) ** 2 / np.mean(s2) ** 2)
 
     def sampling_table(self, bins: int = TABLE_BINS) -> np.ndarray:
         """CDF (bins+1 entries) of |f| integrated over each bin (by a fine midpoint rule)."""

@@ -43,12 +43,13 @@ DROPPED = {
 }
 
 #: Mitsuba 0.6 integrators that clrender does not have, with what they do (a path tracer renders the same image
-#: for each of them but the approximate ones, only with other noise)
+#: for each of them but the approximate ones, only with other noise); 0.6's `ptracer` is not one: Mitsuba 3.9.1
+#: reads it as its own ptracer (maxDepth, rrDepth upgraded), and so does clrender (integrators/path.py)
 INTEGRATORS = {
     "bdpt": "bidirectional path tracing", "pssmlt": "primary sample space MLT", "mlt": "Metropolis light transport",
     "erpt": "energy redistribution path tracing", "photonmapper": "photon mapping",
     "ppm": "progressive photon mapping", "sppm": "stochastic progressive photon mapping",
-    "ptracer": "particle tracing", "vpl": "virtual point lights", "multichannel": "several integrators into one image",
+    "vpl": "virtual point lights", "multichannel": "several integrators into one image",
     "field": "a field of the first hit", "volpath_simple": "simple volumetric path tracing",
 }
 

@@ -462,8 +462,9 @@ class MitsubaBuilder(XmlBuilder):
 
 def _referenced(target: PluginSpec, name: str | None) -> PluginSpec:
     """What a ``<ref>`` with parameter name ``name`` to ``target`` puts into its parent."""
-    if name is None or name == target.name or target.tag != "texture":
+    if name is None or name == target.name or target.tag not in ("texture", "medium"):
         return target   # one object wherever it is referenced (a bsdf's or emitter's name says nothing)
+    # A medium's name says on which side of a shape it is (interior, exterior): a spec under that name, as below.
     # A texture filling another parameter (its name tells the BSDF which): a spec sharing the texture's
     # properties and children under that name.
     return replace(target, name=name)

@@ -85,7 +85,7 @@ def instantiate(tag: str, type_name: str, props: dict | None = None, location: S
     return create(PluginSpec(tag, type_name, None, plist, [], location, format=fmt))
 
 
-#: what Mitsuba scenes declare participating media with
+#: what Mitsuba scenes declare participating media with (clrender/media/: homogeneous media, no volumes)
 MEDIA_TAGS = ("medium", "phase", "volume")
 
 
@@ -105,9 +105,15 @@ def create(spec: PluginSpec, _made: dict | None = None):
     # Check every nesting before building anything, so the reported error is the structural one
     # rather than some failure deep inside an earlier child.
     for i, child in enumerate(spec.children):
-        if child.tag in MEDIA_TAGS:
-            raise SceneError(f"<{child.tag}{_typed(child)}>: participating media are not supported (clrender renders "
-                             "surfaces in a vacuum); remove the medium, or render the scene with Mitsuba",
+        if child.tag == "volume":
+            raise SceneError(f"<volume{_typed(child)}>: volumes (grid or constant) are not supported; clrender renders "
+                             "homogeneous media only: give the <medium type=\"homogeneous\">'s sigma_t and albedo as "
+                             "a <float> or <rgb>", child.location)
+        if child.tag in MEDIA_TAGS and child.tag not in accepted:
+            where = ("a <phase> belongs in a <medium>" if child.tag == "phase" else
+                     "a <medium> belongs in a <shape> (name=\"interior\" or \"exterior\"), in the <sensor>, or at "
+                     "the top level of a Mitsuba 3 scene, referenced from those")
+            raise SceneError(f"<{child.tag}{_typed(child)}> cannot be nested in {spec.describe()}: {where}",
                              child.location)
         if child.tag not in accepted:
             takes = (", ".join(f"<{t}>" for t in accepted) if accepted else "no nested objects")

@@ -67,7 +67,8 @@ class Scene:
 @register("scene", "scene", fmt="mitsuba")
 class MitsubaScene(Scene):
     """The root of a Mitsuba 3 file: shapes, scene-level emitters, one sensor (holding film and sampler), one
-    integrator; objects declared at the top level only to be referenced (bsdfs, textures) are allowed.
+    integrator; objects declared at the top level only to be referenced (bsdfs, textures, samplers, films, rfilters)
+    are allowed.
 
     ```xml
     <scene version="3.0.0">
@@ -76,7 +77,8 @@ class MitsubaScene(Scene):
             <film type="hdrfilm"/>                <!-- default 768 x 576, gaussian filter -->
             <sampler type="independent"/>         <!-- default 4 samples per pixel -->
         </sensor>
-        <bsdf type="diffuse" id="white"/>         <!-- declared for <ref id="white"/> -->
+        <bsdf type="diffuse" id="white"/>         <!-- declared for <ref id="white"/>; also textures, and a
+                                                       sampler, film or rfilter for a sensor's <ref> -->
         <shape type="obj"> ... </shape>           <!-- any number; shapegroup + instance: shapes/instance.py -->
         <emitter type="constant"/>                <!-- any number (area emitters live in a shape) -->
     </scene>
@@ -85,13 +87,15 @@ class MitsubaScene(Scene):
     integrator it is rendered by path tracing with unbounded depth (Mitsuba 3.9 asks for one; earlier 3.x
     versions made this same default).
     """
-    children = ("shape", "emitter", "sensor", "integrator", "bsdf", "texture")
+    children = ("shape", "emitter", "sensor", "integrator", "bsdf", "texture", "sampler", "film", "rfilter", "medium")
 
     def __init__(self, props, children, spec):
         self.location = spec.location
         self.nori_dialect = "upstream"   # Mitsuba's camera convention is upstream Nori's
         self.camera = self.integrator = None
-        # bsdfs and textures at the top level are only declared for references: _take_children passes them over.
+        # bsdfs, textures, media, samplers, films and rfilters at the top level are only declared for references
+        # (Mitsuba's docs scenes declare <sampler id> beside an included sensor that refers to it; one that nothing
+        # refers to is ignored, as Mitsuba 3.9.1 ignores it): _take_children passes them over.
         # So is an area emitter that a shape holds by a <ref> (Mitsuba's own Cornell boxes declare the light at the
         # top level, after the shape): Mitsuba 3.9.1's scene lists area emitters only through their shapes. One that
         # no shape holds stays an error (Mitsuba ignores it silently: the light the file meant is missing).

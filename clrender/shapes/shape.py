@@ -32,7 +32,7 @@ class Shape(abc.ABC):
     PARAMS: list = []
     FLAGS: tuple = ()
     METHODS: tuple = ("surface", "sample", "pdf")
-    children = ("bsdf", "emitter")
+    children = ("bsdf", "emitter", "medium")
 
     def pack(self, ctx, index: int, row) -> None:
         """Fill the Shape row `row` of shape number `index` (its bsdf/emitter fields are the caller's) and add the
@@ -62,9 +62,18 @@ class Shape(abc.ABC):
     def _attach(self, children, spec):
         self.bsdf = None
         self.emitter = None
+        self.interior = self.exterior = None   # media (clrender/media/): what lies on either side of the surface
         for c in children:
             kind = c.spec.tag
-            if kind == "bsdf":
+            if kind == "medium":
+                side = c.spec.name
+                if side not in ("interior", "exterior"):
+                    raise SceneError(f'a <medium> in a shape needs name="interior" or name="exterior" (the side it '
+                                     f'fills), got {"no name" if side is None else repr(side)}', c.spec.location)
+                if getattr(self, side) is not None:
+                    raise SceneError(f"a shape can have only one {side} medium", c.spec.location)
+                setattr(self, side, c)
+            elif kind == "bsdf":
                 if self.bsdf is not None:
                     raise SceneError(f"a shape can have only one <bsdf> (first at line {self.bsdf.spec.location.line})",
                                      c.spec.location)

@@ -6,17 +6,21 @@ batches into launches of at most ``CHUNK`` work-items so each stays short. Rando
 kernels/rng.h keyed by (seed, global sample index, 0), so a batch is reproducible however it is split.
 
 The BSDF helpers take any Bsdf row from a plugin's ``.pack()`` (or an array of rows plus a per-sample
-row index, to run many cases in one launch).
+row index, to run many cases in one launch). Their program holds only the plugins those rows use (``rows_plugins``:
+the BSDFs' tags, the composites' nesting depth and the textures the side table holds), as a render program holds
+only its scene's: a program with every plugin takes minutes to compile on 2 cores, one with a plugin or two
+seconds. ``defines=ALL_PLUGINS`` builds the one with every plugin.
 """
 from __future__ import annotations
 
+import contextlib
 import os
 from dataclasses import dataclass
 
 import numpy as np
 
-from .. import plugins  # noqa: F401  (the test programs hold every plugin)
-from ..device import codegen, layout
+from .. import plugins  # noqa: F401  (the rows' tags are numbered over every registered plugin)
+from ..device import codegen, dispatch, layout
 from ..device.program import MIN_GENERIC_GLOBAL, build_program
 
 LOCAL = 64
@@ -57,21 +61,106 @@ def padded(n: int, local: int = LOCAL) -> int:
 
 class BsdfRows(np.ndarray):
     """Bsdf rows carrying the texture and bsdf_tables rows they index (made by :func:`pack_rows`); the batch
-    functions use those unless given others."""
+    functions use those unless given others. `plugins`: the PluginSet they use, exactly (the BSDF's composite depth
+    and its texture table's tags, which the rows alone tell only as bounds)."""
 
     def __array_finalize__(self, obj):
         self.textures = getattr(obj, "textures", None)
         self.tables = getattr(obj, "tables", None)
+        self.plugins = getattr(obj, "plugins", None)
 
 
 def pack_rows(bsdf) -> BsdfRows:
     """A lone BSDF's rows (its own first, then its children's, Bsdf.pack_rows) with their own side tables."""
+    from ..bsdfs.composite import composite_depth
     from ..textures.texture import TextureTable
 
     table = TextureTable()
     rows = np.array(bsdf.pack_rows(table), layout.dtype("Bsdf")).view(BsdfRows)
     rows.textures, rows.tables = table.array(), table.bsdf_tables_array()
+    rows.plugins = dispatch.PluginSet.from_tags({"bsdf": {int(t) for t in rows["type"]}, "texture": table.tags},
+                                                {"bsdf": composite_depth(bsdf)})
     return rows
+
+
+#: `defines` of a test program holding every registered plugin (as a build without a plugin set does)
+ALL_PLUGINS = {dispatch.ALL_PLUGINS: None}
+
+
+def _known(kind: str, tags) -> set:
+    """The tags that name a registered plugin of `kind` (any other takes the methods' default in every program)."""
+    n = len(dispatch.plugins(kind))
+    return {int(t) for t in np.atleast_1d(tags) if 0 <= int(t) < n}
+
+
+def rows_plugins(bsdf_rows, textures=None) -> dispatch.PluginSet:
+    """The plugins a batch of `bsdf_rows` may reach: their BSDF tags; composites nested as deep as the rows have
+    composite rows (a bound: a chain of d nested composites is d rows; ``pack_rows`` records the exact depth); and
+    the texture plugins whose tags appear in the `textures` table. That table also holds texel rows, whose first
+    word is pixel data: read as a tag it may add a texture plugin the rows do not use, never leave one out.
+    Rows made by ``pack_rows`` (with their own textures) carry their exact set."""
+    own = getattr(bsdf_rows, "plugins", None)
+    if own is not None and (textures is None or textures is getattr(bsdf_rows, "textures", None)):
+        return own
+    rows = _rows(bsdf_rows)
+    tags = _known("bsdf", rows["type"])
+    classes = dispatch.plugins("bsdf")
+    composites = sum(dispatch.is_composite(classes[int(t)]) for t in rows["type"] if int(t) in tags)
+    if textures is None:
+        textures = getattr(bsdf_rows, "textures", None)
+    tex = set()
+    if textures is not None:
+        t = np.atleast_1d(np.asarray(textures, layout.dtype("Texture")))
+        # all-zero rows (the placeholder of an empty table, black texels) would read as tag 0, a bitmap, whose
+        # real rows are never all zero (they hold the image's size)
+        tex = _known("texture", t["type"][np.any(t.view(np.uint8).reshape(len(t), -1) != 0, axis=1)])
+    return dispatch.PluginSet.from_tags({"bsdf": tags, "texture": tex},
+                                        {"bsdf": min(composites, dispatch.BSDF.composite_levels)})
+
+
+def plugin_set(bsdfs=(), textures=(), levels: int = 0) -> dispatch.PluginSet:
+    """The PluginSet of BSDF and texture plugins named by prefix (`diffuse`, `checkerboard_color`), with composites
+    nested `levels` deep."""
+    out = set()
+    for kind, names in (("bsdf", bsdfs), ("texture", textures)):
+        known = {dispatch.prefix_of(c) for c in dispatch.plugins(kind)}
+        unknown = set(names) - known
+        if unknown:
+            raise ValueError(f"no {kind} plugin {sorted(unknown)}; known: {sorted(known)}")
+        out |= {(kind, n) for n in names}
+    return dispatch.PluginSet(frozenset(out), (("bsdf", int(levels)),))
+
+
+def union(a: dispatch.PluginSet, b: dispatch.PluginSet) -> dispatch.PluginSet:
+    """Both sets' plugins, each kind's composites as deep as the deeper set's."""
+    levels = dict(a.levels)
+    for kind, depth in b.levels:
+        levels[kind] = max(levels.get(kind, 0), depth)
+    return dispatch.PluginSet(a.used | b.used, tuple(sorted(levels.items())))
+
+
+_HOLDING: list = []   # the sets that programs_holding() adds to every program built now
+
+
+@contextlib.contextmanager
+def programs_holding(plugins: dispatch.PluginSet):
+    """Within it, every test program built for rows (no `defines` given) also holds `plugins`. A test file whose
+    cases use different subsets of its plugins (a bumpmap over four children, textured and plain rows) then
+    compiles one program for them all instead of one per subset (tests/bsdfs/conftest.py: a file's PROGRAM)."""
+    _HOLDING.append(plugins)
+    try:
+        yield
+    finally:
+        _HOLDING.pop()
+
+
+def _defines(bsdf_rows, textures, defines) -> dict:
+    if defines is not None:
+        return defines
+    s = rows_plugins(bsdf_rows, textures)
+    for extra in _HOLDING:
+        s = union(s, extra)
+    return s.defines()
 
 
 def _rows(bsdf_rows) -> np.ndarray:
@@ -130,9 +219,10 @@ def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 
     """n calls of bsdf_sample on the device. `bsdf_row`: one packed row or an array of rows (then
     `row_index` (n,) picks each sample's row); `wi`: (3,) or (n,3) in the local frame (normalised here);
     `uv`: (2,) or (n,2); `textures`, `tables`: the texture and bsdf_tables rows the rows index (a lone plugin's
-    `pack()` leaves them in `textures_table` and `bsdf_tables`); `defines`: of the program (a
-    plugin set's, say; default: every plugin); `geometry`: (4, 3) or (n, 4, 3), the query's dp/du, dp/dv, geometric
-    normal and world dp/du (GEOMETRY by default). Sample i uses the Sampler stream (seed, first + i, 0)."""
+    `pack()` leaves them in `textures_table` and `bsdf_tables`); `defines`: of the program (default: the plugin
+    set of the rows and textures, ``rows_plugins``, with any ``programs_holding`` adds; ALL_PLUGINS: every
+    plugin); `geometry`: (4, 3) or (n, 4, 3), the query's dp/du, dp/dv, geometric normal and world dp/du
+    (GEOMETRY by default). Sample i uses the Sampler stream (seed, first + i, 0)."""
     cl = _cl()
     rows = _rows(bsdf_row)
     wi = np.asarray(wi, np.float64)
@@ -144,10 +234,11 @@ def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 
     args[:, 3] = idx.view(np.float32)
     uvs = _per_item(uv, n, 2)
     geo = _geometry(geometry, n)
-    k = _kernel(ctx, "bsdf_sample_batch", defines=defines)
+    textures = getattr(bsdf_row, "textures", None) if textures is None else textures
+    k = _kernel(ctx, "bsdf_sample_batch", defines=_defines(bsdf_row, textures, defines))
     mf = cl.mem_flags
     d_rows = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=rows)
-    d_tex = _side_table(ctx, "Texture", getattr(bsdf_row, "textures", None) if textures is None else textures)
+    d_tex = _side_table(ctx, "Texture", textures)
     d_tables = _side_table(ctx, "BsdfTable", getattr(bsdf_row, "tables", None) if tables is None else tables)
     out = BsdfSamples(np.empty((n, 3), np.float32), np.empty((n, 3), np.float32), np.empty(n, np.float32),
                       np.empty(n, np.uint32), np.empty(n, np.float32), np.empty((n, 3), np.float32))
@@ -178,9 +269,9 @@ def bsdf_sample_batch(ctx, queue, bsdf_row, wi, n: int, seed: int = 0, uv=(0.5, 
 
 
 def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=None, with_albedo=False,
-                        textures=None, geometry=None, tables=None):
+                        textures=None, geometry=None, tables=None, defines=None):
     """bsdf_pdf and bsdf_eval at m direction pairs: wi (3,) or (m,3), wo (m,3). Returns (pdf (m,), f (m,3)),
-    plus bsdf_albedo(uv) (m,3) if `with_albedo`."""
+    plus bsdf_albedo(uv) (m,3) if `with_albedo`. Other arguments as bsdf_sample_batch's."""
     cl = _cl()
     rows = _rows(bsdf_row)
     wo = np.asarray(wo, np.float64).reshape(-1, 3)
@@ -191,10 +282,11 @@ def bsdf_pdf_eval_batch(ctx, queue, bsdf_row, wi, wo, uv=(0.5, 0.5), row_index=N
     wo_a = _per_item(wo, m, 4)
     uvs = _per_item(uv, m, 2)
     geo = _geometry(geometry, m)
-    k = _kernel(ctx, "bsdf_pdf_eval_batch")
+    textures = getattr(bsdf_row, "textures", None) if textures is None else textures
+    k = _kernel(ctx, "bsdf_pdf_eval_batch", defines=_defines(bsdf_row, textures, defines))
     mf = cl.mem_flags
     d_rows = cl.Buffer(ctx, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=rows)
-    d_tex = _side_table(ctx, "Texture", getattr(bsdf_row, "textures", None) if textures is None else textures)
+    d_tex = _side_table(ctx, "Texture", textures)
     d_tables = _side_table(ctx, "BsdfTable", getattr(bsdf_row, "tables", None) if tables is None else tables)
     pdf = np.empty(m, np.float32)
     f = np.empty((m, 3), np.float32)

@@ -152,11 +152,12 @@ def compare_to_reference(film, mean, stderr, alpha: float = 0.01, mask=None,
 def compare_image_means(film, mean, stderr, ref_samples: int | None = None, alpha: float = 0.01,
                         rfilter=None) -> ZTestResult:
     """The film's mean over all pixels (per channel) against a reference image's, with the variances of
-    :func:`compare_to_reference` summed over pixels (pixels are independent in a film)."""
+    :func:`compare_to_reference` summed over pixels (independent in a filter-sampling film; a splatting film's
+    times pool_factor)."""
     img = film.image.astype(np.float64).reshape(-1, 3)
     ref = np.asarray(mean, np.float64).reshape(-1, 3)
     ref_var = (np.asarray(stderr, np.float64) ** 2).reshape(-1, 3)
-    film_var = _film_variance(film, stderr, ref_samples, mean, rfilter).reshape(-1, 3)
+    film_var = _film_variance(film, stderr, ref_samples, mean, rfilter).reshape(-1, 3) * pool_factor(film)
     n = len(img)
     return _ztest(img.mean(axis=0) - ref.mean(axis=0), (film_var + ref_var).sum(axis=0) / n ** 2, alpha,
                   "image mean vs reference")
@@ -172,9 +173,18 @@ def compare_films(a, b, alpha: float = 0.01, mask=None) -> ZTestResult:
     return _ztest(diff, var, alpha, "film vs film")
 
 
+def pool_factor(film) -> float:
+    """What a sum of a splatting film's pixels' variances is to be multiplied by for the variance of the sum of the
+    pixels (neighbours share samples: Filter.splat_pool_factor, recorded by the Renderer; 4 where a merged film
+    lost the record, above what the Gaussian, tent and Mitchell filters give); 1 for a filter-sampling film."""
+    if getattr(film, "sum_w2", None) is None:
+        return 1.0
+    return float(film.metadata.get("splat_pool", 4.0))
+
+
 def mean_and_error(film, mask=None) -> tuple[np.ndarray, np.ndarray]:
-    """Mean over pixels (per channel) and its standard error, from the per-pixel variances."""
-    img, var = film.image.astype(np.float64), film.variance()
+    """Mean over pixels (per channel) and its standard error, from the per-pixel variances (and pool_factor)."""
+    img, var = film.image.astype(np.float64), film.variance() * pool_factor(film)
     if mask is not None:
         img, var = img[mask], var[mask]
     img, var = img.reshape(-1, 3), var.reshape(-1, 3)
@@ -207,7 +217,7 @@ def compare_block_means_to_value(film, reference, block: int = 16, alpha: float 
     the same value: local like a per-pixel test (a leak along one edge fails it) but pooling a tile's samples, so
     the means are close to normal where a pixel's few samples are skewed (Russian roulette, small bright lights)."""
     sums, n = block_sums(film.image, block)
-    var, _ = block_sums(film.variance(), block)
+    var, _ = block_sums(film.variance() * pool_factor(film), block)
     n = n.reshape(n.shape + (1,) * (sums.ndim - 2))
     m = sums / n
     ref = np.broadcast_to(np.asarray(reference, np.float64), m.shape)

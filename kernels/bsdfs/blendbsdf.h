@@ -39,6 +39,15 @@ INLINE vec3 COMPOSITE_FN(blendbsdf_sample)(__global const Bsdf* b, BsdfQuery* q,
     return bsdf_sample_weight(COMPOSITE_FN(blendbsdf_eval)(b, q), q->wo.z, COMPOSITE_FN(blendbsdf_pdf)(b, q));
 }
 
+/* Mitsuba's eval_null_transmission of a blend: its children's, blended. */
+INLINE vec3 COMPOSITE_FN(blendbsdf_null_transmission)(__global const Bsdf* b, const BsdfQuery* q) {
+    float w = blendbsdf_weight(b, q);
+    vec3 t = v3s(0.0f);
+    if (w < 1.0f) t = vmad(CHILD_FN(null_transmission)(b + b->p.blendbsdf.first, q), 1.0f - w, t);
+    if (w > 0.0f) t = vmad(CHILD_FN(null_transmission)(b + b->p.blendbsdf.second, q), w, t);
+    return t;
+}
+
 INLINE vec3 COMPOSITE_FN(blendbsdf_albedo)(__global const Bsdf* b, const BsdfQuery* q) {
     float w = blendbsdf_weight(b, q);
     vec3 first = CHILD_FN(albedo)(b + b->p.blendbsdf.first, q);

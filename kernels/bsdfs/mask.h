@@ -30,6 +30,13 @@ INLINE vec3 COMPOSITE_FN(mask_sample)(__global const Bsdf* b, BsdfQuery* q, floa
     return CHILD_FN(sample)(b + b->p.mask.child, q, (float2)(u.x / a, u.y));
 }
 
+/* Mitsuba's eval_null_transmission: the pass-through's share, plus what the child lets through unscattered. */
+INLINE vec3 COMPOSITE_FN(mask_null_transmission)(__global const Bsdf* b, const BsdfQuery* q) {
+    float a = mask_opacity(b, q);
+    vec3 child = a > 0.0f ? CHILD_FN(null_transmission)(b + b->p.mask.child, q) : v3s(0.0f);
+    return vsub(v3s(1.0f), vscale(vsub(v3s(1.0f), child), a));
+}
+
 INLINE vec3 COMPOSITE_FN(mask_albedo)(__global const Bsdf* b, const BsdfQuery* q) {
     return CHILD_FN(albedo)(b + b->p.mask.child, q);
 }

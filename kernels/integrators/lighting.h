@@ -63,12 +63,12 @@ INLINE float hit_emitter_pdf(const SceneData* sd, vec3 ref, const Intersection* 
     return scene_emitter_pdf(sd, e, &q);
 }
 
-/* The shadow ray of an emitter sample q->p (or toward q->wi, for lights at infinity) seen from the hit `its`: it
-   starts off the surface (spawn_origin) and aims at q->p from there, stopping short of the light's own surface. A
-   segment too short to hold anything gets tmax <= 0: nothing can block it (shadow_occluded). */
-INLINE Ray light_shadow_ray(const Intersection* its, const EmitterQuery* q) {
+/* The shadow ray of an emitter sample q->p (or toward q->wi, for lights at infinity) from o: it aims at q->p,
+   stopping short of the light's own surface. A segment too short to hold anything gets tmax <= 0: nothing can block
+   it (shadow_occluded). From the hit `its`, it starts off the surface (spawn_origin). */
+INLINE Ray shadow_ray_from(vec3 o, const EmitterQuery* q) {
     Ray r;
-    r.o = spawn_origin(its, q->wi);
+    r.o = o;
     r.tmin = 0.0f;
     if (!isfinite(q->dist)) {
         r.d = q->wi;
@@ -80,6 +80,10 @@ INLINE Ray light_shadow_ray(const Intersection* its, const EmitterQuery* q) {
     r.d = vscale(d, 1.0f / len);
     r.tmax = len * (1.0f - 1e-4f) - ray_eps(q->p);
     return r;
+}
+
+INLINE Ray light_shadow_ray(const Intersection* its, const EmitterQuery* q) {
+    return shadow_ray_from(spawn_origin(its, q->wi), q);
 }
 
 INLINE bool shadow_occluded(const SceneData* sd, const Ray* r) {

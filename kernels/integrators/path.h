@@ -35,6 +35,11 @@ typedef struct {
     uint alive;         /* `ray` is still to be traced */
     uint shadow_pending;
     uint valid;         /* Mitsuba's path: whether the sample keeps what it gathered (path_mitsuba.h) */
+    vec3 chan_pdf;      /* volpath in media: the path's free-flight density had each channel been the hero, over
+                           their mean (media.h) */
+    uint medium;        /* the medium `ray` travels in (a row of `media`; NONE: vacuum; volpath, media.h) */
+    uint shadow_medium; /* the medium `shadow` starts in */
+    uint hero;          /* the channel whose extinction samples the path's free flights (3: not chosen yet) */
 } PathState;
 
 /* Stage 0: a camera ray. */
@@ -50,6 +55,10 @@ INLINE void path_begin(const SceneData* sd, PathState* ps, Ray ray) {
     ps->alive = 1u;
     ps->shadow_pending = 0u;
     ps->valid = 1u;
+    ps->medium = sd->info->camera_medium;
+    ps->shadow_medium = NONE;
+    ps->chan_pdf = v3s(1.0f);
+    ps->hero = 3u;
 #if defined(PATH_MITSUBA)
     ps->valid = sd->info->n_infinite > 0u || sd->info->p.path_mitsuba.volpath != 0u;
     if (sd->info->max_depth == 0u) { ps->alive = 0u; ps->valid = 0u; }   /* Mitsuba: max_depth 0 renders nothing */
@@ -104,6 +113,23 @@ INLINE void path_shadow_done(PathState* ps, bool occluded) {
     ps->shadow_pending = 0u;
 }
 
+/* Stage 2b with media (kernels/integrators/media.h): the pending sample times its shadow ray's transmittance. */
+INLINE void path_shadow_through(PathState* ps, vec3 transmittance) {
+    if (ps->shadow_pending) ps->L = vadd(ps->L, vmul(ps->shadow_L, transmittance));
+    ps->shadow_pending = 0u;
+}
+
+#if defined(PATH_MITSUBA)
+/* Mitsuba's roulette, after a scattering event (a BSDF's or, in volpath, a medium's) once depth reaches rr_depth. */
+INLINE void path_roulette_mitsuba(const SceneData* sd, PathState* ps, Sampler* smp) {
+    if (ps->depth >= sd->info->rr_depth) {
+        float q = minf(max3(ps->beta) * ps->eta * ps->eta, 0.95f);
+        if (!(next1d(smp) < q)) { ps->alive = 0u; return; }
+        ps->beta = vdivs(ps->beta, q);
+    }
+}
+#endif
+
 /* Stage 3: Russian roulette as Nori's, then the BSDF sample that makes the next segment (Mitsuba: the sample, then
    the roulette, from the depth counted after it). */
 INLINE void path_continue(const SceneData* sd, PathState* ps, const Intersection* its, __global const Bsdf* b,
@@ -126,11 +152,7 @@ INLINE void path_continue(const SceneData* sd, PathState* ps, const Intersection
     ps->ray = spawn_ray_from(its, to_world(&its->sh, bq.wo));
     ps->depth += 1u;
 #if defined(PATH_MITSUBA)
-    if (ps->depth >= sd->info->rr_depth) {
-        float q = minf(max3(ps->beta) * ps->eta * ps->eta, 0.95f);
-        if (!(next1d(smp) < q)) { ps->alive = 0u; return; }
-        ps->beta = vdivs(ps->beta, q);
-    }
+    path_roulette_mitsuba(sd, ps, smp);
 #endif
 }
 

@@ -11,6 +11,11 @@ INLINE vec3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
         Hit h;
         bool hit = scene_trace(sd, &ps.ray, &h);
         path_vertex(sd, &ps, hit, &h, smp);
+#if defined(CLR_MEDIA) && defined(PATH_MITSUBA)
+        /* volpath's shadow rays cross media and pass-through surfaces (media.h); Mitsuba's path ignores media */
+        if (ps.shadow_pending && sd->info->p.path_mitsuba.volpath != 0u)
+            path_shadow_through(&ps, shadow_transmittance(sd, &ps.shadow, ps.shadow_medium));
+#endif
         if (ps.shadow_pending) path_shadow_done(&ps, shadow_occluded(sd, &ps.shadow));
     }
     return path_result(sd, &ps);

@@ -9,6 +9,9 @@
 #define PATH_USE_MATS
 #define PATH_MITSUBA
 #include "path.h"
+#ifdef CLR_MEDIA
+#include "media.h"
+#endif
 
 /* Whether path_continue's sample from direction d (at depth `depth`) was a null event: a discrete sample that goes
    on undeviated (a failed sample is not: depth stays). */
@@ -26,6 +29,9 @@ INLINE void path_vertex(const SceneData* sd, PathState* ps, bool traced, const H
     bool hit = traced && scene_surface(sd, &ps->ray, h, &its);
     bool hide = sd->info->p.path_mitsuba.hide_emitters != 0u;
     if (sd->info->p.path_mitsuba.volpath != 0u) {
+#ifdef CLR_MEDIA
+        if (ps->medium != NONE && medium_flight(sd, ps, hit ? its.t : ps->ray.tmax, smp)) return;
+#endif
         vec3 before = ps->L;
         hit = path_emission(sd, ps, hit, &its, true);
         if (hide && ps->depth == 0u) ps->L = before;
@@ -45,11 +51,29 @@ INLINE void path_vertex(const SceneData* sd, PathState* ps, bool traced, const H
     path_sample_lights(sd, ps, &its, b, smp);
     vec3 d = ps->ray.d;
     uint depth = ps->depth;
+#ifdef CLR_MEDIA
+    if (ps->shadow_pending) ps->shadow_medium = medium_across(sd, &its, ps->shadow.d, ps->medium);
+    uint after_delta = ps->after_delta;
+    float prev_pdf = ps->prev_pdf;
+    vec3 prev_p = ps->prev_p;
+#endif
     path_continue(sd, ps, &its, b, smp);
     bool null_event = path_null_event(ps, depth, d);
     if (sd->info->p.path_mitsuba.volpath != 0u) {
         if (null_event) ps->depth = depth;   /* null events do not count toward max_depth */
         if (ps->depth >= sd->info->max_depth) ps->alive = 0u;
+#ifdef CLR_MEDIA
+        ps->medium = medium_across(sd, &its, ps->ray.d, ps->medium);
+        if (null_event) {
+            /* a pass-through that shadow rays cross too (media.h): MIS stays with the last real vertex */
+            BsdfQuery q = bsdf_query(sd, &its, vneg(d));
+            if (!is_black(bsdf_null_transmission(b, &q))) {
+                ps->after_delta = after_delta;
+                ps->prev_pdf = prev_pdf;
+                ps->prev_p = prev_p;
+            }
+        }
+#endif
     } else if (!null_event) {
         ps->valid = 1u;
     }

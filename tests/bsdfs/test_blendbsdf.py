@@ -17,6 +17,10 @@ from .coated_common import CHI2_SEED  # noqa: F401 (read by conftest.py's chi2_r
 from .coated_common import (check_energy, check_fraction_parameter_errors, check_smooth_pdf_integral, check_textured,
                             check_values, check_weights, chi2_case_of, rows_of, value_cases, wi_at)
 
+#: the file's one test program (tests/bsdfs/conftest.py one_program)
+PROGRAM = dict(bsdfs=("blendbsdf", "plastic", "roughplastic"), textures=("checkerboard_color",), levels=1)
+
+
 ROUGH = {"type": "roughplastic", "alpha": 0.2, "distribution": "ggx"}
 CASES = [("blend-rough-plastic-30", {"type": "blendbsdf", "weight": 0.35, "a": ROUGH, "b": {"type": "plastic"}},
           30.0, False, 0.2)]

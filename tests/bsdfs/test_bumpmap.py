@@ -13,6 +13,11 @@ from clrender.scene.registry import create
 
 from .perturbed_common import DATA, FLAT_CHILDREN, check_tilted_chi2, check_unperturbed_is_the_child, check_values, spec
 
+#: the file's one test program (tests/bsdfs/conftest.py one_program)
+PROGRAM = dict(bsdfs=("bumpmap", "blendbsdf", "conductor", "dielectric", "diffuse", "roughconductor", "roughdielectric",
+               "roughplastic"), textures=("bitmap",), levels=2)
+
+
 TILTED = {   # name: (wrapper dict, wi, uv, the normal the wrapper should reflect about, roughly (for the grid))
     "bumpmap-roughplastic": ({"type": "bumpmap", "scale": 0.5,
                               "h": {"type": "bitmap", "filename": "perturbed_height.png", "raw": True},

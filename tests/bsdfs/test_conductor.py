@@ -13,6 +13,10 @@ from clrender.testing.plugin_checks import (UV2, bsdf_sample_batch, check_render
 from .mitsuba_values import case_id, check_delta_events, ref_cases
 
 make, row = mitsuba_bsdf, mitsuba_row
+#: the file's one test program (tests/bsdfs/conftest.py one_program)
+PROGRAM = dict(bsdfs=("conductor",), textures=("checkerboard_color",))
+
+
 DELTA_REFS = ref_cases(("conductor",))
 
 

@@ -20,6 +20,10 @@ from .test_mirror import row_mirror
 INT_IOR, EXT_IOR = 1.5046, 1.000277
 
 
+#: the file's one test program (tests/bsdfs/conftest.py one_program)
+PROGRAM = dict(bsdfs=("dielectric", "mirror"), textures=("checkerboard_color",))
+
+
 def row_dielectric(int_ior=INT_IOR, ext_ior=EXT_IOR):
     return plugin_row(f'<bsdf type="dielectric"><float name="intIOR" value="{int_ior!r}"/>'
                       f'<float name="extIOR" value="{ext_ior!r}"/></bsdf>')

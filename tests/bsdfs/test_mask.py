@@ -18,6 +18,11 @@ from .coated_common import CHI2_SEED  # noqa: F401 (read by conftest.py's chi2_r
 from .coated_common import (check_energy, check_fraction_parameter_errors, check_smooth_pdf_integral, check_textured,
                             check_values, check_weights, chi2_case_of, rgb, rows_of, value_cases, wi_at)
 
+#: the file's one test program (tests/bsdfs/conftest.py one_program)
+PROGRAM = dict(bsdfs=("mask", "blendbsdf", "plastic", "roughplastic", "twosided"), textures=("checkerboard_color",),
+               levels=3)
+
+
 ROUGH = {"type": "roughplastic", "alpha": 0.2, "distribution": "ggx"}
 CASES = [
     ("mask-rough-50", {"type": "mask", "opacity": 0.6, "a": ROUGH}, 50.0, False, 0.2),

@@ -15,6 +15,10 @@ from clrender.testing.plugin_checks import (ALPHA, FAMILIES, albedo_quadrature, 
 
 from .test_diffuse import _c, row_diffuse
 
+#: the file's one test program (tests/bsdfs/conftest.py one_program)
+PROGRAM = dict(bsdfs=("microfacet", "dielectric", "diffuse", "mirror"), textures=("checkerboard_color",))
+
+
 ANGLES = (0.0, 30.0, 60.0, 85.0)
 INT_IOR, EXT_IOR = 1.5046, 1.000277
 

@@ -12,6 +12,11 @@ from clrender.scene.registry import create
 
 from .perturbed_common import DATA, FLAT_CHILDREN, check_tilted_chi2, check_unperturbed_is_the_child, check_values, spec
 
+#: the file's one test program (tests/bsdfs/conftest.py one_program)
+PROGRAM = dict(bsdfs=("normalmap", "bumpmap", "blendbsdf", "conductor", "dielectric", "diffuse", "roughconductor",
+               "roughdielectric", "roughplastic", "twosided"), textures=("bitmap",), levels=2)
+
+
 TILTED = {   # name: (wrapper dict, wi, uv, the normal the wrapper should reflect about, roughly (for the grid))
     "normalmap-roughconductor": ({"type": "normalmap", "normalmap": {"type": "rgb", "value": [0.75, 0.4, 0.85]},
                                   "bsdf": {"type": "roughconductor", "alpha": 0.25, "distribution": "ggx"}},

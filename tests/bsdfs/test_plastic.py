@@ -18,6 +18,10 @@ from clrender.testing.plugin_checks import (ALPHA, FAMILIES, FURNACE_THETA, bsdf
 from .coated_common import (CHI2_SEED, albedo_quadrature, check_energy, check_smooth_pdf_integral, check_textured,
                             check_values, check_weights, chi2_case_of, rgb, rows_of, value_cases, wi_at)
 
+#: the file's one test program (tests/bsdfs/conftest.py one_program)
+PROGRAM = dict(bsdfs=("plastic",), textures=("checkerboard_color",))
+
+
 CASES = [(f"plastic-{th:g}", {"type": "plastic", "diffuse_reflectance": rgb(0.2, 0.5, 0.8)}, th, False, None)
          for th in (0.0, 40.0, 85.0)]
 CASES.append(("plastic-ior2.2-nonlinear-60", {"type": "plastic", "int_ior": 2.2, "nonlinear": True}, 60.0, False,

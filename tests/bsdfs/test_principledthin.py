@@ -20,6 +20,10 @@ from clrender.testing.plugin_checks import (ALPHA, FAMILIES, albedo_quadrature, 
 from .principled_common import (check_albedo, check_eval_and_pdf, check_textured, check_weights, chi2_case_of,
                                 grid_for, make, value_cases)
 
+#: the file's one test program (tests/bsdfs/conftest.py one_program)
+PROGRAM = dict(bsdfs=("principledthin",), textures=("checkerboard_color",))
+
+
 CHI2_SEED = 11
 
 # --------------------------------------------------------------------------------------- chi2 cases

@@ -23,6 +23,10 @@ make, row = mitsuba_bsdf, mitsuba_row
 
 
 # --------------------------------------------------------------------------------------- chi2 cases
+#: the file's one test program (tests/bsdfs/conftest.py one_program)
+PROGRAM = dict(bsdfs=("roughdielectric",), textures=("checkerboard_color",))
+
+
 def _cases():
     cases = []
     for dist in ("beckmann", "ggx"):

@@ -18,6 +18,10 @@ from .coated_common import (CHI2_SEED, albedo_quadrature, check_energy, check_sm
                             check_weights, chi2_case_of, rgb, rows_of, value_cases, wi_at)
 
 
+#: the file's one test program (tests/bsdfs/conftest.py one_program)
+PROGRAM = dict(bsdfs=("roughplastic", "blendbsdf"), textures=("checkerboard_color",), levels=1)
+
+
 def _cases():
     c = []
     for alpha in (0.05, 0.3, 0.8):

@@ -15,6 +15,10 @@ from clrender.testing.plugin_checks import (FAMILIES, check_render_value, render
 from .coated_common import CHI2_SEED  # noqa: F401 (read by conftest.py's chi2_runs)
 from .coated_common import (check_smooth_pdf_integral, check_values, check_weights, chi2_case_of, value_cases)
 
+#: the file's one test program (tests/bsdfs/conftest.py one_program)
+PROGRAM = dict(bsdfs=("twosided", "mask", "diffuse", "plastic", "roughplastic"), levels=2)
+
+
 ROUGH = {"type": "roughplastic", "alpha": 0.2, "distribution": "ggx"}
 CASES = [
     ("twosided-front-45", {"type": "twosided", "a": ROUGH, "b": {"type": "plastic"}}, 45.0, False, 0.2),

@@ -1,0 +1,43 @@
+"""What every participating medium plugin shares: its nested phase function (default isotropic) and its row of the
+scene's `media` table (layout.ROWS "Medium"), which shapes (interior/exterior) and the camera point at.
+
+Media are Mitsuba 3's: a shape's `interior` is the medium on the side its normals point away from, `exterior` the
+one they point to; a path that crosses the shape's surface goes on in the medium on the side it leaves toward. The
+kernel half is `kernels/media/<name>.h`: `<name>_sigma_t` and `<name>_albedo` at a point (gen/medium_dispatch.h,
+kind MEDIUM in clrender/device/dispatch.py); the integrator (kernels/integrators/media.h) samples free flights.
+"""
+from __future__ import annotations
+
+from ..device import dispatch, layout
+from ..errors import SceneError
+
+
+class Medium:
+    kernel: str = ""
+    PARAMS: list = []
+    FLAGS: tuple = ()
+    children = ("phase",)
+
+    def _read_phase(self, children, spec) -> None:
+        from ..phase.isotropic import Isotropic
+
+        phases = [c for c in children if c.spec.tag == "phase"]
+        if len(phases) > 1:
+            raise SceneError(f"{spec.describe()} takes one <phase>; this is a second one", phases[1].spec.location)
+        self.phase = phases[0] if phases else Isotropic()
+
+    def capabilities(self) -> tuple:
+        """The row's flags (a parameter may add some to the class's FLAGS)."""
+        return tuple(self.FLAGS)
+
+    def pack(self, phase_index: int):
+        """This medium's row of the `media` table, its phase function being row `phase_index` of `phases`."""
+        row = layout.zeros("Medium")[0]
+        row["type"] = dispatch.tag_of(type(self))
+        row["flags"] = dispatch.flags_of(type(self), self.capabilities())
+        row["phase"] = phase_index
+        self.fill(row)
+        return row
+
+    def fill(self, row) -> None:
+        """Set this plugin's member of the row's union."""
