@@ -350,7 +350,7 @@ class SplatExecutor:
         return max(1, rows) * self.width
 
     def bind(self, film: dict) -> None:
-        self.gather.set(**{k: v for k, v in film.items() if k in ("acc0", "acc1", "acc2", "bad")})
+        self.gather.set(**{k: v for k, v in film.items() if k != "rays"})   # all but the ray counters' dummy
 
     def warm(self) -> None:
         self._buffer(1)

@@ -9,10 +9,8 @@ import numpy as np
 from .device import layout
 from .errors import SceneError
 
-#: bytes per pixel on the device: the film's accumulators (layout.FILM_ACCUMULATORS), without the ray counters
-DEVICE_BYTES_PER_PIXEL = layout.film_bytes_per_pixel(count_rays=False)
-#: bytes per pixel on the host: the downloaded accumulators plus the Film's float64 sums and its image
-HOST_BYTES_PER_PIXEL = DEVICE_BYTES_PER_PIXEL + 2 * 32 + 8 + 8 + 8 + 12 + 24
+#: bytes per pixel on the host beside the downloaded accumulators: the Film's float64 sums and its image
+HOST_EXTRA_BYTES_PER_PIXEL = 2 * 32 + 8 + 8 + 8 + 12 + 24
 #: pixels and sample numbers are 32-bit kernel arguments
 MAX_PIXELS = 2**32 - 1
 
@@ -36,8 +34,10 @@ def _gib(n: float) -> str:
     return f"{n / 2**30:.1f} GiB"
 
 
-def check_film_fits(scene, device, count_rays: bool = False, fixed_device_bytes: int = 0) -> None:
-    """Raise a SceneError at the camera's width/height if the film cannot be allocated."""
+def check_film_fits(scene, device, count_rays: bool = False, fixed_device_bytes: int = 0,
+                    splat: bool = True) -> None:
+    """Raise a SceneError at the camera's width/height if the film cannot be allocated (`splat`: with a splatting
+    film's accumulators, which a film whose reconstruction is not decided yet may need)."""
     import pyopencl as cl
 
     w, h = int(scene.width), int(scene.height)
@@ -54,10 +54,10 @@ def check_film_fits(scene, device, count_rays: bool = False, fixed_device_bytes:
     if n > MAX_PIXELS:
         raise SceneError(f"{film} has more than {MAX_PIXELS} pixels, the most a render can address{hint}",
                          where)
-    per_pixel = layout.film_bytes_per_pixel(count_rays)
+    per_pixel = layout.film_bytes_per_pixel(count_rays, splat)
     # the largest accumulator buffer (acc0, acc1: one float4 per pixel)
     largest = n * max(np.dtype(dt).itemsize * int(np.prod(shape)) for dt, shape in
-                      (layout.film_element(name) for name, *_ in layout.FILM_ACCUMULATORS))
+                      (layout.film_element(name) for name, _full in layout.film_buffers(count_rays, splat)))
     if largest > device.max_mem_alloc_size:
         raise SceneError(f"{film} needs {_gib(largest)} in one device buffer, but the device allows "
                          f"{_gib(device.max_mem_alloc_size)} per buffer{hint}", where)
@@ -65,7 +65,7 @@ def check_film_fits(scene, device, count_rays: bool = False, fixed_device_bytes:
     if dev_bytes > device.global_mem_size:
         raise SceneError(f"{film} needs {_gib(dev_bytes)} of device memory, but the device has "
                          f"{_gib(device.global_mem_size)}{hint}", where)
-    host_bytes = HOST_BYTES_PER_PIXEL * n
+    host_bytes = (per_pixel + HOST_EXTRA_BYTES_PER_PIXEL) * n
     if device.type & cl.device_type.CPU:  # a CPU device's buffers live in host memory too
         host_bytes += dev_bytes
     avail = available_host_memory()

@@ -111,7 +111,7 @@ class Renderer:
         self.ctx, self.queue = get_context(device)
         dev = self.ctx.devices[0]
         self.device_name = f"{dev.platform.name.strip()} / {dev.name.strip()}"
-        check_film_fits(scene, dev, self.count_rays)
+        check_film_fits(scene, dev, self.count_rays, splat=reconstruction != "sampling")
         self.buffers = buffers if buffers is not None else pack_scene(scene)
         t0 = time.perf_counter()
         #: the -D defines of the render program (`clrender bench` times builds of this very program)
@@ -165,14 +165,16 @@ class Renderer:
 
     def device_memory_bytes(self) -> int:
         """Bytes this renderer keeps on the device during a render: scene tables, camera, filter table,
-        and the per-pixel accumulators (layout.FILM_ACCUMULATORS: the ray counters' one-element dummy when not
+        and the per-pixel accumulators (layout.film_buffers: the ray counters' one-element dummy when not
         counting)."""
         fixed = sum(a.nbytes for a in self.buffers.scene_arrays())
         fixed += self.buffers.camera.nbytes + self.buffers.filter_cdf.nbytes
-        dummies = layout.film_bytes_per_pixel(True) - layout.film_bytes_per_pixel(False)
-        per_pixel = layout.film_bytes_per_pixel(self.count_rays)
-        fixed += getattr(self.executor, "device_bytes", 0)   # the wavefront's path state
-        return int(fixed + per_pixel * self.n_pixels + (0 if self.count_rays else dummies))
+        film = 0
+        for name, full in layout.film_buffers(self.count_rays, self.splat):
+            dt, shape = layout.film_element(name)
+            film += np.dtype(dt).itemsize * int(np.prod(shape)) * (self.n_pixels if full else 1)
+        fixed += getattr(self.executor, "device_bytes", 0)   # the wavefront's path state, the splat records
+        return int(fixed + film)
 
     def accumulators(self):
         """Zeroed per-pixel accumulators on the host and the device ({name: array}, {name: buffer} of
@@ -182,14 +184,10 @@ class Renderer:
         n = self.n_pixels
         host, dev = {}, {}
         mf = cl.mem_flags
-        for name, *_, counting_only in layout.FILM_ACCUMULATORS:
+        for name, full in layout.film_buffers(self.count_rays, self.splat):
             dt, shape = layout.film_element(name)
-            # a counting-only buffer (the ray counters) is a one-element dummy the kernel never touches otherwise
-            host[name] = np.zeros((n if self.count_rays or not counting_only else 1, *shape), dt)
+            host[name] = np.zeros((n if full else 1, *shape), dt)
             dev[name] = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=host[name])
-        if self.splat:   # a splatting film's sums of w^2 L and w^2 (Film.variance)
-            host["acc2"] = np.zeros((n, 4), np.float32)
-            dev["acc2"] = cl.Buffer(self.ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=host["acc2"])
         self.executor.bind(dev)
         if self._features is not None:   # kernels/feature_aovs.h: three float4 per pixel
             feat = np.zeros((n, 12), np.float32)
@@ -353,9 +351,8 @@ class Renderer:
 
     def accumulator_names(self) -> list[str]:
         """The per-pixel sums a render of this renderer sends back (what a cluster task returns, without the ray
-        counters): layout.FILM_ACCUMULATORS', and a splatting film's acc2."""
-        names = [name for name, *_, counting_only in layout.FILM_ACCUMULATORS if not counting_only]
-        return names + (["acc2"] if self.splat else [])
+        counters): layout.film_buffers'."""
+        return [name for name, full in layout.film_buffers(False, self.splat) if full]
 
     def _download(self, host, dev, p0, p1) -> None:
         """Copy pixels p0:p1 of the device's accumulators into `host` (only the rendered range: a band of a 4K film

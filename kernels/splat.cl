@@ -57,11 +57,10 @@ __kernel void render_records(SCENE_ARGS, __global const Camera* cam, __global fl
 }
 
 /* Pixels pixel_offset .. + pixel_count: the pass's records of every neighbour within reach (the records hold
-   pixels rec_first .. rec_stop - 1, pixel p at (p - rec_base) * spp) added to the film's sums: acc0 (sum w L, sum w),
+   pixels rec_first .. rec_stop - 1, pixel p at (p - rec_base) * spp) added to the film's sums (SPLAT_FILM_ARGS, clrender/device/layout.py): acc0 (sum w L, sum w),
    acc1 (sum (w L)^2, own samples), acc2 (sum w^2 L, sum w^2: with acc1 the variance of the ratio), bad. */
 __kernel void splat_gather(__global const Camera* cam, __global const float4* records, __global const float* weights,
-                           uint rec_base, uint rec_first, uint rec_stop, __global float4* acc0,
-                           __global float4* acc1, __global float4* acc2, __global uint* bad, uint pixel_offset,
+                           uint rec_base, uint rec_first, uint rec_stop, SPLAT_FILM_ARGS, uint pixel_offset,
                            uint pixel_count, uint sample_offset, uint spp, uint seed) {
     uint gid = get_global_id(0);
     if (gid >= pixel_count) return;

@@ -68,12 +68,13 @@ def test_vectors_are_16_byte_aligned():
                 assert off % 16 == 0, (name, field, off)
 
 
-def test_film_accumulators_match_device(ctx, queue):
-    # FILM_ARGS as the render kernel takes them: each accumulator's element, sized by the device, against the dtype
-    # the host allocates, downloads and reads it with.
-    names = [n for n, *_ in layout.FILM_ACCUMULATORS]
+@pytest.mark.parametrize("macro", ["FILM_ARGS", "SPLAT_FILM_ARGS"])
+def test_film_accumulators_match_device(ctx, queue, macro):
+    # FILM_ARGS as the render kernels take them, SPLAT_FILM_ARGS as splat.cl's gather does: each accumulator's
+    # element, sized by the device, against the dtype the host allocates, downloads and reads it with.
+    names = [n for n, _t in getattr(layout, macro)]
     assert names[:3] == ["acc0", "acc1", "bad"]
-    src = "__kernel void probe(FILM_ARGS, __global uint* out) {\n"
+    src = f"__kernel void probe({macro}, __global uint* out) {{\n"
     src += "".join(f"    out[{i}] = (uint)sizeof(*{n});\n" for i, n in enumerate(names)) + "}\n"
     prg = build_program(ctx, src)
     out = np.zeros(len(names), np.uint32)
@@ -84,7 +85,18 @@ def test_film_accumulators_match_device(ctx, queue):
     queue.finish()
     host = [np.dtype(dt).itemsize * int(np.prod(shape)) for dt, shape in map(layout.film_element, names)]
     assert out.tolist() == host
-    assert layout.film_bytes_per_pixel() == sum(host[:3]) and layout.film_bytes_per_pixel(True) == sum(host)
+
+
+def test_film_buffers_by_render_kind():
+    size = {n: np.dtype(dt).itemsize * int(np.prod(shape)) for n, *_ in layout.FILM_ACCUMULATORS
+            for dt, shape in [layout.film_element(n)]}
+    base = size["acc0"] + size["acc1"] + size["bad"]
+    assert layout.film_buffers() == [("acc0", True), ("acc1", True), ("bad", True), ("rays", False)]
+    assert dict(layout.film_buffers(count_rays=True))["rays"] is True
+    assert dict(layout.film_buffers(splat=True))["acc2"] is True
+    assert layout.film_bytes_per_pixel() == base
+    assert layout.film_bytes_per_pixel(True) == base + size["rays"]
+    assert layout.film_bytes_per_pixel(splat=True) == base + size["acc2"]
 
 
 def test_textured_parameters_are_a_constant_and_a_texture_row():

@@ -49,8 +49,8 @@ def _scene_tables_c() -> str:
     init = " ".join(f"sd.{n} = s_{n};" for n, _, _ in layout.SCENE_TABLES)
     out.append(f"#define SCENE_ARGS {args}")
     out.append(f"#define SCENE_INIT(sd) SceneData sd; {init} SCENE_INIT_COUNTERS(sd)")
-    film = ", ".join(f"__global {t}* {n}" for n, t, *_ in layout.FILM_ACCUMULATORS)
-    out.append(f"#define FILM_ARGS {film}")
+    for macro, args in (("FILM_ARGS", layout.FILM_ARGS), ("SPLAT_FILM_ARGS", layout.SPLAT_FILM_ARGS)):
+        out.append(f"#define {macro} " + ", ".join(f"__global {t}* {n}" for n, t in args))
     return "\n".join(out)
 
 

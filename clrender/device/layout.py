@@ -126,18 +126,24 @@ SCENE_TABLES: list[tuple[str, str, str]] = [
     ("info", "SceneInfo", "scene-wide numbers and the integrator's parameters"),
 ]
 
-# The film's per-pixel accumulators, in the render kernel's argument order: (argument, element type, what each
-# pixel's element holds, whether it exists only in builds that count rays). One buffer of one element per pixel
-# each; the kernels take them as FILM_ARGS (each the argument of its name), the host allocates, downloads and reads
-# them by these names (clrender/renderer.py, film.py Film.sums), and the film's memory is counted from their sizes
-# (memcheck.py). Without CLRENDER_COUNT_RAYS a counting-only buffer is a one-element dummy the kernel never touches,
-# so both builds take the same arguments.
-FILM_ACCUMULATORS: list[tuple[str, str, str, bool]] = [
-    ("acc0", "float4", "xyz: sum of w L, w: sum of w (the filter weights)", False),
-    ("acc1", "float4", "xyz: sum of (w L)^2, w: samples accumulated", False),
-    ("bad", "uint", "samples dropped for being NaN/Inf", False),
-    ("rays", "uint4", "rays traced: camera, other closest-hit, shadow (any-hit), 0", True),
+# The film's per-pixel accumulators: (argument, element type, what each pixel's element holds, when it exists). One
+# buffer of one element per pixel each; the render kernels take them as FILM_ARGS (each the argument of its name),
+# splat.cl's gather a splatting film's as SPLAT_FILM_ARGS; the host allocates, downloads and reads them by these names
+# (clrender/renderer.py, film.py Film.sums), and the film's memory is counted from their sizes (memcheck.py).
+# When: "always"; "count_rays": in builds with CLRENDER_COUNT_RAYS, else a one-element dummy the kernel never
+# touches, so both builds take the same arguments; "splat": a splatting film's only (not a render kernel argument).
+FILM_ACCUMULATORS: list[tuple[str, str, str, str]] = [
+    ("acc0", "float4", "xyz: sum of w L, w: sum of w (the filter weights)", "always"),
+    ("acc1", "float4", "xyz: sum of (w L)^2, w: samples accumulated", "always"),
+    ("bad", "uint", "samples dropped for being NaN/Inf", "always"),
+    ("rays", "uint4", "rays traced: camera, other closest-hit, shadow (any-hit), 0", "count_rays"),
+    ("acc2", "float4", "xyz: sum of w^2 L, w: sum of w^2 (with acc1 the variance of a splatted pixel's ratio)",
+     "splat"),
 ]
+#: (argument, type) of the accumulators the render kernels take as FILM_ARGS, and splat.cl's gather as SPLAT_FILM_ARGS
+FILM_ARGS = [(n, t) for n, t, _what, when in FILM_ACCUMULATORS if when != "splat"]
+SPLAT_FILM_ARGS = [(n, t) for n, t, _what, when in FILM_ACCUMULATORS if when != "count_rays"]
+
 
 # Type tags and flag bits, shared the same way (emitted as #defines).
 ENUMS: dict[str, int] = {
@@ -291,11 +297,19 @@ def film_element(name: str) -> tuple:
     return _ELEMENTS[types[name]]
 
 
-def film_bytes_per_pixel(count_rays: bool = False) -> int:
-    """Device bytes per pixel of the film's accumulators (with the ray counters when counting)."""
+def film_buffers(count_rays: bool = False, splat: bool = False) -> list[tuple[str, bool]]:
+    """(name, whether it has one element per pixel) of the accumulators a render allocates: not full, a one-element
+    dummy (the ray counters when not counting); a splatting film's only for one."""
+    return [(name, when != "count_rays" or count_rays) for name, _t, _what, when in FILM_ACCUMULATORS
+            if when != "splat" or splat]
+
+
+def film_bytes_per_pixel(count_rays: bool = False, splat: bool = False) -> int:
+    """Device bytes per pixel of the film's accumulators (with the ray counters when counting, a splatting
+    film's own when splatting)."""
     out = 0
-    for name, _t, _what, counting_only in FILM_ACCUMULATORS:
-        if count_rays or not counting_only:
+    for name, full in film_buffers(count_rays, splat):
+        if full:
             dt, shape = film_element(name)
             out += np.dtype(dt).itemsize * int(np.prod(shape))
     return out
