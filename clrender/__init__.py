@@ -28,7 +28,7 @@ def render(scene, spp=None, seed=0, device=None, time_limit=None, progress=False
     ``driver``: "megakernel", "wavefront" (the path integrators) or "auto" (clrender/executors.py).
     ``reconstruction``: the film's, "splat" (Mitsuba's and Nori's: each sample weighted into every pixel within
     the filter's radius), "sampling" (filter importance sampling) or "auto" (splat where it can run: the
-    megakernel, uniform sampling, a filter wider than a box); the same expected image, see Renderer.
+    megakernel, a filter wider than a box, no feature AOVs); the same expected image, see Renderer.
     With ``target_error=E`` the render is adaptive (clrender/adaptive.py): rounds over the pixels whose relative error
     is still above E, from ``min_spp`` (16) up to ``max_spp`` (default: ``spp``, else the scene's sample count)
     samples per pixel; ``film.count`` says where the samples went. One process only (not with ``cluster=``).
@@ -41,9 +41,7 @@ def render(scene, spp=None, seed=0, device=None, time_limit=None, progress=False
             raise ValueError("adaptive sampling (target_error=) runs in one process, not on a cluster")
         from .renderer import Renderer
 
-        if reconstruction == "splat":
-            raise ValueError("adaptive sampling samples the filter: reconstruction='sampling' or 'auto'")
-        return Renderer(scene, device=device, driver=driver, reconstruction="sampling").render_adaptive(
+        return Renderer(scene, device=device, driver=driver, reconstruction=reconstruction).render_adaptive(
             target_error, min_spp, spp if max_spp is None else max_spp, seed=seed, time_limit=time_limit,
             progress=progress)
     if min_spp is not None or max_spp is not None:

@@ -304,13 +304,19 @@ class SplatExecutor:
     """kernels/splat.cl: a splatting film. A pass renders every sample of the pixels within the filter's reach of
     the pass's pixels into a record buffer (render_records, in launches of `launch_pixels`), then adds each pixel's
     neighbourhood to its sums (splat_gather). A band of pixels (a cluster task) renders its halo's samples too (the
-    same samples: random numbers are keyed by pixel and sample), so its sums are the one-process film's."""
+    same samples: random numbers are keyed by pixel and sample), so its sums are the one-process film's.
+
+    Adaptive sampling's launches (`launch`, `launch_spans`: pixels with counts of their own) go to a store instead,
+    each pixel's splats kept apart ((2 reach + 1)^2 float4 per pixel, store_bytes), and `resolve` turns it into the
+    film's sums, each pixel's splats weighed by 1 / its samples (kernels/splat.cl store_pixel, splat_resolve)."""
 
     name = "megakernel"
     #: the record buffer of a pass stays below this (its samples per pixel are cut to fit)
     MAX_RECORD_BYTES = 256 << 20
+    #: launch_spans: each listed pixel with its own samples in one launch (adaptive sampling's rounds)
+    spans = True
 
-    def __init__(self, ctx, queue, program, scene_bufs, camera, width, height, reach, launch_pixels):
+    def __init__(self, ctx, queue, program, scene_bufs, camera, width, height, reach, launch_pixels, mean_square):
         import pyopencl as cl
 
         from .device.kernelargs import KernelArgs
@@ -319,9 +325,17 @@ class SplatExecutor:
         self.width, self.height, self.reach = width, height, reach
         self.records = KernelArgs(cl.Kernel(program, "render_records")).set_scene(scene_bufs).set(cam=camera)
         self.gather = KernelArgs(cl.Kernel(program, "splat_gather")).set(cam=camera)
+        self.store_range = KernelArgs(cl.Kernel(program, "store_pass")).set_scene(scene_bufs).set(cam=camera)
+        self.store_list = KernelArgs(cl.Kernel(program, "store_spans")).set_scene(scene_bufs).set(cam=camera)
+        self.resolver = KernelArgs(cl.Kernel(program, "splat_resolve")).set(cam=camera)
+        self._m2 = cl.Buffer(ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR,   # (KernelArgs keeps none)
+                             hostbuf=np.ascontiguousarray(mean_square, np.float32))
+        self.resolver.set(m2=self._m2)
         self.launch_pixels = launch_pixels
         self.global_size = max(MIN_GENERIC_GLOBAL, _round_up(launch_pixels))
         self._buf, self._buf_samples = None, 0
+        self._store = None         # (store, own, own2): allocated by the first adaptive render
+        self._stored = False       # samples went to the store since the film was bound: resolve before reading
 
     def halo(self, p0: int, p1: int) -> tuple[int, int]:
         """The pixels whose samples reach pixels p0 .. p1 - 1: whole rows `reach` above and below."""
@@ -350,7 +364,76 @@ class SplatExecutor:
         return max(1, rows) * self.width
 
     def bind(self, film: dict) -> None:
-        self.gather.set(**{k: v for k, v in film.items() if k != "rays"})   # all but the ray counters' dummy
+        accumulators = {k: v for k, v in film.items() if k != "rays"}   # all but the ray counters' dummy
+        self.gather.set(**accumulators)
+        self.resolver.set(**accumulators)
+        self._stored = False
+        if self._store is not None:
+            self._clear_store()
+
+    # -- adaptive sampling's store ---------------------------------------------------------------------------
+    def store_bytes(self) -> int:
+        """Device bytes of the store: (2 reach + 1)^2 splats and two sums of a pixel's own, one float4 each."""
+        return self.width * self.height * 16 * ((2 * self.reach + 1) ** 2 + 2)
+
+    def _clear_store(self) -> None:
+        import pyopencl as cl
+
+        for buf in self._store:
+            cl.enqueue_fill_buffer(self.queue, buf, np.float32(0), 0, buf.size)
+
+    def _use_store(self) -> None:
+        import pyopencl as cl
+
+        if self._store is None:
+            n = self.width * self.height
+            mf = cl.mem_flags.READ_WRITE
+            self._store = (cl.Buffer(self.ctx, mf, 16 * n * (2 * self.reach + 1) ** 2), cl.Buffer(self.ctx, mf, 16 * n),
+                           cl.Buffer(self.ctx, mf, 16 * n))
+            self._clear_store()
+            store, own, own2 = self._store
+            for k in (self.store_range, self.store_list):
+                k.set(store=store, own=own, own2=own2)
+            self.resolver.set(store=store, own=own, own2=own2)
+        self._stored = True
+
+    def warm_list(self, pixel_list) -> None:
+        """The store's kernels' first launches (only adaptive renders use them, so only they pay that compile)."""
+        self._use_store()
+        self.launch(0, 0, 0, 0, 0)
+        self.launch_spans(0, 0, pixel_list, pixel_list, 0)   # (no entry read: any buffer does for spans)
+        self.resolve()
+
+    def launch(self, off: int, count: int, sample_offset: int, spp: int, seed: int, pixel_list=None) -> None:
+        """Samples sample_offset .. + spp - 1 of pixels off .. off + count - 1 into the store."""
+        import pyopencl as cl
+
+        if pixel_list is not None:
+            raise DriverError("a splatting film's pixel lists are launched with their spans (launch_spans)")
+        self._use_store()
+        self.store_range.set(pixel_offset=np.uint32(off), pixel_count=np.uint32(count),
+                             sample_offset=np.uint32(sample_offset), spp=np.uint32(spp), seed=np.uint32(seed))
+        cl.enqueue_nd_range_kernel(self.queue, self.store_range.kernel, (self.global_size,), (LOCAL_SIZE,))
+
+    def launch_spans(self, off: int, count: int, pixel_list, spans, seed: int) -> None:
+        """MegakernelExecutor.launch_spans' samples into the store."""
+        import pyopencl as cl
+
+        self._use_store()
+        self.store_list.set(pixel_list=pixel_list, spans=spans, pixel_offset=np.uint32(off),
+                            pixel_count=np.uint32(count), seed=np.uint32(seed))
+        cl.enqueue_nd_range_kernel(self.queue, self.store_list.kernel, (self.global_size,), (LOCAL_SIZE,))
+
+    def resolve(self) -> None:
+        """The film's sums from the store, if samples went there since the film was bound (before reading it)."""
+        import pyopencl as cl
+
+        if not self._stored:
+            return
+        n = self.width * self.height
+        for off in range(0, max(n, 1), self.launch_pixels):
+            self.resolver.set(pixel_offset=np.uint32(off), pixel_count=np.uint32(min(self.launch_pixels, n - off)))
+            cl.enqueue_nd_range_kernel(self.queue, self.resolver.kernel, (self.global_size,), (LOCAL_SIZE,))
 
     def warm(self) -> None:
         self._buffer(1)

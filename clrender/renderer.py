@@ -92,7 +92,8 @@ class Renderer:
     within the filter's radius), "sampling" filter importance sampling (render.cl: each sample in one pixel),
     "auto" splats wherever it can (``self.splat`` says which). The same expected image; a splatting film has
     about a third of the noise variance per pixel with Mitsuba's default Gaussian filter, and neighbouring pixels'
-    noise is correlated. Adaptive sampling samples the filter (an auto Renderer builds that program when asked).
+    noise is correlated. Adaptive sampling splats too, each pixel's samples weighed by 1 / its count
+    (SplatExecutor's store), unless the store does not fit the device (then it samples the filter).
     """
 
     def __init__(self, scene, device=None, fast_math: bool = False, buffers=None, defines=None,
@@ -145,7 +146,8 @@ class Renderer:
         self.launch_pixels = min(self.n_pixels, MAX_LAUNCH_PIXELS)
         if self.splat:
             self.executor = SplatExecutor(self.ctx, self.queue, self.program, self._scene_bufs, self._camera,
-                                          self.width, self.height, splat_reach(b.camera), self.launch_pixels)
+                                          self.width, self.height, splat_reach(b.camera), self.launch_pixels,
+                                          scene.camera.filter.splat_mean_square())
         else:
             executor = WavefrontExecutor if self.driver == "wavefront" else MegakernelExecutor
             self.executor = executor(self.ctx, self.queue, self.program, self._scene_bufs, self._camera,
@@ -196,10 +198,8 @@ class Renderer:
         return host, dev
 
     def launch(self, off: int, count: int, sample_offset: int, spp: int, seed: int, pixel_list=None) -> None:
-        """The executor's launch (clrender/executors.py), and the feature AOVs' of the same samples if asked for."""
-        if self.splat:
-            raise DriverError("a splatting film renders whole passes (render()); adaptive sampling and pixel "
-                              "lists need the filter-sampling film")
+        """The executor's launch (clrender/executors.py), and the feature AOVs' of the same samples if asked for (a
+        splatting film's launches go to its store, for pixels with counts of their own: adaptive sampling)."""
         self.executor.launch(off, count, sample_offset, spp, seed, pixel_list=pixel_list)
         self._launch_features(off, count, sample_offset, spp, seed, pixel_list)
 
@@ -235,10 +235,11 @@ class Renderer:
         even it finishes as a uniform render (`uniform_below`: the potential gain below which; 0: never)."""
         from .adaptive import UNIFORM_BELOW, AdaptiveOptions, render_adaptive
 
-        if self.splat:
+        if self.splat and not self.store_fits():
             if self.reconstruction != "auto":
-                raise DriverError("adaptive sampling samples the filter (a splatted sample would change its "
-                                  "neighbours' estimates): use --reconstruction sampling or auto")
+                raise DriverError(f"adaptive sampling's splatting film needs {self.executor.store_bytes() / 2**30:.1f}"
+                                  " GiB of device memory for this image, more than the device gives it: use "
+                                  "--reconstruction sampling or auto")
             if self._sampling is None:   # the same scene tables, the filter-sampling program
                 self._sampling = Renderer(self.scene, buffers=self.buffers, reconstruction="sampling",
                                           **self._init_args)
@@ -248,6 +249,14 @@ class Renderer:
                                     UNIFORM_BELOW if uniform_below is None else uniform_below)
         return render_adaptive(self, opts, seed=seed, time_limit=time_limit, progress=progress, partial=partial,
                                on_round=on_round)
+
+    def store_fits(self) -> bool:
+        """Whether a splatting film's store for adaptive sampling (SplatExecutor.store_bytes) fits the device: its
+        largest buffer within one allocation, all of it within half the device's memory."""
+        dev = self.ctx.devices[0]
+        k2 = (2 * self.executor.reach + 1) ** 2
+        return (16 * k2 * self.n_pixels <= dev.max_mem_alloc_size
+                and self.executor.store_bytes() + self.device_memory_bytes() <= dev.global_mem_size // 2)
 
     def render(self, spp: int | None = None, seed: int = 0, time_limit: float | None = None,
                progress: bool = False, on_pass=None, start_sample: int = 0, pixels=None,
@@ -370,6 +379,8 @@ class Renderer:
     def _film(self, done, seed, start_sample, stats, host, dev, p0, p1, partial=False) -> Film:
         """The Film of the `done` samples per pixel accumulated on the device so far (pixels p0:p1); fills in
         `stats`."""
+        if self.splat:
+            self.executor.resolve()   # adaptive sampling's store, if it was used, into the film's sums
         self._download(host, dev, p0, p1)
         stats.samples = done * (p1 - p0)
         stats.dropped = int(host["bad"].sum())

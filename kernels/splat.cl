@@ -19,6 +19,24 @@ INLINE int splat_reach(__global const Camera* cam) {
     return (int)ceil(cam->filter_radius - 0.5f);
 }
 
+/* Sample `index` of pixel `pix` as a splatting film draws it: its position u inside the pixel and its radiance L;
+   false for a NaN/Inf sample, which is dropped. */
+INLINE bool splat_sample(SceneData* sd, __global const Camera* cam, uint pix, uint index, uint seed, float2* u,
+                         vec3* L) {
+    uint px = pix % cam->width, py = pix / cam->width;
+    Sampler smp;
+    sampler_init(&smp, seed, pix, index);
+    *u = next2d(&smp);
+    float2 lens = cam->lens_radius > 0.0f ? next2d(&smp) : (float2)(0.5f, 0.5f);
+    Ray ray = camera_ray_lens(cam, (float)px + u->x, (float)py + u->y, lens);
+    *L = Li(sd, ray, &smp);
+#ifdef CLRENDER_TEST_POISON
+    if (index % 5u == 0u) L->x = NAN;
+    else if (index % 7u == 0u) L->y = INFINITY;
+#endif
+    return all_finite(*L);
+}
+
 /* Each sample's record: its radiance with w = 1, or 0 for a NaN/Inf sample (dropped, counted in its own pixel),
    and its filter weights toward the pixels within reach: weights[(2 reach + 1) (2 i + a) + reach + t] is
    f(pixel's centre + t - the sample's position) along axis a (x, y) for the sample at record i, 0 for a dropped
@@ -30,23 +48,13 @@ __kernel void render_records(SCENE_ARGS, __global const Camera* cam, __global fl
     if (gid >= pixel_count) return;
     SCENE_INIT(sd);
     uint pix = pixel_offset + gid;
-    uint px = pix % cam->width, py = pix / cam->width;
     int reach = splat_reach(cam);
     uint k = 2u * (uint)reach + 1u;
     size_t first = (size_t)(pix - rec_base) * spp;
     for (uint s = 0u; s < spp; ++s) {
-        Sampler smp;
-        sampler_init(&smp, seed, pix, sample_offset + s);
-        float2 u = next2d(&smp);
-        float2 lens = cam->lens_radius > 0.0f ? next2d(&smp) : (float2)(0.5f, 0.5f);
-        Ray ray = camera_ray_lens(cam, (float)px + u.x, (float)py + u.y, lens);
-        vec3 L = Li(&sd, ray, &smp);
-#ifdef CLRENDER_TEST_POISON
-        uint si = sample_offset + s;
-        if (si % 5u == 0u) L.x = NAN;
-        else if (si % 7u == 0u) L.y = INFINITY;
-#endif
-        bool ok = all_finite(L);
+        float2 u;
+        vec3 L;
+        bool ok = splat_sample(&sd, cam, pix, sample_offset + s, seed, &u, &L);
         records[first + s] = ok ? vf4(L, 1.0f) : (float4)(0.0f);
         __global float* wt = weights + (first + s) * 2u * k;
         for (int t = -reach; t <= reach; ++t) {
@@ -97,4 +105,105 @@ __kernel void splat_gather(__global const Camera* cam, __global const float4* re
     acc1[q] = vf4(vadd(vxyz(a1), swl2), a1.w + (float)own);
     acc2[q] = vf4(vadd(vxyz(a2), sw2l), a2.w + sw2);
     if (q >= rec_first && q < rec_stop) bad[q] += spp - own;
+}
+
+/* Adaptive sampling's splatting film (clrender/executors.py SplatExecutor, its store). Pixels whose sample counts
+   differ cannot pour their samples into shared sums: a pixel with 16 times the samples of its neighbour would weigh
+   16 times as much in the pixels between them, and an edge there would move. So each pixel keeps its own samples'
+   splats apart, store[(2 reach + 1)^2 pix + (2 reach + 1) (ty + reach) + tx + reach] = (sum of w L, sum of w) toward
+   the pixel at offset (tx, ty), with w = f(tx + 1/2 - u.x) f(ty + 1/2 - u.y), and its own sums own = (sum of L, all
+   its samples), own2 = (sum of L^2, dropped samples); splat_resolve weighs each pixel's splats by 1 / its samples,
+   which with equal counts is the uniform splatting film's sum. A pixel's sums depend only on its own samples, so
+   they are the same however its samples are cut into launches. */
+INLINE void store_pixel(SceneData* sd, __global const Camera* cam, __global float4* store, __global float4* own,
+                        __global float4* own2, uint pix, uint first, uint count, uint seed) {
+    int reach = splat_reach(cam);
+    int k = 2 * reach + 1;
+    __global float4* st = store + (size_t)pix * (size_t)(k * k);
+    vec3 sl = v3s(0.0f), sl2 = v3s(0.0f);
+    uint nbad = 0u;
+    for (uint s = 0u; s < count; ++s) {
+        float2 u;
+        vec3 L;
+        if (!splat_sample(sd, cam, pix, first + s, seed, &u, &L)) { nbad += 1u; continue; }
+        sl = vadd(sl, L);
+        sl2 = vadd(sl2, vmul(L, L));
+        for (int ty = -reach; ty <= reach; ++ty) {
+            float wy = filter_eval_1d(cam, (float)ty + 0.5f - u.y);
+            for (int tx = -reach; tx <= reach; ++tx) {
+                float w = wy * filter_eval_1d(cam, (float)tx + 0.5f - u.x);
+                __global float4* e = st + (ty + reach) * k + tx + reach;
+                float4 a = *e;
+                *e = vf4(vadd(vxyz(a), vscale(L, w)), a.w + w);
+            }
+        }
+    }
+    float4 o = own[pix], o2 = own2[pix];
+    own[pix] = vf4(vadd(vxyz(o), sl), o.w + (float)count);
+    own2[pix] = vf4(vadd(vxyz(o2), sl2), o2.w + (float)nbad);
+}
+
+/* Samples sample_offset .. + spp - 1 of pixels pixel_offset .. + pixel_count - 1 into the store. */
+__kernel void store_pass(SCENE_ARGS, __global const Camera* cam, __global float4* store, __global float4* own,
+                         __global float4* own2, uint pixel_offset, uint pixel_count, uint sample_offset, uint spp,
+                         uint seed) {
+    uint gid = get_global_id(0);
+    if (gid >= pixel_count) return;
+    SCENE_INIT(sd);
+    store_pixel(&sd, cam, store, own, own2, pixel_offset + gid, sample_offset, spp, seed);
+}
+
+/* Entry i of pixel_list[pixel_offset ..] with its own samples spans[i] = (first, count) (render.cl render_spans'
+   rounds), each pixel at most once per launch. */
+__kernel void store_spans(SCENE_ARGS, __global const Camera* cam, __global float4* store, __global float4* own,
+                          __global float4* own2, __global const uint* pixel_list, __global const uint2* spans,
+                          uint pixel_offset, uint pixel_count, uint seed) {
+    uint gid = get_global_id(0);
+    if (gid >= pixel_count) return;
+    SCENE_INIT(sd);
+    uint2 span = spans[pixel_offset + gid];
+    store_pixel(&sd, cam, store, own, own2, pixel_list[pixel_offset + gid], span.x, span.y, seed);
+}
+
+/* The film's sums (SPLAT_FILM_ARGS, overwritten) of pixels pixel_offset .. + pixel_count - 1 from the store: acc0 =
+   (sum over the pixels p within reach of p's splats toward this one over n_p, the same of the weights), so a pixel
+   weighs the same whatever its count. acc1 = (_, this pixel's finite samples) and acc2 hold the sums the film's
+   variance takes (Film._splat_variance: of w^2 L^2, w^2 L, w^2), not kept per splat but from each source's own sums
+   with the filter's mean squared weight m2[tx] m2[ty] (the weight taken independent of L within a pixel). */
+__kernel void splat_resolve(__global const Camera* cam, __global const float4* store, __global const float4* own,
+                            __global const float4* own2, __global const float* m2, SPLAT_FILM_ARGS,
+                            uint pixel_offset, uint pixel_count) {
+    uint gid = get_global_id(0);
+    if (gid >= pixel_count) return;
+    uint q = pixel_offset + gid;
+    int w = (int)cam->width, h = (int)cam->height;
+    int qx = (int)(q % cam->width), qy = (int)(q / cam->width);
+    int reach = splat_reach(cam);
+    int k = 2 * reach + 1;
+    vec3 swl = v3s(0.0f), swl2 = v3s(0.0f), sw2l = v3s(0.0f);
+    float sw = 0.0f, sw2 = 0.0f;
+    for (int ty = -reach; ty <= reach; ++ty) {
+        int y = qy - ty;
+        if (y < 0 || y >= h) continue;
+        for (int tx = -reach; tx <= reach; ++tx) {
+            int x = qx - tx;
+            if (x < 0 || x >= w) continue;
+            size_t p = (size_t)(y * w + x);
+            float4 o = own[p];
+            if (o.w <= 0.0f) continue;
+            float inv = 1.0f / o.w;
+            float4 e = store[p * (size_t)(k * k) + (size_t)((ty + reach) * k + tx + reach)];
+            swl = vadd(swl, vscale(vxyz(e), inv));
+            sw += e.w * inv;
+            float mm = m2[tx + reach] * m2[ty + reach] * inv;
+            sw2 += mm;
+            sw2l = vadd(sw2l, vscale(vxyz(o), mm * inv));
+            swl2 = vadd(swl2, vscale(vxyz(own2[p]), mm * inv));
+        }
+    }
+    float4 oq = own[q], o2q = own2[q];
+    acc0[q] = vf4(swl, sw);
+    acc1[q] = vf4(swl2, oq.w - o2q.w);
+    acc2[q] = vf4(sw2l, sw2);
+    bad[q] = (uint)o2q.w;
 }

@@ -27,8 +27,9 @@ from test_oclgrind import _run_under_oclgrind, needs_oclgrind
 
 
 def sampling_renderer(scene, **kw):
-    """Adaptive sampling samples the filter (clrender/executors.py choose_reconstruction): the uniform renders it is
-    compared with here are of the same film (a splatting film, the default elsewhere, is another estimator)."""
+    """The filter-sampling film, which the wavefront and the feature AOVs take, and adaptive sampling where a
+    splatting film's store would not fit (tests/test_adaptive_splat.py tests adaptive sampling on the splatting
+    film): the uniform renders it is compared with here are of the same film."""
     return Renderer(scene, reconstruction="sampling", **kw)
 
 
@@ -218,10 +219,13 @@ def test_relmse_allocation_relaxes_with_the_samples(cornell):
 
 
 def test_python_api(cornell):
-    film = clrender.render(cornell, target_error=OPTS["target_error"], max_spp=32, seed=OPTS["seed"])
-    same = sampling_renderer(cornell).render_adaptive(target_error=OPTS["target_error"], max_spp=32, seed=OPTS["seed"])
-    np.testing.assert_array_equal(film.count, same.count)
-    assert film.layers == ("count",)
+    opts = dict(target_error=OPTS["target_error"], max_spp=32, seed=OPTS["seed"])
+    film = clrender.render(cornell, **opts)
+    assert film.metadata["film"] == "splat"   # the default film splats (tests/test_adaptive_splat.py)
+    np.testing.assert_array_equal(film.count, Renderer(cornell).render_adaptive(**opts).count)
+    sampled = clrender.render(cornell, reconstruction="sampling", **opts)
+    np.testing.assert_array_equal(sampled.count, sampling_renderer(cornell).render_adaptive(**opts).count)
+    assert film.layers == ("count",) and "film" not in sampled.metadata
     with pytest.raises(ValueError, match="one process"):
         clrender.render(cornell, target_error=0.1, cluster="local:1")
     with pytest.raises(TypeError, match="target_error"):

@@ -175,3 +175,27 @@ def test_the_wavefront_layouts_are_clean_under_oclgrind(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.count("rendered") == 2, proc.stdout
     assert report == "", report[:4000]
+
+
+_RUN_STORE = textwrap.dedent("""
+    import sys
+    from clrender.bench import load_bench_scene
+    from clrender.renderer import Renderer
+    scene, _, _ = load_bench_scene(sys.argv[1], None, width=11, height=7)
+    r = Renderer(scene, device="Oclgrind")
+    r.launch_pixels = 64   # launches over parts of the pixel list
+    film = r.render_adaptive(target_error=0.3, min_spp=2, max_spp=4, seed=1, uniform_below=0)
+    print("rendered", film.metadata["film"], int(film.count.min()), int(film.count.max()), float(film.image.mean()))
+""")
+
+
+@needs_oclgrind
+@slow
+def test_the_adaptive_splatting_store_is_clean_under_oclgrind(tmp_path):
+    """Adaptive rounds on the splatting film (kernels/splat.cl store_pass, store_spans, splat_resolve) over an 11 x 7
+    image in launches over parts of the pixel list: its splats toward pixels beyond the image's edge stay in the
+    pixel's own store, no out-of-bounds access, no race."""
+    proc, report = _run_under_oclgrind(tmp_path, [str(SCENES / "cornell" / "cornell_path_mis.xml")], _RUN_STORE)
+    assert proc.returncode == 0, proc.stderr
+    assert "rendered splat" in proc.stdout, proc.stdout
+    assert report == "", report[:4000]

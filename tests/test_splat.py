@@ -153,18 +153,9 @@ def test_nan_and_inf_samples_are_dropped_and_counted(scene):
     assert np.isfinite(f.image).all() and np.isfinite(f.variance()).all() and f.image.mean() > 0
 
 
-def test_adaptive_sampling_samples_the_filter(scene):
-    r = Renderer(scene)
-    assert r.splat
-    f = r.render_adaptive(target_error=0.2, min_spp=4, max_spp=8, seed=1)
-    assert "film" not in f.metadata and f.count.min() >= 4
-    with pytest.raises(DriverError, match="adaptive"):
-        Renderer(scene, reconstruction="splat").render_adaptive(target_error=0.2, max_spp=8)
-
-
 def test_command_line(tmp_path, capsys):
-    """`clrender render` splats by default (the EXR header says so), samples the filter when asked or when
-    adaptive, and refuses a splatting film where it cannot run, naming the option."""
+    """`clrender render` splats by default (the EXR header says so), adaptive renders too, samples the filter when
+    asked, and refuses a splatting film where it cannot run, naming the option."""
     from clrender.cli import main
     from clrender.film import read_exr
 
@@ -176,10 +167,8 @@ def test_command_line(tmp_path, capsys):
     assert main(["render", str(scene), "-q", "--spp", "2", "-o", str(out), "--reconstruction", "sampling"]) == 0
     assert "clrender.film" not in read_exr(out)[1]
     assert main(["render", str(scene), "-q", "--max-spp", "4", "--target-error", "0.5", "-o", str(out)]) == 0
+    assert read_exr(out)[1]["clrender.film"] == "splat"   # adaptive sampling splats too (test_adaptive_splat.py)
     capsys.readouterr()
     assert main(["render", str(scene), "-q", "--spp", "2", "-o", str(out), "--reconstruction", "splat",
                  "--driver", "wavefront"]) == 2
     assert "--driver megakernel" in capsys.readouterr().err
-    assert main(["render", str(scene), "-q", "--max-spp", "4", "--target-error", "0.5", "-o", str(out),
-                 "--reconstruction", "splat"]) == 2
-    assert "--reconstruction sampling" in capsys.readouterr().err

@@ -45,13 +45,9 @@ def cmd_render(args) -> int:
     except ClrenderError as e:
         print(f"clrender: error: {args.scene}: --driver: {e}", file=sys.stderr)
         return 2
-    if adaptive is not None and args.reconstruction == "splat":
-        print(f"clrender: error: {args.scene}: adaptive sampling samples the filter (a splatted sample changes its "
-              "neighbours' estimates): --reconstruction sampling or auto", file=sys.stderr)
-        return 2
     try:
         renderer = Renderer(scene, device=args.device, driver=args.driver, feature_aovs=needs_features(args, layers),
-                            reconstruction="sampling" if adaptive is not None else args.reconstruction)
+                            reconstruction=args.reconstruction)
     except ClrenderError as e:
         print(f"clrender: error: {args.scene}: {e}", file=sys.stderr)
         return 2
@@ -217,7 +213,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="how the film makes pixels of samples: splat (as Mitsuba and Nori: each sample, placed "
                         "uniformly in its pixel, weighted into every pixel within the filter's radius), sampling "
                         "(filter importance sampling: each sample in one pixel, more noise with a wide filter), "
-                        "auto (default: splat, except adaptive renders, --driver wavefront and box filters)")
+                        "auto (default: splat, except --driver wavefront, box filters and feature AOVs)")
     r.add_argument("-D", "--define", action="append", metavar="NAME=VALUE", help="set $NAME in the scene")
     r.add_argument("--emitter-selection", choices=("uniform", "power"), default="uniform",
                    help="how light sampling picks an emitter in a Mitsuba scene: uniformly (default, as Mitsuba) or "

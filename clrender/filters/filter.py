@@ -45,15 +45,26 @@ class Filter(abc.ABC):
         pixel's variance is taken as independent: E[S1^2] / E[S2], S1 and S2 the sums of a sample's weights and
         squared weights over the pixels it reaches, over sample positions uniform in the pixel (about 3 for
         Mitsuba's Gaussian; 1 for a box)."""
-        reach = max(0, int(np.ceil(np.float32(self.radius) - np.float32(0.5))))
-        u = (np.arange(n) + 0.5) / n
-        t = np.arange(-reach, reach + 1)
-        w = self.eval(t[None, :] + 0.5 - u[:, None])          # (n positions, 2 reach + 1 offsets) per axis
-        w = np.where(np.abs(t[None, :] + 0.5 - u[:, None]) <= self.radius, w, 0.0)
+        w = self._splat_weights(n)
         s1 = w.sum(axis=1)
         s2 = (w * w).sum(axis=1)
         # 2-D weights are products: S1 = s1x s1y, S2 = s2x s2y over independent x and y
         return float(np.mean(s1 ** 2) ** 2 / np.mean(s2) ** 2)
+
+    def splat_mean_square(self, n: int = 1024) -> np.ndarray:
+        """(2 reach + 1,) the mean squared weight f(t + 1/2 - u)^2 toward the pixel t pixels away along one axis,
+        over sample positions u uniform in the pixel (adaptive sampling's splatting film: kernels/splat.cl
+        splat_resolve)."""
+        w = self._splat_weights(n)
+        return (w * w).mean(axis=0)
+
+    def _splat_weights(self, n: int) -> np.ndarray:
+        """(n, 2 reach + 1) a splatted sample's weights along one axis toward the pixels within reach (offsets
+        -reach .. reach), for n positions spread evenly over its pixel (the midpoint rule)."""
+        reach = max(0, int(np.ceil(np.float32(self.radius) - np.float32(0.5))))
+        u = (np.arange(n) + 0.5) / n
+        x = np.arange(-reach, reach + 1)[None, :] + 0.5 - u[:, None]
+        return np.where(np.abs(x) <= self.radius, self.eval(x), 0.0)
 
     def sampling_table(self, bins: int = TABLE_BINS) -> np.ndarray:
         """CDF (bins+1 entries) of |f| integrated over each bin (by a fine midpoint rule)."""
