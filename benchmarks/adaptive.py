@@ -1,19 +1,21 @@
 """Adaptive sampling against uniform sampling and Mitsuba 3: the render time each needs to reach the same relMSE.
 
     python benchmarks/adaptive.py [--res 128] [--spp 64] [--reference-spp 512] [--repeat 3] [--only NAME ...]
-                                  [--json OUT]
+                                  [--film splat|sampling] [--filter gaussian|box] [--json OUT]
 
 Scenes: the twins of benchmarks/vs_mitsuba.py (Cornell box with mirror and glass spheres, the diffuse Cornell box,
 the rough plates under four lights, the furnace; not the 1 M-triangle mesh, whose BVH build would dominate a small
 run) and our Veach MIS scene (scenes/mis/mis_path_mis.xml, no Mitsuba twin), all at --res (the MIS scene at its
-aspect ratio). Per scene, in one run:
+aspect ratio). The twins' box filter (vs_mitsuba.py compares pixels) becomes Mitsuba's default Gaussian in both
+renderers' files unless --filter box: the film a user's scene gets, on which splatting differs from filter sampling. Per scene, in one run:
 - a reference: clrender, uniform, --reference-spp, another seed; every relMSE below has the reference's own
   expected share, mean(var_ref / (ref^2 + 1e-2)) from its per-pixel variance, taken off;
 - the target relMSE R: that of clrender's uniform render at --spp;
-- uniform: renders of 4, 8, ... --spp spp, their (render seconds, relMSE), with the film adaptive sampling uses
-  (filter importance sampling), and "uniform_splat" the same with the default splatting film (kernels/splat.cl:
-  with a wide filter about a third of the variance per pixel), the render a user gets without adaptive sampling;
-- adaptive: renders with target errors 0.4, 0.2, 0.1 and 1.5, 1, 0.7 x sqrt(R) (so that a quiet scene's curve
+- uniform: renders of 4, 8, ... --spp spp, their (render seconds, relMSE), with --film (default: splat, the
+  default film, kernels/splat.cl: with a wide filter about a third of the variance per pixel of filter
+  sampling), and "uniform_other" the same with the other film;
+- adaptive: renders with --film (splat: kernels/splat.cl's store, each pixel's splats weighed by 1 / its count)
+  with target errors 0.4, 0.2, 0.1 and 1.5, 1, 0.7 x sqrt(R) (so that a quiet scene's curve
   reaches R too; no promise of R: relMSE is a mean that fireflies dominate, while the target bounds each pixel's
   standard error), max spp 16 x --spp, their (render seconds, including the rounds' host-side tests, mean spp,
   relMSE, rounds; whether it finished as a uniform render, clrender/adaptive.py's switch where the noise is even);
@@ -93,7 +95,7 @@ def potential_gain(ref_film) -> float:
 
 
 def bench_scene(name, xml_clr: Path, xml_mi: Path | None, res: int, spp: int, ref_spp: int, say,
-                variant: str, repeat: int = 3) -> dict:
+                variant: str, repeat: int = 3, film: str = "splat") -> dict:
     import clrender
     from clrender.renderer import Renderer
 
@@ -101,24 +103,26 @@ def bench_scene(name, xml_clr: Path, xml_mi: Path | None, res: int, spp: int, re
     if name == "veach_mis":
         w, h = scene.width, scene.height
         scene.camera.width, scene.camera.height = res * w // max(w, h), res * h // max(w, h)
-    # adaptive sampling samples the filter; "uniform" is the same film, "uniform_splat" the default splatting one
-    r = Renderer(scene, reconstruction="sampling")
-    rs = Renderer(scene, reconstruction="splat")
+    # adaptive and "uniform" with `film`, "uniform_other" with the other one
+    other = "sampling" if film == "splat" else "splat"
+    r = Renderer(scene, reconstruction=film)
+    rs = Renderer(scene, reconstruction=other)
     rs.render(spp=1)
     r.render(spp=1)
     r.render_adaptive(target_error=0.1, max_spp=16)   # the list kernel's first launch, outside the timings
     say(f"{name}: reference, {ref_spp} spp")
     ref_film = r.render(spp=ref_spp, seed=12345)
     ref, ref_var = ref_film.image.astype(np.float64), ref_film.variance()
-    out = {"width": r.width, "height": r.height, "potential_gain": potential_gain(ref_film),
-           "uniform": [], "uniform_splat": [], "adaptive": [], "adaptive_relmse": [], "mitsuba": []}
+    out = {"width": r.width, "height": r.height, "potential_gain": potential_gain(ref_film), "film": film,
+           "other_film": other, "uniform": [], "uniform_other": [], "adaptive": [], "adaptive_relmse": [],
+           "mitsuba": []}
     # the target relMSE (R) first: the adaptive target errors depend on it
     target = corrected_relmse(r.render(spp=spp, seed=7).image, ref, ref_var)["relmse"]
     say(f"{name}: uniform at {spp} spp: relMSE {target:.4g}; uniform and adaptive renders x {repeat}")
     # the fixed targets, and three around sqrt(R) (each pixel at about the uniform render's error)
     errors = sorted({*TARGET_ERRORS, *(round(float(np.sqrt(target)) * k, 4) for k in (1.5, 1.0, 0.7))}, reverse=True)
     runs = [("uniform", s, lambda s=s: r.render(spp=s, seed=7)) for s in spp_ladder(spp)]
-    runs += [("uniform_splat", s, lambda s=s: rs.render(spp=s, seed=7)) for s in spp_ladder(spp)]
+    runs += [("uniform_other", s, lambda s=s: rs.render(spp=s, seed=7)) for s in spp_ladder(spp)]
     runs += [(key, e, lambda e=e, a=allocation: r.render_adaptive(target_error=e, max_spp=16 * spp, seed=7,
                                                                    allocation=a))
              for key, allocation in (("adaptive", "error"), ("adaptive_relmse", "relmse")) for e in errors]
@@ -131,7 +135,7 @@ def bench_scene(name, xml_clr: Path, xml_mi: Path | None, res: int, spp: int, re
             if rep:
                 continue
             point.update(corrected_relmse(f.image, ref, ref_var))
-            if key in ("uniform", "uniform_splat"):
+            if key in ("uniform", "uniform_other"):
                 point["spp"] = x
             else:
                 point.update(target_error=x, spp_mean=float(f.count.mean()), converged=f.metadata["converged"],
@@ -148,7 +152,7 @@ def bench_scene(name, xml_clr: Path, xml_mi: Path | None, res: int, spp: int, re
     for metric in ("relmse", "relmse_robust"):
         target = out["uniform"][-1][metric]
         times = {k: time_to([(p["seconds"], p[metric]) for p in out[k]], target) if out[k] else None
-                 for k in ("uniform", "uniform_splat", "adaptive", "adaptive_relmse", "mitsuba")}
+                 for k in ("uniform", "uniform_other", "adaptive", "adaptive_relmse", "mitsuba")}
         # samples (mean spp) to the target: free of the shared machine's timing noise, blind to per-sample costs
         spp = {k: time_to([(p.get("spp_mean", p.get("spp")), p[metric]) for p in out[k]], target)
                for k in ("uniform", "adaptive", "adaptive_relmse")}
@@ -157,8 +161,8 @@ def bench_scene(name, xml_clr: Path, xml_mi: Path | None, res: int, spp: int, re
                        "relmse_allocation": {"speedup_over_uniform": times["uniform"] / times["adaptive_relmse"],
                                              "samples_ratio": spp["uniform"] / spp["adaptive_relmse"]},
                        "speedup_over_uniform": times["uniform"] / times["adaptive"],
-                       # the default uniform render (a splatting film) against the better adaptive allocation
-                       "splat_over_best_adaptive": times["uniform_splat"] / min(times["adaptive"],
+                       # the other film's uniform render against the better adaptive allocation
+                       "other_over_best_adaptive": times["uniform_other"] / min(times["adaptive"],
                                                                                 times["adaptive_relmse"]),
                        "speedup_over_mitsuba": None if times["mitsuba"] is None
                        else times["mitsuba"] / times["adaptive"]}
@@ -203,6 +207,10 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=3, help="timings of our renders: the median of this many")
     ap.add_argument("--only", nargs="*", help=f"some of: {', '.join(TWINS)}, veach_mis")
     ap.add_argument("--json", help="default: benchmarks/results/adaptive-<date>.json")
+    ap.add_argument("--film", choices=("splat", "sampling"), default="splat",
+                    help="the film of the adaptive and uniform renders (the other's uniform renders beside them)")
+    ap.add_argument("--filter", choices=("gaussian", "box"), default="gaussian",
+                    help="the twins' reconstruction filter (default: Mitsuba's default Gaussian)")
     ap.add_argument("--variant", help="Mitsuba's (default: llvm_ad_rgb with a libLLVM >= 16, else scalar_rgb)")
     a = ap.parse_args(argv)
     say = lambda m: print(f"adaptive: {m}", file=sys.stderr, flush=True)  # noqa: E731
@@ -218,14 +226,19 @@ def main(argv=None):
                 files = {"clrender": ROOT / "scenes" / "mis" / "mis_path_mis.xml", "mitsuba": None}
             else:
                 files = vm.write_twin(vm.TWINS[name](d, a.spp, a.res), d)
+                for path in set(files.values()):
+                    if a.filter != "box":
+                        text = path.read_text()
+                        assert '<rfilter type="box"/>' in text, path
+                        path.write_text(text.replace('<rfilter type="box"/>', f'<rfilter type="{a.filter}"/>'))
             results[name] = bench_scene(name, files["clrender"], files["mitsuba"], a.res, a.spp, a.reference_spp,
-                                        say, variant, a.repeat)
+                                        say, variant, a.repeat, a.film)
     path = write_results("adaptive", a.json, results, res=a.res, spp=a.spp, reference_spp=a.reference_spp,
-                         repeat=a.repeat, mitsuba_variant=variant, load_average_start=load,
+                         repeat=a.repeat, film=a.film, filter=a.filter, mitsuba_variant=variant, load_average_start=load,
                          load_average_end=os.getloadavg(), commit=_commit())
     print(f"{'scene':16} {'size':>8} {'metric':>13} {'target':>9} {'uniform s':>10} {'adaptive s':>10} "
           f"{'mitsuba s':>10} {'vs uniform':>10} {'vs mitsuba':>10} {'spp ratio':>9} {'relmse alloc: time, spp':>24} "
-          f"{'bound':>6} {'uniform finish':>14} {'splat s':>8} {'best adaptive vs splat':>22}")
+          f"{'bound':>6} {'uniform finish':>14} {'other s':>8} {'best adaptive vs other':>22}")
     for name, r in results.items():
         for metric in ("relmse", "relmse_robust"):
             m = r[metric]
@@ -236,7 +249,7 @@ def main(argv=None):
                   f"{t['adaptive']:10.2f} {mi:>10} {m['speedup_over_uniform']:9.2f}x {smi:>10} "
                   f"{m['samples_ratio']:8.2f}x {m['relmse_allocation']['speedup_over_uniform']:11.2f}x "
                   f"{m['relmse_allocation']['samples_ratio']:8.2f}x {r['potential_gain']:5.2f}x {switched(r):>14} "
-                  f"{t['uniform_splat']:8.2f} {m['splat_over_best_adaptive']:21.2f}x")
+                  f"{t['uniform_other']:8.2f} {m['other_over_best_adaptive']:21.2f}x")
     print(f"wrote {path}", file=sys.stderr)
 
 

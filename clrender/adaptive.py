@@ -5,8 +5,9 @@ A pixel is tested only at fixed sample counts (`checkpoints`: `min_spp`, then a 
 `max_spp`), the same for every pixel and every run. The first round takes every pixel to `min_spp`; after each
 round, a pixel that failed its test goes on to the checkpoint its pooled error predicts it needs (next_counts: the
 error falls as 1/sqrt(n)), at least the next one and at most twice its samples, all in the next round's one launch
-(kernels/render.cl render_spans: each listed pixel with its own first sample and count; without it, the wavefront
-and the feature AOVs' pass, one list launch per distinct span). So a render needs a handful of rounds instead of one
+(kernels/render.cl render_spans, or kernels/splat.cl store_spans on the splatting film, whose store keeps each
+pixel's splats apart and weighs them by 1 / its count when the film is read: each listed pixel with its own first
+sample and count; without it, the wavefront and the feature AOVs' pass, one list launch per distinct span). So a render needs a handful of rounds instead of one
 per checkpoint: each round costs 10-20 ms of fixed work (the film's download, the test, the launch and its wait) and
 the late ones, over a few hundred pixels, leave cores idle. A pixel's samples are numbered 0, 1, 2, ... as in a
 uniform render (its n samples are those a uniform render of n spp gives it), and its sums depend only on its own

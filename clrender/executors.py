@@ -307,8 +307,8 @@ class SplatExecutor:
     same samples: random numbers are keyed by pixel and sample), so its sums are the one-process film's.
 
     Adaptive sampling's launches (`launch`, `launch_spans`: pixels with counts of their own) go to a store instead,
-    each pixel's splats kept apart ((2 reach + 1)^2 float4 per pixel, store_bytes), and `resolve` turns it into the
-    film's sums, each pixel's splats weighed by 1 / its samples (kernels/splat.cl store_pixel, splat_resolve)."""
+    each pixel's splats kept apart ((2 reach + 1)^2 float4 per pixel, store_buffer_bytes), and `resolve` turns it
+    into the film's sums, each pixel's splats weighed by 1 / its samples (kernels/splat.cl store_pixel, splat_resolve)."""
 
     name = "megakernel"
     #: the record buffer of a pass stays below this (its samples per pixel are cut to fit)
@@ -372,9 +372,11 @@ class SplatExecutor:
             self._clear_store()
 
     # -- adaptive sampling's store ---------------------------------------------------------------------------
-    def store_bytes(self) -> int:
-        """Device bytes of the store: (2 reach + 1)^2 splats and two sums of a pixel's own, one float4 each."""
-        return self.width * self.height * 16 * ((2 * self.reach + 1) ** 2 + 2)
+    def store_buffer_bytes(self) -> list[int]:
+        """Device bytes of the store's buffers: (2 reach + 1)^2 splats, and two sums of a pixel's own, one float4 each
+        per pixel."""
+        n = self.width * self.height
+        return [16 * n * (2 * self.reach + 1) ** 2, 16 * n, 16 * n]
 
     def _clear_store(self) -> None:
         import pyopencl as cl
@@ -386,10 +388,8 @@ class SplatExecutor:
         import pyopencl as cl
 
         if self._store is None:
-            n = self.width * self.height
             mf = cl.mem_flags.READ_WRITE
-            self._store = (cl.Buffer(self.ctx, mf, 16 * n * (2 * self.reach + 1) ** 2), cl.Buffer(self.ctx, mf, 16 * n),
-                           cl.Buffer(self.ctx, mf, 16 * n))
+            self._store = tuple(cl.Buffer(self.ctx, mf, size) for size in self.store_buffer_bytes())
             self._clear_store()
             store, own, own2 = self._store
             for k in (self.store_range, self.store_list):

@@ -171,12 +171,8 @@ class Renderer:
         counting)."""
         fixed = sum(a.nbytes for a in self.buffers.scene_arrays())
         fixed += self.buffers.camera.nbytes + self.buffers.filter_cdf.nbytes
-        film = 0
-        for name, full in layout.film_buffers(self.count_rays, self.splat):
-            dt, shape = layout.film_element(name)
-            film += np.dtype(dt).itemsize * int(np.prod(shape)) * (self.n_pixels if full else 1)
         fixed += getattr(self.executor, "device_bytes", 0)   # the wavefront's path state, the splat records
-        return int(fixed + film)
+        return int(fixed + layout.film_bytes(self.n_pixels, self.count_rays, self.splat))
 
     def accumulators(self):
         """Zeroed per-pixel accumulators on the host and the device ({name: array}, {name: buffer} of
@@ -237,9 +233,9 @@ class Renderer:
 
         if self.splat and not self.store_fits():
             if self.reconstruction != "auto":
-                raise DriverError(f"adaptive sampling's splatting film needs {self.executor.store_bytes() / 2**30:.1f}"
-                                  " GiB of device memory for this image, more than the device gives it: use "
-                                  "--reconstruction sampling or auto")
+                gib = sum(self.executor.store_buffer_bytes()) / 2**30
+                raise DriverError(f"adaptive sampling's splatting film needs {gib:.1f} GiB of device memory for this "
+                                  "image, more than the device gives it: use --reconstruction sampling or auto")
             if self._sampling is None:   # the same scene tables, the filter-sampling program
                 self._sampling = Renderer(self.scene, buffers=self.buffers, reconstruction="sampling",
                                           **self._init_args)
@@ -251,12 +247,12 @@ class Renderer:
                                on_round=on_round)
 
     def store_fits(self) -> bool:
-        """Whether a splatting film's store for adaptive sampling (SplatExecutor.store_bytes) fits the device: its
-        largest buffer within one allocation, all of it within half the device's memory."""
+        """Whether a splatting film's store for adaptive sampling (SplatExecutor.store_buffer_bytes) fits the device:
+        its largest buffer within one allocation, all of it within half the device's memory."""
         dev = self.ctx.devices[0]
-        k2 = (2 * self.executor.reach + 1) ** 2
-        return (16 * k2 * self.n_pixels <= dev.max_mem_alloc_size
-                and self.executor.store_bytes() + self.device_memory_bytes() <= dev.global_mem_size // 2)
+        sizes = self.executor.store_buffer_bytes()
+        return (max(sizes) <= dev.max_mem_alloc_size
+                and sum(sizes) + self.device_memory_bytes() <= dev.global_mem_size // 2)
 
     def render(self, spp: int | None = None, seed: int = 0, time_limit: float | None = None,
                progress: bool = False, on_pass=None, start_sample: int = 0, pixels=None,

@@ -304,15 +304,20 @@ def film_buffers(count_rays: bool = False, splat: bool = False) -> list[tuple[st
             if when != "splat" or splat]
 
 
+def _film_element_bytes(name: str) -> int:
+    dt, shape = film_element(name)
+    return np.dtype(dt).itemsize * int(np.prod(shape))
+
+
 def film_bytes_per_pixel(count_rays: bool = False, splat: bool = False) -> int:
     """Device bytes per pixel of the film's accumulators (with the ray counters when counting, a splatting
     film's own when splatting)."""
-    out = 0
-    for name, full in film_buffers(count_rays, splat):
-        if full:
-            dt, shape = film_element(name)
-            out += np.dtype(dt).itemsize * int(np.prod(shape))
-    return out
+    return sum(_film_element_bytes(name) for name, full in film_buffers(count_rays, splat) if full)
+
+
+def film_bytes(n_pixels: int, count_rays: bool = False, splat: bool = False) -> int:
+    """Device bytes of a film of `n_pixels` pixels: film_bytes_per_pixel's, and the one-element dummies."""
+    return sum(_film_element_bytes(name) * (n_pixels if full else 1) for name, full in film_buffers(count_rays, splat))
 
 
 def zeros(struct: str, n: int = 1) -> np.ndarray:
