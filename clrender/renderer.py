@@ -130,6 +130,7 @@ class Renderer:
         self._sampling = None
         if self.splat:
             self.defines["CLR_SPLAT"] = 1
+            self.defines["CLR_SPLAT_K"] = 2 * splat_reach(self.buffers.camera) + 1   # adaptive sampling's store
         main = '#include "splat.cl"\n' if self.splat else \
             {"wavefront": '#include "wavefront.cl"\n', "megakernel": '#include "render.cl"\n'}[self.driver]
         self.program = build_program(self.ctx, main, defines=self.defines, fast_math=fast_math)
