@@ -43,7 +43,9 @@ Per scene it reports:
   row says how: `(Mitsuba: lookAt)` (a 0.x `<lookAt>`, which Mitsuba 3 refuses while it upgrades the rest of a
   0.x file itself), `(Mitsuba: -name)` (properties it reports as unreferenced left out: 0.x's `high_quality_edges`,
   `max_smooth_angle`, ...; clrender uses or ignores them with a warning, see README's "Older files"),
-  `(Mitsuba: ldrfilm)` (0.x's ldrfilm as an hdrfilm: both compare linear images). Where both refuse a property
+  `(Mitsuba: ldrfilm)` (0.x's ldrfilm as an hdrfilm: both compare linear images), `(Mitsuba: sigma_t,albedo)` (a 0.x
+  homogeneous medium's `sigmaA`/`sigmaS` as the same medium's `sigma_t`/`albedo`, as clrender reads them; dropped,
+  Mitsuba would render its default medium). Where both refuse a property
   (a 3.x file with 0.x's `high_quality_edges`: Bitterli's Cornell boxes), `--drop NAME` leaves it out of both
   copies, marked `(both: -N)`;
 - clrender's warnings (a ptracer rendered by path, 0.x properties ignored, degenerate triangles dropped): the first
@@ -195,6 +197,10 @@ def for_mitsuba(text, error):
         return re.sub(r'<film\s+type="ldrfilm"', '<film type="hdrfilm"', text), "ldrfilm"
     if "unreferenced propert" in error:
         names = set(re.findall(r'^\s*- \w+ "([^"]+)"', error, flags=re.M))
+        if {"sigma_a", "sigma_s"} & names:
+            converted = media_as_v3(text)
+            if converted != text:
+                return converted, "sigma_t,albedo"
         if names:
             def drop(m):
                 return "" if camel_to_snake(m.group(1)) in names else m.group(0)
@@ -202,6 +208,35 @@ def for_mitsuba(text, error):
             if n:
                 return text, "-" + ",".join(sorted(names))
     return None
+
+
+def media_as_v3(text):
+    """0.x homogeneous media given by `sigmaA`/`sigmaS` (which Mitsuba 3.9.1 calls unreferenced) as the same media in
+    Mitsuba 3's `sigma_t` = sigma_a + sigma_s and `albedo` = sigma_s / sigma_t, as clrender reads them
+    (clrender/scene/mitsuba_legacy.py); left out, Mitsuba would render its default medium instead. Values written as
+    numbers (rgb, float, a constant spectrum); any other medium is left as it is."""
+    prop = r'<(?:rgb|float|spectrum)\s+name="sigma_?%s"\s+value="([^"]+)"\s*/>'
+
+    def numbers(v):
+        x = np.array([float(t) for t in re.split(r"[,\s]+", v.strip())])
+        return np.repeat(x, 3) if x.size == 1 else x
+
+    def medium(m):
+        body = m.group(0)
+        a, s = re.search(prop % "[aA]", body), re.search(prop % "[sS]", body)
+        if not (a and s):
+            return body
+        try:
+            sa, ss = numbers(a.group(1)), numbers(s.group(1))
+        except ValueError:
+            return body
+        st = sa + ss
+        albedo = np.divide(ss, st, out=np.zeros_like(st), where=st > 0)
+        body = body.replace(s.group(0), "").replace(
+            a.group(0), f'<rgb name="sigma_t" value="{", ".join(map(repr, st.tolist()))}"/>'
+                        f'<rgb name="albedo" value="{", ".join(map(repr, albedo.tolist()))}"/>')
+        return body
+    return re.sub(r'<medium\s+type="homogeneous".*?</medium>', medium, text, flags=re.S)
 
 
 def include_dirs(text, folder):
