@@ -232,10 +232,18 @@ def media_as_v3(text):
             return body
         st = sa + ss
         albedo = np.divide(ss, st, out=np.zeros_like(st), where=st > 0)
-        body = body.replace(s.group(0), "").replace(
-            a.group(0), f'<rgb name="sigma_t" value="{", ".join(map(repr, st.tolist()))}"/>'
-                        f'<rgb name="albedo" value="{", ".join(map(repr, albedo.tolist()))}"/>')
-        return body
+        # Mitsuba 3.9.1 refuses an <rgb> above 1 here (an sRGB reflectance): a grey sigma_t as a <float>, a colour
+        # one scaled to at most 1 with its largest value moved into `scale`
+        peak = float(st.max())
+        if np.all(st == peak):
+            sigma_t = f'<float name="sigma_t" value="{peak!r}"/>'
+        else:
+            sigma_t = f'<rgb name="sigma_t" value="{", ".join(map(repr, (st / peak).tolist()))}"/>'
+            sc = re.search(r'<float\s+name="scale"\s+value="([^"]+)"\s*/>', body)
+            scale = f'<float name="scale" value="{(float(sc.group(1)) * peak) if sc else peak!r}"/>'
+            body = body.replace(sc.group(0), scale) if sc else body.replace(a.group(0), a.group(0) + scale)
+        return body.replace(s.group(0), "").replace(
+            a.group(0), sigma_t + f'<rgb name="albedo" value="{", ".join(map(repr, albedo.tolist()))}"/>')
     return re.sub(r'<medium\s+type="homogeneous".*?</medium>', medium, text, flags=re.S)
 
 
