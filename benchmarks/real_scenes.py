@@ -13,14 +13,18 @@ outside the work tree and name their folders. Every `*.xml` under a folder whose
 - Mitsuba 3's own data: mitsuba-renderer/mitsuba-data (docs/scenes, tests/scenes, scenes/cbox), the scenes of
   its documentation and test-suite.
 - Course scene sets in Mitsuba format, e.g. BachiLi/lajolla_public (UCSD CSE 272: Crytek Sponza as 37 serialized
-  shapes, Veach's MIS scene, matpreview, Cornell boxes).
+  shapes, Veach's MIS scene, matpreview, Cornell boxes, volume tests whose integrators carry the course renderer's
+  own `version`: `--drop version`).
 - Other renderers' evaluation scenes in Mitsuba form, e.g. PearCoding/Ignis (scenes/evaluation/mitsuba, Mitsuba 2
   files: area, point and environment lights over planes and a room; they look for their meshes in
-  scenes/evaluation/meshes and mitsuba/meshes, while the repository keeps some in scenes/meshes: put them there).
+  scenes/evaluation/meshes and mitsuba/meshes and for their maps in scenes/evaluation/textures, while the
+  repository keeps some in scenes/meshes and scenes/textures: put them there).
 - Research scenes, e.g. VElysianP/mitsuba_scenes (Mitsuba 0.5 files from BSDF and luminaire papers; the ones that
   ask for `path`: layered_kitchen, layered_shoes, leaves_status, shelf_conductor; the others ask for `bdpt` or
   `photonmapper`, which neither Mitsuba 3 nor clrender has).
-Bring a set onto your machine from its public repository (a clone, or a `git archive` of it) outside the work tree.
+Bring a set onto your machine from its public repository (a clone, or a `git archive` of it) outside the work tree,
+in a folder whose path holds none of the --skip words (a copy named mitsuba2-transient-scenes is skipped whole by
+`--skip transient`).
 
 Per scene it reports:
 - read: whether clrender (and Mitsuba) load it, else the first line of the error;
