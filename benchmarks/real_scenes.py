@@ -13,14 +13,18 @@ outside the work tree and name their folders. Every `*.xml` under a folder whose
 - Mitsuba 3's own data: mitsuba-renderer/mitsuba-data (docs/scenes, tests/scenes, scenes/cbox), the scenes of
   its documentation and test-suite.
 - Course scene sets in Mitsuba format, e.g. BachiLi/lajolla_public (UCSD CSE 272: Crytek Sponza as 37 serialized
-  shapes, Veach's MIS scene, matpreview, Cornell boxes).
+  shapes, Veach's MIS scene, matpreview, Cornell boxes, volume tests whose integrators carry the course renderer's
+  own `version`: `--drop version`).
 - Other renderers' evaluation scenes in Mitsuba form, e.g. PearCoding/Ignis (scenes/evaluation/mitsuba, Mitsuba 2
   files: area, point and environment lights over planes and a room; they look for their meshes in
-  scenes/evaluation/meshes and mitsuba/meshes, while the repository keeps some in scenes/meshes: put them there).
+  scenes/evaluation/meshes and mitsuba/meshes and for their maps in scenes/evaluation/textures, while the
+  repository keeps some in scenes/meshes and scenes/textures: put them there).
 - Research scenes, e.g. VElysianP/mitsuba_scenes (Mitsuba 0.5 files from BSDF and luminaire papers; the ones that
   ask for `path`: layered_kitchen, layered_shoes, leaves_status, shelf_conductor; the others ask for `bdpt` or
   `photonmapper`, which neither Mitsuba 3 nor clrender has).
-Bring a set onto your machine from its public repository (a clone, or a `git archive` of it) outside the work tree.
+Bring a set onto your machine from its public repository (a clone, or a `git archive` of it) outside the work tree,
+in a folder whose path holds none of the --skip words (a copy named mitsuba2-transient-scenes is skipped whole by
+`--skip transient`).
 
 Per scene it reports:
 - read: whether clrender (and Mitsuba) load it, else the first line of the error;
@@ -43,7 +47,9 @@ Per scene it reports:
   row says how: `(Mitsuba: lookAt)` (a 0.x `<lookAt>`, which Mitsuba 3 refuses while it upgrades the rest of a
   0.x file itself), `(Mitsuba: -name)` (properties it reports as unreferenced left out: 0.x's `high_quality_edges`,
   `max_smooth_angle`, ...; clrender uses or ignores them with a warning, see README's "Older files"),
-  `(Mitsuba: ldrfilm)` (0.x's ldrfilm as an hdrfilm: both compare linear images). Where both refuse a property
+  `(Mitsuba: ldrfilm)` (0.x's ldrfilm as an hdrfilm: both compare linear images), `(Mitsuba: sigma_t,albedo)` (a 0.x
+  homogeneous medium's `sigmaA`/`sigmaS` as the same medium's `sigma_t`/`albedo`, as clrender reads them; dropped,
+  Mitsuba would render its default medium). Where both refuse a property
   (a 3.x file with 0.x's `high_quality_edges`: Bitterli's Cornell boxes), `--drop NAME` leaves it out of both
   copies, marked `(both: -N)`;
 - clrender's warnings (a ptracer rendered by path, 0.x properties ignored, degenerate triangles dropped): the first
@@ -195,6 +201,10 @@ def for_mitsuba(text, error):
         return re.sub(r'<film\s+type="ldrfilm"', '<film type="hdrfilm"', text), "ldrfilm"
     if "unreferenced propert" in error:
         names = set(re.findall(r'^\s*- \w+ "([^"]+)"', error, flags=re.M))
+        if {"sigma_a", "sigma_s"} & names:
+            converted = media_as_v3(text)
+            if converted != text:
+                return converted, "sigma_t,albedo"
         if names:
             def drop(m):
                 return "" if camel_to_snake(m.group(1)) in names else m.group(0)
@@ -202,6 +212,43 @@ def for_mitsuba(text, error):
             if n:
                 return text, "-" + ",".join(sorted(names))
     return None
+
+
+def media_as_v3(text):
+    """0.x homogeneous media given by `sigmaA`/`sigmaS` (which Mitsuba 3.9.1 calls unreferenced) as the same media in
+    Mitsuba 3's `sigma_t` = sigma_a + sigma_s and `albedo` = sigma_s / sigma_t, as clrender reads them
+    (clrender/scene/mitsuba_legacy.py); left out, Mitsuba would render its default medium instead. Values written as
+    numbers (rgb, float, a constant spectrum); any other medium is left as it is."""
+    prop = r'<(?:rgb|float|spectrum)\s+name="sigma_?%s"\s+value="([^"]+)"\s*/>'
+
+    def numbers(v):
+        x = np.array([float(t) for t in re.split(r"[,\s]+", v.strip())])
+        return np.repeat(x, 3) if x.size == 1 else x
+
+    def medium(m):
+        body = m.group(0)
+        a, s = re.search(prop % "[aA]", body), re.search(prop % "[sS]", body)
+        if not (a and s):
+            return body
+        try:
+            sa, ss = numbers(a.group(1)), numbers(s.group(1))
+        except ValueError:
+            return body
+        st = sa + ss
+        albedo = np.divide(ss, st, out=np.zeros_like(st), where=st > 0)
+        # Mitsuba 3.9.1 refuses an <rgb> above 1 here (an sRGB reflectance): a grey sigma_t as a <float>, a colour
+        # one scaled to at most 1 with its largest value moved into `scale`
+        peak = float(st.max())
+        if np.all(st == peak):
+            sigma_t = f'<float name="sigma_t" value="{peak!r}"/>'
+        else:
+            sigma_t = f'<rgb name="sigma_t" value="{", ".join(map(repr, (st / peak).tolist()))}"/>'
+            sc = re.search(r'<float\s+name="scale"\s+value="([^"]+)"\s*/>', body)
+            scale = f'<float name="scale" value="{(float(sc.group(1)) * peak) if sc else peak!r}"/>'
+            body = body.replace(sc.group(0), scale) if sc else body.replace(a.group(0), a.group(0) + scale)
+        return body.replace(s.group(0), "").replace(
+            a.group(0), sigma_t + f'<rgb name="albedo" value="{", ".join(map(repr, albedo.tolist()))}"/>')
+    return re.sub(r'<medium\s+type="homogeneous".*?</medium>', medium, text, flags=re.S)
 
 
 def include_dirs(text, folder):

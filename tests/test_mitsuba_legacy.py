@@ -328,3 +328,60 @@ def test_wrapping_integrators_render_as_the_one_they_wrap(wrapper, caplog):
     assert type(wrapped) is type(plain) and vars(wrapped).keys() == vars(plain).keys()
     assert wrapped.max_depth == plain.max_depth == 3 and "max_error" in caplog.text
     err(f'<scene version="0.5.0">\n<integrator type="{wrapper}"/></scene>', 2, "must hold one nested <integrator>")
+
+
+#: a camera inside a homogeneous medium looking at an emitting sphere through it (lajolla's volpath tests are such
+#: scenes); {medium} is the medium's parameters in one spelling or the other
+MEDIUM_SCENE = """<scene version="{version}">
+  <integrator type="volpath"><integer name="{max_depth}" value="3"/></integrator>
+  <medium type="homogeneous" id="fog">{medium}<phase type="hg"><float name="g" value="0.3"/></phase></medium>
+  <shape type="sphere"><float name="radius" value="0.5"/><emitter type="area"><rgb name="radiance" value="2, 1, 3"/>
+    </emitter><bsdf type="diffuse"><rgb name="reflectance" value="0.3"/></bsdf><ref name="exterior" id="fog"/></shape>
+  <shape type="sphere"><point name="center" x="0.6" y="0.4" z="0.6"/><float name="radius" value="0.2"/>
+    <ref name="exterior" id="fog"/></shape>
+  <sensor type="perspective"><float name="fov" value="50"/><ref id="fog"/>
+    <transform name="{to_world}"><lookat origin="0, 0, 3" target="0, 0, 0" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="12"/></film></sensor>
+</scene>"""
+
+
+def test_old_homogeneous_medium_by_absorption_and_scattering():
+    """Mitsuba 0.x's homogeneous medium given as sigmaA / sigmaS (Mitsuba 3.9.1 calls them unreferenced; lajolla's
+    volpath tests are written so) is Mitsuba 3's sigma_t = sigma_a + sigma_s, albedo = sigma_s / sigma_t, with 0.x's
+    scale multiplying both: the very image of that medium written in Mitsuba 3's names (same seed), and one that
+    differs from Mitsuba's default medium (what leaving the old names out would give)."""
+    old = ('<rgb name="sigmaA" value="0.2, 0.5, 0.3"/><rgb name="sigmaS" value="0.6, 0, 0.1"/>'
+           '<float name="scale" value="1.5"/>')
+    new = ('<rgb name="sigma_t" value="0.8, 0.5, 0.4"/><rgb name="albedo" value="0.75, 0, 0.25"/>'
+           '<float name="scale" value="1.5"/>')
+    a = create(parse_string(MEDIUM_SCENE.format(version="0.5.0", max_depth="maxDepth", to_world="toWorld",
+                                                medium=old), "old.xml"))
+    b = create(parse_string(MEDIUM_SCENE.format(version="3.0.0", max_depth="max_depth", to_world="to_world",
+                                                medium=new), "new.xml"))
+    m = a.shapes[0].exterior
+    np.testing.assert_allclose(m.sigma_t, [1.2, 0.75, 0.6])
+    np.testing.assert_allclose(m.albedo, [0.75, 0, 0.25])
+    ia, ib = (clrender.render(s, spp=4, seed=3).image for s in (a, b))
+    assert ia.mean() > 0.05 and np.array_equal(ia, ib)
+    default = create(parse_string(MEDIUM_SCENE.format(version="3.0.0", max_depth="max_depth", to_world="to_world",
+                                                      medium=""), "new.xml"))
+    assert not np.allclose(clrender.render(default, spp=4, seed=3).image, ib, rtol=0.05)
+    # a channel with nothing in it: albedo 0 there (no 0 / 0)
+    c = create(parse_string(MEDIUM_SCENE.format(version="0.6", max_depth="maxDepth", to_world="toWorld", medium=(
+        '<rgb name="sigmaA" value="0, 1, 0"/><rgb name="sigmaS" value="0, 1, 2"/>')), "old.xml"))
+    np.testing.assert_allclose(c.shapes[0].exterior.albedo, [0, 0.5, 1])
+
+
+def test_old_homogeneous_medium_errors_are_located():
+    def bad(medium, *fragments):
+        with pytest.raises(SceneError) as e:
+            create(parse_string(MEDIUM_SCENE.format(version="0.5.0", max_depth="maxDepth", to_world="toWorld",
+                                                    medium="\n" + medium), "old.xml"))
+        assert e.value.location.file == "old.xml" and e.value.location.line == 4, str(e.value)
+        for f in fragments:
+            assert f in str(e.value), str(e.value)
+    bad('<rgb name="sigmaA" value="0.2"/>', "sigma_a needs sigma_s")
+    bad('<rgb name="sigmaS" value="0.2"/><float name="sigmaT" value="1"/>', "sigma_a")
+    bad('<rgb name="sigmaA" value="0.2"/><rgb name="sigmaS" value="0.2"/><float name="albedo" value="1"/>',
+        "'albedo' given together")
+    bad('<rgb name="sigmaA" value="0.2, -1, 0"/><rgb name="sigmaS" value="0.2"/>', "sigma_a must be non-negative")

@@ -17,6 +17,7 @@ Beyond Mitsuba 3 (each with a log line or a located error):
 - the ``ldrfilm``, the ``sobol``/``halton``/``hammersley`` samplers (with their ``scramble``) and meshes' ``maxSmoothAngle`` are plugins'
   own parameters (films/ldrfilm.py, samplers/independent.py, shapes/trianglemesh.py);
 - an old bitmap's MIP-mapped filterType, per-axis wrap modes and gamma, where they mean something we have;
+- an old homogeneous medium's ``sigmaA``/``sigmaS`` (absorption and scattering) as Mitsuba 3's ``sigma_t``/``albedo``;
 - the wrappers ``adaptive`` and ``irrcache`` render as the integrator they hold (:data:`WRAPPERS`);
 - an integrator that clrender does not have (:data:`INTEGRATORS`) is a located error that names what it has.
 """
@@ -126,6 +127,35 @@ def _upgrade_bitmap(props) -> None:
         props.add("raw", "boolean", gamma == 1.0, where)
 
 
+def _upgrade_homogeneous(props) -> None:
+    """Mitsuba 0.x's homogeneous medium given by its absorption and scattering coefficients ``sigmaA``, ``sigmaS``
+    (0.6's other form, ``sigmaT``/``albedo``, is Mitsuba 3's): the same medium as Mitsuba 3's ``sigma_t`` = sigma_a +
+    sigma_s and ``albedo`` = sigma_s / sigma_t (0 where nothing is there); 0.6's ``scale`` multiplied both, as 3's
+    multiplies sigma_t. Mitsuba 3.9.1 refuses the old names as unreferenced (lajolla's volpath tests use them)."""
+    given = [n for n in ("sigma_a", "sigma_s") if props.has(n)]
+    if not given:
+        return
+    where = props.location(given[0])
+    if len(given) == 1:
+        other = "sigma_s" if given[0] == "sigma_a" else "sigma_a"
+        raise SceneError(f"an old homogeneous medium's {given[0]} needs {other} beside it (clrender does not have "
+                         f"Mitsuba 0.x's material presets that filled it in)", where)
+    for n in ("sigma_t", "albedo", "material"):
+        if props.has(n):
+            raise SceneError(f"'{n}' given together with sigma_a and sigma_s; give one form of the medium "
+                             f"(sigma_a/sigma_s, or sigma_t/albedo)", props.location(n))
+    sigma_a, sigma_s = (props.get_color(n, unbounded=True) for n in given)
+    for n, v in (("sigma_a", sigma_a), ("sigma_s", sigma_s)):
+        if np.any(v < 0):
+            raise SceneError(f"{n} must be non-negative, got {v.tolist()}", props.location(n))
+    sigma_t = sigma_a + sigma_s
+    albedo = np.divide(sigma_s, sigma_t, out=np.zeros(3), where=sigma_t > 0)
+    for n in given:
+        props.remove(n)
+    props.add("sigma_t", "rgb", sigma_t, where)
+    props.add("albedo", "rgb", albedo, where)
+
+
 def srgb_to_linear(value) -> np.ndarray:
     """Mitsuba 0.x's ``<srgb>``: an sRGB-encoded colour, ``#rrggbb`` or 1 or 3 numbers in [0, 1], as linear RGB.
     A string that is not ``#rrggbb`` raises ValueError (the caller then reads it as numbers)."""
@@ -179,6 +209,8 @@ def upgrade(spec, shared: set[int]) -> None:
         props.add("to_uv", "transform", to_uv, where)
     if spec.tag == "texture" and spec.type == "bitmap":
         _upgrade_bitmap(props)
+    if spec.tag == "medium" and spec.type == "homogeneous":
+        _upgrade_homogeneous(props)
     for name in DROPPED.get(spec.tag, ()):
         if props.has(name):
             props.mark_used(name)
