@@ -13,8 +13,8 @@
 <shape type="obj"> ... <ref id="fog" name="interior"/> </shape>   <!-- or a nested <medium name="interior"> -->
 <sensor type="perspective"> ... <ref id="fog"/> </sensor>          <!-- the camera's medium -->
 ```
-`sigma_t` and `albedo` are constants: a `<volume>` (grid or constant volume) in either is refused, as are
-heterogeneous media. `has_spectral_extinction` picks Mitsuba's estimator for colour extinction; clrender samples
+`sigma_t` and `albedo` are constants: a `<volume>` (grid or constant volume) belongs in a heterogeneous medium
+(clrender/media/heterogeneous.py). `has_spectral_extinction` picks Mitsuba's estimator for colour extinction; clrender samples
 free flights the same way either way (one-sample MIS over the three channels: kernels/integrators/media.h), which
 converges to the same image. Kernel: kernels/media/homogeneous.h.
 """
@@ -56,6 +56,6 @@ class Homogeneous(Medium):
             extra += ("SPECTRAL_EXTINCTION",)
         return self.FLAGS + extra
 
-    def fill(self, row) -> None:
+    def fill(self, row, ctx=None) -> None:
         row["homogeneous"]["sigma_t"][:3] = self.sigma_t
         row["homogeneous"]["albedo"][:3] = self.albedo

@@ -3,7 +3,8 @@ scene's `media` table (layout.ROWS "Medium"), which shapes (interior/exterior) a
 
 Media are Mitsuba 3's: a shape's `interior` is the medium on the side its normals point away from, `exterior` the
 one they point to; a path that crosses the shape's surface goes on in the medium on the side it leaves toward. The
-kernel half is `kernels/media/<name>.h`: `<name>_sigma_t` and `<name>_albedo` at a point (gen/medium_dispatch.h,
+kernel half is `kernels/media/<name>.h`: `<name>_sigma_t` and `<name>_albedo` at a point (and for media that are
+not homogeneous `<name>_majorant` and `<name>_clip`) (gen/medium_dispatch.h,
 kind MEDIUM in clrender/device/dispatch.py); the integrator (kernels/integrators/media.h) samples free flights.
 """
 from __future__ import annotations
@@ -30,14 +31,15 @@ class Medium:
         """The row's flags (a parameter may add some to the class's FLAGS)."""
         return tuple(self.FLAGS)
 
-    def pack(self, phase_index: int):
-        """This medium's row of the `media` table, its phase function being row `phase_index` of `phases`."""
+    def pack(self, phase_index: int, ctx=None):
+        """This medium's row of the `media` table, its phase function being row `phase_index` of `phases` (ctx: the
+        PackContext, where a medium that reads volumes adds them)."""
         row = layout.zeros("Medium")[0]
         row["type"] = dispatch.tag_of(type(self))
         row["flags"] = dispatch.flags_of(type(self), self.capabilities())
         row["phase"] = phase_index
-        self.fill(row)
+        self.fill(row, ctx)
         return row
 
-    def fill(self, row) -> None:
+    def fill(self, row, ctx=None) -> None:
         """Set this plugin's member of the row's union."""
