@@ -5,13 +5,23 @@ over every pixel and channel (clrender/testing/stats.py; clrender's variance is 
 per-sample variance implies at clrender's sample count, so a pixel whose rare paths clrender missed does not fail on
 noise, and for wide filters by the spread of Mitsuba's image over the filter's footprint). Mitsuba is not needed
 to run this."""
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 HERE = Path(__file__).resolve().parent / "mitsuba"
+sys.path.insert(0, str(HERE))
+from make_volumes import write_volumes  # noqa: E402
+
 SCENES = sorted(p.stem for p in (HERE / "scenes").glob("*.xml") if (HERE / "refs" / f"{p.stem}.npz").is_file())
+
+
+@pytest.fixture(autouse=True, scope="module")
+def volume_grids():
+    """The grids scenes/volumes/*.vol that media twins read, written from deterministic functions (not committed)."""
+    write_volumes()
 
 
 def render_twin(name: str, seed: int = 7, **defines):

@@ -30,6 +30,7 @@ class Homogeneous(Medium):
     kernel = "media/homogeneous.h"
     PARAMS = [("sigma_t", "float4"), ("albedo", "float4")]
     FLAGS = ("HOMOGENEOUS",)
+    METHODS = ("sigma_t", "albedo")   # free flights in closed form: no majorant, no clip
 
     def __init__(self, props, children, spec):
         self._read_phase(children, spec)
