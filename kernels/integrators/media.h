@@ -11,14 +11,12 @@
    times its albedo's product. (Weighting each flight by the mixture of that flight's densities alone is not
    enough: its ratios, up to 3 each, multiply along a path; the furnace test saw them.)
 
-   A heterogeneous medium (flag HOMOGENEOUS unset) is tracked against its majorant mu (one bound for every channel,
-   Mitsuba's get_majorant), within the part of the ray that medium_clip leaves (Mitsuba's intersect_aabb): tentative
-   collisions at rate mu, each a real one with probability sigma_t/mu of the hero channel, else a null one (delta
-   tracking, as Mitsuba's volpath, which re-traces from each null collision; here the loop goes on along the same
-   ray). The same spectral MIS weights them: a real collision has density sigma_t,c / mu in channel c and value
+   A heterogeneous medium (flag HOMOGENEOUS unset) is tracked against its majorant mu (kernels/media/tracking.h):
+   tentative collisions at rate mu, each a real one with probability sigma_t/mu of the hero channel, else a null one
+   (delta tracking, as Mitsuba's volpath, which re-traces from each null collision; here the loop goes on along the
+   same ray). The same spectral MIS weights them: a real collision has density sigma_t,c / mu in channel c and value
    sigma_s,c / mu, a null one density and value (mu - sigma_t,c) / mu, the flight's exp(-mu t) being the same in
-   every channel. Shadow rays take the transmittance by ratio tracking (the product of (mu - sigma_t) / mu over the
-   tentative collisions, per channel; Mitsuba's volpath's sigma_n / majorant). Null collisions do not count toward
+   every channel. Shadow rays take the transmittance by ratio tracking. Null collisions do not count toward
    max_depth (Mitsuba's count only real ones); MEDIA_MAX_NULL_COLLISIONS bounds the loops.
 
    As Mitsuba's volpath: a scattering event in a medium counts toward max_depth as a bounce does; shadow rays cross
@@ -32,15 +30,11 @@
 #define CLRENDER_INTEGRATORS_MEDIA_H
 #include "gen/medium_dispatch.h"
 #include "gen/phase_dispatch.h"
+#include "media/tracking.h"
 
 /* A shadow ray's pass-throughs: beyond this many surfaces it counts as blocked (a bound on the loop, far above any
    real stack of null surfaces). */
 #define MEDIA_MAX_CROSSINGS 64
-/* Tentative collisions one flight or shadow segment may take in a heterogeneous medium; beyond them the path ends
-   (the shadow ray counts as blocked). The expected count is the majorant times the length: a bound far above it. */
-#define MEDIA_MAX_NULL_COLLISIONS 65536
-
-INLINE float vchannel(vec3 v, uint c) { return c == 0u ? v.x : (c == 1u ? v.y : v.z); }
 
 /* exp(-sigma d) per channel; 1 where sigma is 0 (also over an infinite distance). */
 INLINE vec3 medium_transmittance(vec3 sigma, float d) {
@@ -55,23 +49,6 @@ INLINE uint medium_across(const SceneData* sd, const Intersection* its, vec3 d, 
     __global const Shape* s = &sd->shapes[its->shape];
     if (s->interior == NONE && s->exterior == NONE) return current;
     return dot3(d, its->ng) > 0.0f ? s->exterior : s->interior;
-}
-
-/* Ratio tracking: the transmittance of the segment o + t d, t in [0, t1], of the heterogeneous medium m (an
-   unbiased estimate per channel; 0 once the loop's bound is reached). */
-INLINE vec3 medium_ratio_tracking(const SceneData* sd, __global const Medium* m, vec3 o, vec3 d, float t1,
-                                  Sampler* smp) {
-    float mu = medium_majorant(sd, m), t = 0.0f;
-    if (!(mu > 0.0f) || !medium_clip(sd, m, o, d, &t, &t1)) return v3s(1.0f);
-    vec3 tr = v3s(1.0f);
-    for (int i = 0; i < MEDIA_MAX_NULL_COLLISIONS; ++i) {
-        t -= log(1.0f - next1d(smp)) / mu;
-        if (!(t < t1)) return tr;
-        vec3 sigma = vmin(vmax(medium_sigma_t(sd, m, vmad(d, t, o)), v3s(0.0f)), v3s(mu));
-        tr = vmul(tr, vscale(vsub(v3s(mu), sigma), 1.0f / mu));
-        if (is_black(tr)) return tr;
-    }
-    return v3s(0.0f);
 }
 
 /* The transmittance along a shadow ray that starts in `medium`: each segment's transmittance in the medium it
@@ -159,14 +136,14 @@ INLINE bool medium_weigh(PathState* ps, vec3 density, vec3 value) {
 /* Delta tracking through the heterogeneous medium m from the ray's tmin to tmax (see the top of this file). */
 INLINE bool medium_flight_tracked(const SceneData* sd, PathState* ps, __global const Medium* m, float tmax,
                                   Sampler* smp) {
-    float mu = medium_majorant(sd, m), t = ps->ray.tmin, t1 = tmax;
-    if (!(mu > 0.0f) || !medium_clip(sd, m, ps->ray.o, ps->ray.d, &t, &t1)) return false;
+    float t = ps->ray.tmin, t1 = tmax;
+    float mu = medium_track_range(sd, m, ps->ray.o, ps->ray.d, &t, &t1);
+    if (mu == 0.0f) return false;
+    vec3 sigma;
+    bool real;
     for (int i = 0; i < MEDIA_MAX_NULL_COLLISIONS; ++i) {
-        t -= log(1.0f - next1d(smp)) / mu;
-        if (!(t < t1)) return false;
+        if (!medium_track_step(sd, m, ps->ray.o, ps->ray.d, mu, t1, ps->hero, smp, &t, &sigma, &real)) return false;
         vec3 p = vmad(ps->ray.d, t, ps->ray.o);
-        vec3 sigma = vmin(vmax(medium_sigma_t(sd, m, p), v3s(0.0f)), v3s(mu));
-        bool real = next1d(smp) * mu < vchannel(sigma, ps->hero);
         vec3 density = real ? sigma : vsub(v3s(mu), sigma);
         if (!medium_weigh(ps, density, real ? vmul(sigma, medium_albedo(sd, m, p)) : density)) return true;
         if (real) {
