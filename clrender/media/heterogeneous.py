@@ -54,11 +54,7 @@ class Heterogeneous(Medium):
             volumes[name] = c
         self.sigma_t = volumes.get("sigma_t") or self._constant(props, "sigma_t", 1.0)
         self.albedo = volumes.get("albedo") or self._constant(props, "albedo", 0.75)
-        self.scale = props.get_float("scale", 1.0)
-        self.sample_emitters = props.get_bool("sample_emitters", True)
-        self.spectral = props.get_bool("has_spectral_extinction", True)
-        if not (self.scale >= 0 and np.isfinite(self.scale)):
-            raise SceneError(f"scale must be non-negative and finite, got {self.scale}", props.location("scale"))
+        self.scale = self._read_common(props)
         where = {n: (volumes[n].spec.location if n in volumes else
                      props.location(n) if props.has(n) else spec.location) for n in ("sigma_t", "albedo")}
         if self.sigma_t.min_value() < 0:
@@ -78,12 +74,6 @@ class Heterogeneous(Medium):
             return ConstVolume.of(default, 1)
         value = props.get_color(name, unbounded=True)
         return ConstVolume.of(value, 1 if props.tag(name) == "float" else 3)
-
-    def capabilities(self) -> tuple:
-        extra = ("SAMPLE_EMITTERS",) if self.sample_emitters else ()
-        if self.spectral:
-            extra += ("SPECTRAL_EXTINCTION",)
-        return self.FLAGS + extra
 
     def fill(self, row, ctx=None) -> None:
         p = row["heterogeneous"]

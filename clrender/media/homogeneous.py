@@ -34,28 +34,18 @@ class Homogeneous(Medium):
 
     def __init__(self, props, children, spec):
         self._read_phase(children, spec)
-        scale = props.get_float("scale", 1.0)
+        scale = self._read_common(props)
         sigma_t = np.asarray(props.get_color("sigma_t", np.ones(3), unbounded=True), np.float64)
         self.albedo = np.asarray(props.get_color("albedo", np.full(3, 0.75)), np.float64)
-        self.sample_emitters = props.get_bool("sample_emitters", True)
-        self.spectral = props.get_bool("has_spectral_extinction", True)
         if np.any(sigma_t < 0) or not np.all(np.isfinite(sigma_t)):
             raise SceneError(f"sigma_t must be non-negative and finite, got {sigma_t.tolist()}",
                              props.location("sigma_t") if props.has("sigma_t") else spec.location)
-        if not (scale >= 0 and np.isfinite(scale)):
-            raise SceneError(f"scale must be non-negative and finite, got {scale}", props.location("scale"))
         if np.any(self.albedo < 0) or np.any(self.albedo > 1):
             raise SceneError(f"albedo must lie in [0, 1], got {self.albedo.tolist()}", props.location("albedo"))
         self.sigma_t = sigma_t * scale
         if not np.all(np.isfinite(self.sigma_t)) or np.any(self.sigma_t > 3.4e38):
             raise SceneError(f"sigma_t * scale is beyond single precision: {self.sigma_t.tolist()}",
                              props.location("scale") if props.has("scale") else spec.location)
-
-    def capabilities(self) -> tuple:
-        extra = ("SAMPLE_EMITTERS",) if self.sample_emitters else ()
-        if self.spectral:
-            extra += ("SPECTRAL_EXTINCTION",)
-        return self.FLAGS + extra
 
     def fill(self, row, ctx=None) -> None:
         row["homogeneous"]["sigma_t"][:3] = self.sigma_t

@@ -9,6 +9,8 @@ kind MEDIUM in clrender/device/dispatch.py); the integrator (kernels/integrators
 """
 from __future__ import annotations
 
+import numpy as np
+
 from ..device import dispatch, layout
 from ..errors import SceneError
 
@@ -27,9 +29,22 @@ class Medium:
             raise SceneError(f"{spec.describe()} takes one <phase>; this is a second one", phases[1].spec.location)
         self.phase = phases[0] if phases else Isotropic()
 
+    def _read_common(self, props) -> float:
+        """Mitsuba's parameters every medium has: sample_emitters and has_spectral_extinction (both default true);
+        returns `scale` (default 1), checked."""
+        self.sample_emitters = props.get_bool("sample_emitters", True)
+        self.spectral = props.get_bool("has_spectral_extinction", True)
+        scale = props.get_float("scale", 1.0)
+        if not (scale >= 0 and np.isfinite(scale)):
+            raise SceneError(f"scale must be non-negative and finite, got {scale}", props.location("scale"))
+        return scale
+
     def capabilities(self) -> tuple:
-        """The row's flags (a parameter may add some to the class's FLAGS)."""
-        return tuple(self.FLAGS)
+        """The row's flags: the class's FLAGS, and SAMPLE_EMITTERS and SPECTRAL_EXTINCTION as the file says."""
+        extra = ("SAMPLE_EMITTERS",) if getattr(self, "sample_emitters", False) else ()
+        if getattr(self, "spectral", False):
+            extra += ("SPECTRAL_EXTINCTION",)
+        return tuple(self.FLAGS) + extra
 
     def pack(self, phase_index: int, ctx=None):
         """This medium's row of the `media` table, its phase function being row `phase_index` of `phases` (ctx: the

@@ -36,10 +36,10 @@ import numpy as np
 
 from ..errors import SceneError
 from ..scene.registry import register
+from ..textures.bitmap import WRAPS, choice, wrap_index   # the same wrap modes, numbered alike
 from .volume import Volume
 
 FILTERS = ("trilinear", "nearest")
-WRAPS = ("repeat", "mirror", "clamp")
 HEADER_BYTES = 48
 
 
@@ -89,24 +89,6 @@ def read_vol(path, location=None) -> tuple[np.ndarray, np.ndarray]:
     return data, bbox
 
 
-def _choice(props, name, options, default) -> int:
-    value = props.get_string(name, default)
-    if value not in options:
-        raise SceneError(f"{name} must be one of {', '.join(options)}; got '{value}'", props.location(name))
-    return options.index(value)
-
-
-def wrap_index(i, n: int, mode: int) -> np.ndarray:
-    """Voxel indices wrapped into [0, n) by mode 0 repeat / 1 mirror / 2 clamp (as the kernel)."""
-    i = np.asarray(i, np.int64)
-    if mode == 0:
-        return np.mod(i, n)
-    if mode == 1:
-        k = np.mod(i, 2 * n)
-        return np.where(k >= n, 2 * n - 1 - k, k)
-    return np.clip(i, 0, n - 1)
-
-
 @register("volume", "gridvolume", fmt="mitsuba")
 class GridVolume(Volume):
     kernel = "volumes/gridvolume.h"
@@ -120,8 +102,8 @@ class GridVolume(Volume):
                              spec.location)
         self.data, self.file_bbox = read_vol(props.get_string("filename"), loc)
         self.channels = self.data.shape[-1]
-        self.filter = _choice(props, "filter_type", FILTERS, "trilinear")
-        self.wrap = _choice(props, "wrap_mode", WRAPS, "clamp")
+        self.filter = choice(props, "filter_type", FILTERS, "trilinear")
+        self.wrap = choice(props, "wrap_mode", WRAPS, "clamp")
         props.get_bool("raw", False)
         props.get_bool("accel", True)
         if props.get_bool("use_grid_bbox", False):

@@ -7,20 +7,6 @@
 #ifndef CLRENDER_VOLUMES_GRIDVOLUME_H
 #define CLRENDER_VOLUMES_GRIDVOLUME_H
 
-INLINE int gridvolume_wrap(int i, int n, uint mode) {
-    if (mode == 2u) return clamp(i, 0, n - 1);
-    if (mode == 1u) {
-        int k = i % (2 * n);
-        if (k < 0) k += 2 * n;
-        return k >= n ? 2 * n - 1 - k : k;
-    }
-    int k = i % n;
-    return k < 0 ? k + n : k;
-}
-
-/* floor, kept where the wrap arithmetic cannot overflow */
-INLINE int gridvolume_floor(float x) { return (int)floor(clampf(x, -1.0e8f, 1.0e8f)); }
-
 INLINE vec3 gridvolume_voxel(const SceneData* sd, __global const Volume* v, int x, int y, int z) {
     uint4 r = v->p.gridvolume.res;
     __global const float* g = sd->grid_data + v->p.gridvolume.offset +
@@ -38,17 +24,17 @@ INLINE vec3 gridvolume_eval(const SceneData* sd, __global const Volume* v, vec3 
         u[k] = (row.x * p.x + row.y * p.y + row.z * p.z + row.w) * (float)n[k];
     }
     if (v->p.gridvolume.filter == 1u)
-        return gridvolume_voxel(sd, v, gridvolume_wrap(gridvolume_floor(u[0]), n[0], wrap),
-                                gridvolume_wrap(gridvolume_floor(u[1]), n[1], wrap),
-                                gridvolume_wrap(gridvolume_floor(u[2]), n[2], wrap));
+        return gridvolume_voxel(sd, v, wrap_index(floor_index(u[0]), n[0], wrap),
+                                wrap_index(floor_index(u[1]), n[1], wrap),
+                                wrap_index(floor_index(u[2]), n[2], wrap));
     int i0[3], i1[3];
     float f[3];
     for (int k = 0; k < 3; ++k) {
         float c = u[k] - 0.5f, c0 = floor(c);
         f[k] = c - c0;
-        int i = gridvolume_floor(c0);
-        i0[k] = gridvolume_wrap(i, n[k], wrap);
-        i1[k] = gridvolume_wrap(i + 1, n[k], wrap);
+        int i = floor_index(c0);
+        i0[k] = wrap_index(i, n[k], wrap);
+        i1[k] = wrap_index(i + 1, n[k], wrap);
     }
     vec3 acc = v3s(0.0f);
     for (int c = 0; c < 8; ++c) {

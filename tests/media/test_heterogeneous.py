@@ -232,6 +232,14 @@ def test_furnace_radiance_is_the_emission(tmp_path):
 RADIANCE = np.array([2.0, 1.0, 0.5])
 
 
+def ramp_slab(tmp_path) -> str:
+    """The absorbing ramp (albedo 0) filling a null slab |z| <= 1, 40 wide: its medium and its shape."""
+    write_vol(tmp_path / "ramp.vol", ramp())
+    med = heterogeneous_xml(grid_xml("sigma_t", tmp_path / "ramp.vol", box_to_world((20, 20, 1))),
+                            '<float name="albedo" value="0"/>', mid="slab")
+    return med + box((20, 20, 1), inner=INTERIOR.format("slab"))
+
+
 def check_every_pixel(film, expected) -> None:
     """Every pixel (per-pixel z-test) and the image mean (which a bias of a few percent cannot hide in) are the
     expected value."""
@@ -244,11 +252,7 @@ def check_every_pixel(film, expected) -> None:
 def test_camera_rays_through_a_ramp_see_its_transmittance(tmp_path, kind):
     """An orthographic camera looks down through an absorbing ramp (albedo 0) at an emitter: every pixel is
     L exp(-optical depth) (delta tracking in the integrator, spectral MIS; per-pixel z-test)."""
-    write_vol(tmp_path / "ramp.vol", ramp())
-    med = heterogeneous_xml(grid_xml("sigma_t", tmp_path / "ramp.vol", box_to_world((20, 20, 1))),
-                            '<float name="albedo" value="0"/>', mid="slab")
-    xml = (f'{HEAD}{integrator(kind)}{med}{ortho_sensor((0, 0, 5), (0, 0, -10), 0.5, 8, 1024)}'
-           f'{box((20, 20, 1), inner=INTERIOR.format("slab"))}'
+    xml = (f'{HEAD}{integrator(kind)}{ramp_slab(tmp_path)}{ortho_sensor((0, 0, 5), (0, 0, -10), 0.5, 8, 1024)}'
            f'<shape type="rectangle"><transform name="to_world"><scale value="30"/><translate z="-3"/></transform>'
            f'<emitter type="area"><rgb name="radiance" value="2, 1, 0.5"/></emitter></shape></scene>')
     film = render_xml(tmp_path, xml)
@@ -261,11 +265,8 @@ def test_shadow_rays_through_a_ramp_see_its_transmittance(tmp_path):
     """A diffuse floor under an absorbing ramp, lit straight down by a directional light through it and seen from
     below the ramp (max_depth 2: direct light only): every pixel is rho / pi E exp(-optical depth), the
     transmittance of the shadow rays (ratio tracking in the integrator; per-pixel z-test)."""
-    write_vol(tmp_path / "ramp.vol", ramp())
-    med = heterogeneous_xml(grid_xml("sigma_t", tmp_path / "ramp.vol", box_to_world((20, 20, 1))),
-                            '<float name="albedo" value="0"/>', mid="slab")
-    xml = (f'{HEAD}{integrator("volpath", 2)}{med}{ortho_sensor((0, 0, -1.2), (0, 0, -10), 0.5, 8, 256)}'
-           f'{box((20, 20, 1), inner=INTERIOR.format("slab"))}'
+    xml = (f'{HEAD}{integrator("volpath", 2)}{ramp_slab(tmp_path)}'
+           f'{ortho_sensor((0, 0, -1.2), (0, 0, -10), 0.5, 8, 256)}'
            f'<shape type="rectangle"><transform name="to_world"><scale value="30"/><translate z="-1.5"/>'
            f'</transform><bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>'
            f'<emitter type="directional"><vector name="direction" value="0, 0, -1"/>'
