@@ -56,6 +56,11 @@ def test_rows_volumes_and_grid_data(tmp_path):
     np.testing.assert_allclose(g["bbox_min"][:3], (-1, -2, -3)) and np.testing.assert_allclose(g["bbox_max"][:3],
                                                                                                  (1, 2, 3))
     np.testing.assert_allclose(vols[p["albedo"]]["constvolume"]["value"][:3], (0.5, 0.6, 0.7), rtol=1e-6)
+    # max_value stands for the grid's largest value (Mitsuba's fixed max): the majorant follows it
+    fixed = grid_xml("sigma_t", tmp_path / "g.vol", extra='<float name="max_value" value="3"/>')
+    m = load('<shape type="sphere"><medium type="heterogeneous" name="interior"><float name="scale" value="2"/>'
+             f'{fixed}</medium></shape>').shapes[0].interior
+    assert m.majorant == 6
 
 
 def test_refusals_are_located(tmp_path):
