@@ -91,6 +91,8 @@ class PackContext:
         self._n_vertices = self._n_triangles = 0
         self.textures = TextureTable()
         self.camera_medium = NONE   # the camera's row of the media table (_pack_media)
+        self.volumes: dict[int, int] = {}   # rows of the volumes table, by the volume's identity (Volume.pack)
+        self.volume_tags: set = set()       # their type tags
 
     def add_table(self, name: str, dtype: str, rows) -> int:
         """Append `rows` to table `name`, whose element type must be `dtype` as SCENE_TABLES declares it (a
@@ -231,7 +233,8 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     used = dispatch.PluginSet.from_tags(
         {"bsdf": {int(r["type"]) for r in bsdf_rows}, "mesh": set(shape_rows["type"].tolist()),
          "emitter": {int(r["type"]) for r in emitter_rows}, "texture": ctx.textures.tags,
-         "rfilter": {int(camera[0]["filter_type"])}, "medium": media_tags, "phase": phase_tags},
+         "rfilter": {int(camera[0]["filter_type"])}, "medium": media_tags, "phase": phase_tags,
+         "volume": ctx.volume_tags},
         {"bsdf": max((composite_depth(b) for b in {id(s.bsdf): s.bsdf for s in shapes}.values()), default=0)})
     return SceneBuffers(tables=tables, camera=camera, filter_cdf=filter_cdf, stats=stats, bvh_width=geo.width,
                         leaf_order=np.asarray(geo.order, np.int64), plugins=used,
@@ -291,7 +294,7 @@ def _pack_media(scene, ctx: PackContext, shape_rows) -> tuple[set, set]:
                 prow = phase.pack()
                 phases[id(phase)] = ctx.add_table("phases", "Phase", prow)
                 tags[1].add(int(prow["type"]))
-            mrow = medium.pack(phases[id(phase)])
+            mrow = medium.pack(phases[id(phase)], ctx)
             media[id(medium)] = ctx.add_table("media", "Medium", mrow)
             tags[0].add(int(mrow["type"]))
         return media[id(medium)]

@@ -12,6 +12,7 @@ from .bsdfs import null, plastic, principled, principledthin  # noqa: F401
 from .bsdfs import roughconductor, roughdielectric, roughplastic, thindielectric, twosided  # noqa: F401
 from .emitters import area, constant, distant, distantdisk, envmap, point, projector, spot, sunsky  # noqa: F401
 from .phase import hg, isotropic  # noqa: F401
-from .media import homogeneous  # noqa: F401
+from .volumes import constvolume, gridvolume  # noqa: F401
+from .media import heterogeneous, homogeneous  # noqa: F401
 from .integrators import (ao, aov, av, direct, direct_ems, direct_mats, direct_mis, material,  # noqa: F401
                           moment, normals, path, path_ems, path_mats, path_mis, simple, whitted)

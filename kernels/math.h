@@ -89,6 +89,22 @@ INLINE float safe_sqrt(float x) { return sqrt(maxf(x, 0.0f)); }
 INLINE bool is_black(vec3 c) { return c.x == 0.0f && c.y == 0.0f && c.z == 0.0f; }
 INLINE bool all_finite(vec3 c) { return isfinite(c.x) && isfinite(c.y) && isfinite(c.z); }
 
+/* A texel or voxel index wrapped into [0, n) by mode 0 repeat / 1 mirror / 2 clamp (Mitsuba's wrap modes, as the
+   bitmap texture and the grid volume number them). */
+INLINE int wrap_index(int i, int n, uint mode) {
+    if (mode == 2u) return clamp(i, 0, n - 1);
+    if (mode == 1u) {
+        int k = i % (2 * n);
+        if (k < 0) k += 2 * n;
+        return k >= n ? 2 * n - 1 - k : k;
+    }
+    int k = i % n;
+    return k < 0 ? k + n : k;
+}
+
+/* A float texel or voxel coordinate to int, kept in a range where the wrap arithmetic cannot overflow. */
+INLINE int floor_index(float x) { return (int)floor(clampf(x, -1.0e8f, 1.0e8f)); }
+
 /* (sin x, cos x) for the moderate angles of sampling code (|x| up to a few thousand), in plain arithmetic:
    PoCL's sin/cos spend most of their time in a general argument reduction (measured: 5 % of a Cornell box
    render). Quadrant q = round(x / (pi/2)); r = x - q pi/2 with pi/2 in three parts (the first two short, so

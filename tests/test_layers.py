@@ -8,7 +8,7 @@ import textwrap
 # Packages and modules that hold plugins (a class registered for an XML tag), and the module importing them all.
 PLUGIN_PACKAGES = ("clrender.bsdfs", "clrender.cameras", "clrender.emitters", "clrender.films", "clrender.filters",
                    "clrender.integrators", "clrender.media", "clrender.phase", "clrender.samplers", "clrender.shapes",
-                   "clrender.textures")
+                   "clrender.textures", "clrender.volumes")
 PLUGIN_MODULES = ("clrender.plugins", "clrender.scene.scene")
 
 

@@ -5,13 +5,23 @@ over every pixel and channel (clrender/testing/stats.py; clrender's variance is 
 per-sample variance implies at clrender's sample count, so a pixel whose rare paths clrender missed does not fail on
 noise, and for wide filters by the spread of Mitsuba's image over the filter's footprint). Mitsuba is not needed
 to run this."""
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 HERE = Path(__file__).resolve().parent / "mitsuba"
+sys.path.insert(0, str(HERE))
+from make_volumes import write_volumes  # noqa: E402
+
 SCENES = sorted(p.stem for p in (HERE / "scenes").glob("*.xml") if (HERE / "refs" / f"{p.stem}.npz").is_file())
+
+
+@pytest.fixture(autouse=True, scope="module")
+def volume_grids():
+    """The grids scenes/volumes/*.vol that media twins read, written from deterministic functions (not committed)."""
+    write_volumes()
 
 
 def render_twin(name: str, seed: int = 7, **defines):
@@ -85,15 +95,22 @@ def _projector_square_image(scene):
             e.v_scale = e.u_scale          # the aspect ratio of the projected image's resolution ignored
 
 
+def _smoke_denser(scene):
+    smoke = next(s.interior for s in scene.shapes if s.interior is not None)
+    smoke.scale *= 1.1                     # sigma_t 10% denser (the majorant with it)
+    smoke.majorant *= 1.1
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name, mutate", [
     ("cornell_meshes", _mirror), ("filter_lanczos_crop", _crop_off_by_one), ("thinlens", _pinhole),
     ("gaussian_sample_border", _border_ignored), ("filter_gaussian_fov_y", _fov_one_percent_wider),
     ("integrator_volpath_depth2", _path_rules), ("integrator_volpath_hide", _path_rules),
     ("orthographic", _mirror), ("principled", _principled_glass_eta), ("projector", _projector_square_image),
+    ("media_smoke", _smoke_denser),
 ], ids=["mirrored camera", "crop window 1 px off", "pinhole for thin lens", "sample_border ignored", "fov 1% wider",
         "volpath depth as path's", "volpath hide_emitters as path's", "mirrored orthographic sensor",
-        "principled glass eta 1.33 for 1.5", "projector's image taken as square"])
+        "principled glass eta 1.33 for 1.5", "projector's image taken as square", "smoke 10% denser"])
 def test_twin_test_fails_when_clrender_is_wrong(name, mutate):
     """The harness can fail: each twin, rendered with one thing it verifies done wrong, must not pass."""
     import clrender

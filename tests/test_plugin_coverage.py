@@ -28,10 +28,10 @@ TESTS = Path(__file__).resolve().parent
 
 #: folder (as in clrender/ and tests/) -> the registry tags of its plugins (Nori calls a shape <mesh>)
 KINDS = {"bsdfs": ("bsdf",), "emitters": ("emitter",), "shapes": ("shape", "mesh"), "textures": ("texture",),
-         "filters": ("rfilter",), "media": ("medium",), "phase": ("phase",)}
+         "filters": ("rfilter",), "media": ("medium",), "phase": ("phase",), "volumes": ("volume",)}
 NEEDS = {"bsdfs": ("sampling", "render"), "emitters": ("sampling", "render"), "shapes": ("sampling", "render"),
          "textures": ("eval", "render"), "filters": ("sampling", "render"),
-         "media": ("render",), "phase": ("sampling", "render")}
+         "media": ("render",), "phase": ("sampling", "render"), "volumes": ("eval", "render")}
 
 #: (folder, plugin, aspect) -> why it is missing today
 GAPS = {

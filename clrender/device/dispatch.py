@@ -163,19 +163,37 @@ PHASE = Kind(
     after=("phase/common.h",))
 
 # Participating media: rows of the `media` table that shapes (interior, exterior) and the camera point at.
-# HOMOGENEOUS: sigma_t is the same everywhere (free flights are sampled in closed form, kernels/media.h);
-# SAMPLE_EMITTERS: scattering vertices sample lights (Mitsuba's sample_emitters); SPECTRAL_EXTINCTION: sigma_t
-# differs between the channels (Mitsuba's has_spectral_extinction; the estimator here is the same either way).
+# HOMOGENEOUS: sigma_t is the same everywhere (free flights are sampled in closed form, kernels/integrators/media.h;
+# the others by delta tracking against their majorant); SAMPLE_EMITTERS: scattering vertices sample lights
+# (Mitsuba's sample_emitters); SPECTRAL_EXTINCTION: sigma_t may differ between the channels (Mitsuba's
+# has_spectral_extinction; the estimator here is the same either way).
 MEDIUM = Kind(
     tag="medium", struct="Medium", flags=("HOMOGENEOUS", "SAMPLE_EMITTERS", "SPECTRAL_EXTINCTION"),
     dispatch_name="medium", row="m",
     methods=(
-        Method("sigma_t", "vec3", "__global const Medium* m, vec3 p", "m, p", "return v3s(0.0f);", required=True),
-        Method("albedo", "vec3", "__global const Medium* m, vec3 p", "m, p", "return v3s(0.0f);", required=True),
+        Method("sigma_t", "vec3", "const SceneData* sd, __global const Medium* m, vec3 p", "sd, m, p",
+               "return v3s(0.0f);", required=True),
+        Method("albedo", "vec3", "const SceneData* sd, __global const Medium* m, vec3 p", "sd, m, p",
+               "return v3s(0.0f);", required=True),
+        # a bound on every channel of sigma_t inside the medium's extent (heterogeneous media: the null-collision
+        # methods' majorant)
+        Method("majorant", "float", "const SceneData* sd, __global const Medium* m", "sd, m", "return 0.0f;"),
+        # narrows [*t0, *t1] along o + t d to where the medium can have extinction (Mitsuba's intersect_aabb);
+        # false if nothing of it is left
+        Method("clip", "bool", "const SceneData* sd, __global const Medium* m, vec3 o, vec3 d, float* t0, "
+               "float* t1", "sd, m, o, d, t0, t1", "return true;"),
     ),
     after=("math.h",))
 
-KINDS = {k.tag: k for k in (TEXTURE, SHAPE, BSDF, EMITTER, INTEGRATOR, RFILTER, PHASE, MEDIUM)}
+# Volumes: rows of the `volumes` table that heterogeneous media read sigma_t and albedo from (a grid's voxels are in
+# `grid_data`); eval is the value at a world-space point, a colour (a one-channel volume's value in all three).
+VOLUME = Kind(
+    tag="volume", struct="Volume", flags=(), dispatch_name="volume", row="v",
+    methods=(Method("eval", "vec3", "const SceneData* sd, __global const Volume* v, vec3 p", "sd, v, p",
+                    "return v3s(0.0f);", required=True),),
+    after=("math.h",))
+
+KINDS = {k.tag: k for k in (TEXTURE, SHAPE, BSDF, EMITTER, INTEGRATOR, RFILTER, PHASE, MEDIUM, VOLUME)}
 
 
 def prefix_of(cls) -> str:

@@ -96,6 +96,10 @@ ROWS: dict[str, Row] = {
     "Medium": Row(header=(("type", "uint"), ("flags", "uint"), ("phase", "uint"), ("pad", "uint")),
                   union_bytes=32),
     "Phase": Row(header=(("type", "uint"), ("pad", "uint", 3)), union_bytes=16),
+    # a volume (clrender/volumes/) that a heterogeneous medium reads sigma_t or albedo from: its world-space bounding
+    # box (Mitsuba's Volume::bbox, the box of to_world's image of the unit cube), which bounds the medium's extinction
+    "Volume": Row(header=(("type", "uint"), ("pad", "uint", 3), ("bbox_min", "float4"), ("bbox_max", "float4")),
+                  union_bytes=80),
 }
 # The scene's tables, in kernel-argument order: (name, element type, what it holds). The kernels' SceneData
 # struct, its SCENE_ARGS argument list (each table is the argument s_<name>) and SCENE_INIT are generated from
@@ -123,6 +127,9 @@ SCENE_TABLES: list[tuple[str, str, str]] = [
     ("infinite", "uint", "indices of the infinite emitters (info->n_infinite of them)"),
     ("media", "Medium", "one row per participating medium (shapes' interior/exterior, the camera's)"),
     ("phases", "Phase", "the media's phase functions (Medium.phase)"),
+    ("volumes", "Volume", "the volumes heterogeneous media read sigma_t and albedo from"),
+    ("grid_data", "float", "gridvolumes' voxels, back to back: ((z yres + y) xres + x) channels + c from each "
+                           "volume's offset (p.gridvolume.offset)"),
     ("info", "SceneInfo", "scene-wide numbers and the integrator's parameters"),
 ]
 

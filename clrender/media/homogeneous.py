@@ -13,8 +13,8 @@
 <shape type="obj"> ... <ref id="fog" name="interior"/> </shape>   <!-- or a nested <medium name="interior"> -->
 <sensor type="perspective"> ... <ref id="fog"/> </sensor>          <!-- the camera's medium -->
 ```
-`sigma_t` and `albedo` are constants: a `<volume>` (grid or constant volume) in either is refused, as are
-heterogeneous media. `has_spectral_extinction` picks Mitsuba's estimator for colour extinction; clrender samples
+`sigma_t` and `albedo` are constants: a `<volume>` (grid or constant volume) belongs in a heterogeneous medium
+(clrender/media/heterogeneous.py). `has_spectral_extinction` picks Mitsuba's estimator for colour extinction; clrender samples
 free flights the same way either way (one-sample MIS over the three channels: kernels/integrators/media.h), which
 converges to the same image. Kernel: kernels/media/homogeneous.h.
 """
@@ -30,19 +30,16 @@ class Homogeneous(Medium):
     kernel = "media/homogeneous.h"
     PARAMS = [("sigma_t", "float4"), ("albedo", "float4")]
     FLAGS = ("HOMOGENEOUS",)
+    METHODS = ("sigma_t", "albedo")   # free flights in closed form: no majorant, no clip
 
     def __init__(self, props, children, spec):
         self._read_phase(children, spec)
-        scale = props.get_float("scale", 1.0)
+        scale = self._read_common(props)
         sigma_t = np.asarray(props.get_color("sigma_t", np.ones(3), unbounded=True), np.float64)
         self.albedo = np.asarray(props.get_color("albedo", np.full(3, 0.75)), np.float64)
-        self.sample_emitters = props.get_bool("sample_emitters", True)
-        self.spectral = props.get_bool("has_spectral_extinction", True)
         if np.any(sigma_t < 0) or not np.all(np.isfinite(sigma_t)):
             raise SceneError(f"sigma_t must be non-negative and finite, got {sigma_t.tolist()}",
                              props.location("sigma_t") if props.has("sigma_t") else spec.location)
-        if not (scale >= 0 and np.isfinite(scale)):
-            raise SceneError(f"scale must be non-negative and finite, got {scale}", props.location("scale"))
         if np.any(self.albedo < 0) or np.any(self.albedo > 1):
             raise SceneError(f"albedo must lie in [0, 1], got {self.albedo.tolist()}", props.location("albedo"))
         self.sigma_t = sigma_t * scale
@@ -50,12 +47,6 @@ class Homogeneous(Medium):
             raise SceneError(f"sigma_t * scale is beyond single precision: {self.sigma_t.tolist()}",
                              props.location("scale") if props.has("scale") else spec.location)
 
-    def capabilities(self) -> tuple:
-        extra = ("SAMPLE_EMITTERS",) if self.sample_emitters else ()
-        if self.spectral:
-            extra += ("SPECTRAL_EXTINCTION",)
-        return self.FLAGS + extra
-
-    def fill(self, row) -> None:
+    def fill(self, row, ctx=None) -> None:
         row["homogeneous"]["sigma_t"][:3] = self.sigma_t
         row["homogeneous"]["albedo"][:3] = self.albedo

@@ -462,9 +462,10 @@ class MitsubaBuilder(XmlBuilder):
 
 def _referenced(target: PluginSpec, name: str | None) -> PluginSpec:
     """What a ``<ref>`` with parameter name ``name`` to ``target`` puts into its parent."""
-    if name is None or name == target.name or target.tag not in ("texture", "medium"):
+    if name is None or name == target.name or target.tag not in ("texture", "medium", "volume"):
         return target   # one object wherever it is referenced (a bsdf's or emitter's name says nothing)
-    # A medium's name says on which side of a shape it is (interior, exterior): a spec under that name, as below.
+    # A medium's name says on which side of a shape it is (interior, exterior), a volume's which parameter of a
+    # heterogeneous medium it fills (sigma_t, albedo): a spec under that name, as below.
     # A texture filling another parameter (its name tells the BSDF which): a spec sharing the texture's
     # properties and children under that name.
     return replace(target, name=name)

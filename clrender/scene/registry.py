@@ -85,7 +85,7 @@ def instantiate(tag: str, type_name: str, props: dict | None = None, location: S
     return create(PluginSpec(tag, type_name, None, plist, [], location, format=fmt))
 
 
-#: what Mitsuba scenes declare participating media with (clrender/media/: homogeneous media, no volumes)
+#: what Mitsuba scenes declare participating media with (clrender/media/, clrender/volumes/)
 MEDIA_TAGS = ("medium", "phase", "volume")
 
 
@@ -105,10 +105,10 @@ def create(spec: PluginSpec, _made: dict | None = None):
     # Check every nesting before building anything, so the reported error is the structural one
     # rather than some failure deep inside an earlier child.
     for i, child in enumerate(spec.children):
-        if child.tag == "volume":
-            raise SceneError(f"<volume{_typed(child)}>: volumes (grid or constant) are not supported; clrender renders "
-                             "homogeneous media only: give the <medium type=\"homogeneous\">'s sigma_t and albedo as "
-                             "a <float> or <rgb>", child.location)
+        if child.tag == "volume" and child.tag not in accepted:
+            raise SceneError(f"<volume{_typed(child)}> cannot be nested in {spec.describe()}: volumes (grid or "
+                             "constant) are the sigma_t or albedo of a <medium type=\"heterogeneous\">",
+                             child.location)
         if child.tag in MEDIA_TAGS and child.tag not in accepted:
             where = ("a <phase> belongs in a <medium>" if child.tag == "phase" else
                      "a <medium> belongs in a <shape> (name=\"interior\" or \"exterior\"), in the <sensor>, or at "

@@ -87,13 +87,14 @@ class MitsubaScene(Scene):
     integrator it is rendered by path tracing with unbounded depth (Mitsuba 3.9 asks for one; earlier 3.x
     versions made this same default).
     """
-    children = ("shape", "emitter", "sensor", "integrator", "bsdf", "texture", "sampler", "film", "rfilter", "medium")
+    children = ("shape", "emitter", "sensor", "integrator", "bsdf", "texture", "sampler", "film", "rfilter", "medium",
+                "volume")
 
     def __init__(self, props, children, spec):
         self.location = spec.location
         self.nori_dialect = "upstream"   # Mitsuba's camera convention is upstream Nori's
         self.camera = self.integrator = None
-        # bsdfs, textures, media, samplers, films and rfilters at the top level are only declared for references
+        # bsdfs, textures, media, volumes, samplers, films and rfilters at the top level are only declared for references
         # (Mitsuba's docs scenes declare <sampler id> beside an included sensor that refers to it; one that nothing
         # refers to is ignored, as Mitsuba 3.9.1 ignores it): _take_children passes them over.
         # So is an area emitter that a shape holds by a <ref> (Mitsuba's own Cornell boxes declare the light at the

@@ -3,14 +3,21 @@
    its MIS weight, then a phase sample), medium changes where a path crosses a shape with interior/exterior media,
    and the transmittance of shadow rays through media and pass-through surfaces.
 
-   Media are homogeneous (the only kind clrender packs), so free flights and transmittance are closed forms. With
-   an extinction that differs between channels, sampling every flight with one channel's exponential and weighting
+   In a homogeneous medium free flights and transmittance are closed forms. With an extinction that differs between channels, sampling every flight with one channel's exponential and weighting
    by it alone (Mitsuba's volpath) weights the other channels by exp((s_c - s_k) t) per flight, unbounded. Here a
    hero channel is picked uniformly per path, its extinction samples every flight, and the path is weighted by the
    mean of the densities the whole path would have had under each channel (one-sample MIS with the balance
    heuristic over the three channels, spectral MIS as Mitsuba's volpathmis): each channel's weight stays within 3
    times its albedo's product. (Weighting each flight by the mixture of that flight's densities alone is not
    enough: its ratios, up to 3 each, multiply along a path; the furnace test saw them.)
+
+   A heterogeneous medium (flag HOMOGENEOUS unset) is tracked against its majorant mu (kernels/media/tracking.h):
+   tentative collisions at rate mu, each a real one with probability sigma_t/mu of the hero channel, else a null one
+   (delta tracking, as Mitsuba's volpath, which re-traces from each null collision; here the loop goes on along the
+   same ray). The same spectral MIS weights them: a real collision has density sigma_t,c / mu in channel c and value
+   sigma_s,c / mu, a null one density and value (mu - sigma_t,c) / mu, the flight's exp(-mu t) being the same in
+   every channel. Shadow rays take the transmittance by ratio tracking. Null collisions do not count toward
+   max_depth (Mitsuba's count only real ones); MEDIA_MAX_NULL_COLLISIONS bounds the loops.
 
    As Mitsuba's volpath: a scattering event in a medium counts toward max_depth as a bounce does; shadow rays cross
    surfaces by what their BSDF lets straight through (bsdf_null_transmission, Mitsuba's eval_null_transmission:
@@ -23,12 +30,11 @@
 #define CLRENDER_INTEGRATORS_MEDIA_H
 #include "gen/medium_dispatch.h"
 #include "gen/phase_dispatch.h"
+#include "media/tracking.h"
 
 /* A shadow ray's pass-throughs: beyond this many surfaces it counts as blocked (a bound on the loop, far above any
    real stack of null surfaces). */
 #define MEDIA_MAX_CROSSINGS 64
-
-INLINE float vchannel(vec3 v, uint c) { return c == 0u ? v.x : (c == 1u ? v.y : v.z); }
 
 /* exp(-sigma d) per channel; 1 where sigma is 0 (also over an infinite distance). */
 INLINE vec3 medium_transmittance(vec3 sigma, float d) {
@@ -45,9 +51,10 @@ INLINE uint medium_across(const SceneData* sd, const Intersection* its, vec3 d, 
     return dot3(d, its->ng) > 0.0f ? s->exterior : s->interior;
 }
 
-/* The transmittance along a shadow ray that starts in `medium`: each segment's exp(-sigma_t length) in the medium
-   it crosses, times the null transmission of every surface on the way (0 at any other surface). */
-INLINE vec3 shadow_transmittance(const SceneData* sd, const Ray* shadow, uint medium) {
+/* The transmittance along a shadow ray that starts in `medium`: each segment's transmittance in the medium it
+   crosses (exp(-sigma_t length) in a homogeneous one, ratio tracking in the others), times the null transmission
+   of every surface on the way (0 at any other surface). */
+INLINE vec3 shadow_transmittance(const SceneData* sd, const Ray* shadow, uint medium, Sampler* smp) {
     if (!(shadow->tmax > 0.0f)) return v3s(1.0f);
     Ray r = *shadow;
     vec3 tr = v3s(1.0f);
@@ -55,8 +62,13 @@ INLINE vec3 shadow_transmittance(const SceneData* sd, const Ray* shadow, uint me
         Hit h;
         Intersection its;
         bool hit = scene_trace(sd, &r, &h) && scene_surface(sd, &r, &h, &its);
-        if (medium != NONE)
-            tr = vmul(tr, medium_transmittance(medium_sigma_t(sd->media + medium, r.o), hit ? its.t : r.tmax));
+        if (medium != NONE) {
+            __global const Medium* m = sd->media + medium;
+            float len = hit ? its.t : r.tmax;
+            tr = vmul(tr, (m->flags & MEDIUM_HOMOGENEOUS) != 0u
+                              ? medium_transmittance(medium_sigma_t(sd, m, r.o), len)
+                              : medium_ratio_tracking(sd, m, r.o, r.d, len, smp));
+        }
         if (!hit || is_black(tr)) return tr;
         BsdfQuery q = bsdf_query(sd, &its, vneg(r.d));
         tr = vmul(tr, bsdf_null_transmission(bsdf_at(sd, &its), &q));
@@ -109,14 +121,50 @@ INLINE void medium_scatter(const SceneData* sd, PathState* ps, __global const Me
     path_roulette_mitsuba(sd, ps, smp);
 }
 
+/* One event of a free flight under the spectral MIS: `density` is each channel's density of it, `value` what it
+   contributes; the throughput gets value over the mean of the channels' path densities (chan_pdf keeps them
+   relative to that mean). False if that ends the path. */
+INLINE bool medium_weigh(PathState* ps, vec3 density, vec3 value) {
+    vec3 pdf = vmul(ps->chan_pdf, density);
+    float mean = (pdf.x + pdf.y + pdf.z) * (1.0f / 3.0f);
+    if (!(mean > 0.0f) || !isfinite(mean)) { ps->alive = 0u; return false; }
+    ps->chan_pdf = vscale(pdf, 1.0f / mean);
+    ps->beta = vmul(ps->beta, vscale(value, 1.0f / mean));
+    return true;
+}
+
+/* Delta tracking through the heterogeneous medium m from the ray's tmin to tmax (see the top of this file). */
+INLINE bool medium_flight_tracked(const SceneData* sd, PathState* ps, __global const Medium* m, float tmax,
+                                  Sampler* smp) {
+    float t = ps->ray.tmin, t1 = tmax;
+    float mu = medium_track_range(sd, m, ps->ray.o, ps->ray.d, &t, &t1);
+    if (mu == 0.0f) return false;
+    vec3 sigma;
+    bool real;
+    for (int i = 0; i < MEDIA_MAX_NULL_COLLISIONS; ++i) {
+        if (!medium_track_step(sd, m, ps->ray.o, ps->ray.d, mu, t1, ps->hero, smp, &t, &sigma, &real)) return false;
+        vec3 p = vmad(ps->ray.d, t, ps->ray.o);
+        vec3 density = real ? sigma : vsub(v3s(mu), sigma);
+        if (!medium_weigh(ps, density, real ? vmul(sigma, medium_albedo(sd, m, p)) : density)) return true;
+        if (real) {
+            if (is_black(ps->beta)) { ps->alive = 0u; return true; }
+            medium_scatter(sd, ps, m, p, smp);
+            return true;
+        }
+    }
+    ps->alive = 0u;
+    return true;
+}
+
 /* The free flight of the segment just traced, in the path's medium (the surface at `tmax`, or none). Returns true
    if the medium took the path (a scattering vertex, or the end of the path); false if it reaches the surface (or
-   escapes). The flight is sampled with the hero channel's extinction; the throughput gets the event's value over
-   the mean of the three channels' path densities (chan_pdf keeps them relative to that mean). */
+   escapes). The flight is sampled with the hero channel's extinction (or tracked against the majorant) and
+   weighted by medium_weigh. */
 INLINE bool medium_flight(const SceneData* sd, PathState* ps, float tmax, Sampler* smp) {
     __global const Medium* m = sd->media + ps->medium;
-    vec3 sigma = medium_sigma_t(m, ps->ray.o);
     if (ps->hero > 2u) ps->hero = min((uint)(next1d(smp) * 3.0f), 2u);
+    if ((m->flags & MEDIUM_HOMOGENEOUS) == 0u) return medium_flight_tracked(sd, ps, m, tmax, smp);
+    vec3 sigma = medium_sigma_t(sd, m, ps->ray.o);
     float sc = vchannel(sigma, ps->hero);
     /* the medium starts where the ray does: at tmin (a camera ray's near clip plane, where Mitsuba's start) */
     float t0 = ps->ray.tmin;
@@ -124,12 +172,8 @@ INLINE bool medium_flight(const SceneData* sd, PathState* ps, float tmax, Sample
     bool scatter = t < tmax;
     vec3 tr = medium_transmittance(sigma, (scatter ? t : tmax) - t0);
     vec3 density = scatter ? vmul(sigma, tr) : tr;   /* each channel's density of this event */
-    vec3 value = scatter ? vmul(tr, vmul(sigma, medium_albedo(m, ps->ray.o))) : tr;
-    vec3 pdf = vmul(ps->chan_pdf, density);
-    float mean = (pdf.x + pdf.y + pdf.z) * (1.0f / 3.0f);
-    if (!(mean > 0.0f) || !isfinite(mean)) { ps->alive = 0u; return true; }
-    ps->chan_pdf = vscale(pdf, 1.0f / mean);
-    ps->beta = vmul(ps->beta, vscale(value, 1.0f / mean));
+    vec3 value = scatter ? vmul(tr, vmul(sigma, medium_albedo(sd, m, ps->ray.o))) : tr;
+    if (!medium_weigh(ps, density, value)) return true;
     if (!scatter) return false;
     if (is_black(ps->beta)) { ps->alive = 0u; return true; }
     medium_scatter(sd, ps, m, vmad(ps->ray.d, t, ps->ray.o), smp);

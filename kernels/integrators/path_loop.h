@@ -14,7 +14,7 @@ INLINE vec3 Li(const SceneData* sd, Ray ray, Sampler* smp) {
 #if defined(CLR_MEDIA) && defined(PATH_MITSUBA)
         /* volpath's shadow rays cross media and pass-through surfaces (media.h); Mitsuba's path ignores media */
         if (ps.shadow_pending && sd->info->p.path_mitsuba.volpath != 0u)
-            path_shadow_through(&ps, shadow_transmittance(sd, &ps.shadow, ps.shadow_medium));
+            path_shadow_through(&ps, shadow_transmittance(sd, &ps.shadow, ps.shadow_medium, smp));
 #endif
         if (ps.shadow_pending) path_shadow_done(&ps, shadow_occluded(sd, &ps.shadow));
     }

@@ -1,9 +1,14 @@
 /* homogeneous: constant extinction sigma_t (scale already applied) and single-scattering albedo. Row:
-   p.homogeneous.sigma_t, .albedo (xyz). */
+   p.homogeneous.sigma_t, .albedo (xyz). Free flights are closed forms (kernels/integrators/media.h), so it has no
+   majorant or clip. */
 #ifndef CLRENDER_MEDIA_HOMOGENEOUS_H
 #define CLRENDER_MEDIA_HOMOGENEOUS_H
 #include "math.h"
 
-INLINE vec3 homogeneous_sigma_t(__global const Medium* m, vec3 p) { return vrow(m->p.homogeneous.sigma_t); }
-INLINE vec3 homogeneous_albedo(__global const Medium* m, vec3 p) { return vrow(m->p.homogeneous.albedo); }
+INLINE vec3 homogeneous_sigma_t(const SceneData* sd, __global const Medium* m, vec3 p) {
+    return vrow(m->p.homogeneous.sigma_t);
+}
+INLINE vec3 homogeneous_albedo(const SceneData* sd, __global const Medium* m, vec3 p) {
+    return vrow(m->p.homogeneous.albedo);
+}
 #endif

@@ -5,20 +5,6 @@
 #ifndef CLRENDER_TEXTURES_BITMAP_H
 #define CLRENDER_TEXTURES_BITMAP_H
 
-INLINE int bitmap_wrap(int i, int n, uint mode) {
-    if (mode == 2u) return clamp(i, 0, n - 1);
-    if (mode == 1u) {
-        int k = i % (2 * n);
-        if (k < 0) k += 2 * n;
-        return k >= n ? 2 * n - 1 - k : k;
-    }
-    int k = i % n;
-    return k < 0 ? k + n : k;
-}
-
-/* Float pixel coordinate to int, kept in a range where the wrap arithmetic cannot overflow. */
-INLINE int bitmap_floor(float x) { return (int)floor(clampf(x, -1.0e8f, 1.0e8f)); }
-
 INLINE vec3 bitmap_texel(__global const Texture* t, int x, int y) {
     __global const float4* px = (__global const float4*)(t + 1);
     return vrow(px[y * (int)t->p.bitmap.dims.x + x]);
@@ -34,11 +20,11 @@ INLINE BitmapTaps bitmap_taps(uint4 d, float s, float tt) {
     BitmapTaps k;
     k.a = fx - x0f;
     k.b = fy - y0f;
-    int x0 = bitmap_floor(x0f), y0 = bitmap_floor(y0f);
-    k.xa = bitmap_wrap(x0, w, d.w);
-    k.xb = bitmap_wrap(x0 + 1, w, d.w);
-    k.ya = bitmap_wrap(y0, h, d.w);
-    k.yb = bitmap_wrap(y0 + 1, h, d.w);
+    int x0 = floor_index(x0f), y0 = floor_index(y0f);
+    k.xa = wrap_index(x0, w, d.w);
+    k.xb = wrap_index(x0 + 1, w, d.w);
+    k.ya = wrap_index(y0, h, d.w);
+    k.yb = wrap_index(y0 + 1, h, d.w);
     return k;
 }
 
@@ -48,8 +34,8 @@ INLINE vec3 bitmap_eval(__global const Texture* t, float2 uv) {
     float4 r0 = t->p.bitmap.to_uv[0], r1 = t->p.bitmap.to_uv[1];
     float s = r0.x * uv.x + r0.y * uv.y + r0.z, tt = r1.x * uv.x + r1.y * uv.y + r1.z;
     if (d.z == 1u)
-        return bitmap_texel(t, bitmap_wrap(bitmap_floor(s * (float)w), w, d.w),
-                            bitmap_wrap(bitmap_floor(tt * (float)h), h, d.w));
+        return bitmap_texel(t, wrap_index(floor_index(s * (float)w), w, d.w),
+                            wrap_index(floor_index(tt * (float)h), h, d.w));
     BitmapTaps k = bitmap_taps(d, s, tt);
     vec3 top = vmad(bitmap_texel(t, k.xa, k.ya), 1.0f - k.a, vscale(bitmap_texel(t, k.xb, k.ya), k.a));
     vec3 bot = vmad(bitmap_texel(t, k.xa, k.yb), 1.0f - k.a, vscale(bitmap_texel(t, k.xb, k.yb), k.a));

@@ -149,3 +149,51 @@ def thin_sheet_transmittance(cos_i: float, eta: float) -> float:
     rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
     f = (rs * rs + rp * rp) / 2
     return 1 - 2 * f / (1 + f)
+
+
+# ------------------------------------------------------------------------------------------------ heterogeneous
+def box_to_world(half_sizes, centre=(0, 0, 0)) -> str:
+    """The <transform name="to_world"> that maps a volume's unit cube onto the box of box(half_sizes, centre)."""
+    h = np.broadcast_to(np.asarray(half_sizes, np.float64), 3)
+    lo = np.asarray(centre, np.float64) - h
+    return (f'<transform name="to_world"><scale value="{_rgb(2 * h)}"/><translate value="{_rgb(lo)}"/>'
+            f'</transform>')
+
+
+def grid_xml(name: str, filename, to_world: str = "", filter_type: str = "trilinear", wrap: str = "clamp",
+             extra: str = "") -> str:
+    """A <volume type="gridvolume"> filling parameter `name` of a heterogeneous medium."""
+    return (f'<volume type="gridvolume" name="{name}"><string name="filename" value="{filename}"/>'
+            f'<string name="filter_type" value="{filter_type}"/><string name="wrap_mode" value="{wrap}"/>'
+            f'{to_world}{extra}</volume>')
+
+
+def heterogeneous_xml(sigma_t: str, albedo: str = '<float name="albedo" value="0.75"/>', scale: float = 1.0,
+                      phase: str = '<phase type="isotropic"/>', mid: str = "", name: str = "") -> str:
+    """A heterogeneous medium of the given sigma_t and albedo elements (a <volume> or a <float>/<rgb>)."""
+    attrs = (f' name="{name}"' if name else "") + (f' id="{mid}"' if mid else "")
+    return (f'<medium type="heterogeneous"{attrs}>{sigma_t}{albedo}<float name="scale" value="{scale:.9g}"/>'
+            f'{phase}</medium>')
+
+
+def ramp(n: int = 8, per_channel=(1.0, 0.5, 2.0)) -> np.ndarray:
+    """A (n, 1, 1, 3) grid (z, y, x, c) whose values grow linearly with z: (0.1 + 0.2 k) times per_channel."""
+    v = (0.1 + 0.2 * np.arange(n))[:, None] * np.asarray(per_channel, np.float64)
+    return v.reshape(n, 1, 1, 3).astype(np.float32)
+
+
+def ramp_optical_depth(grid: np.ndarray, height: float, t, scale: float = 1.0) -> np.ndarray:
+    """Exactly, the integral of the trilinearly looked-up density of a (n, 1, 1, c) grid spanning `height` along z
+    from its bottom face up to height t (an array): piecewise linear between the voxel centres, constant (clamped)
+    in the half voxels at either end. Returns (len(t), c)."""
+    v = grid.reshape(len(grid), -1).astype(np.float64)
+    n = len(v)
+    knots = np.concatenate([[0.0], (np.arange(n) + 0.5) / n * height, [height]])
+    vals = np.concatenate([v[:1], v, v[-1:]])
+    seg = np.diff(knots)[:, None] * (vals[1:] + vals[:-1]) / 2
+    cum = np.concatenate([np.zeros((1, v.shape[1])), np.cumsum(seg, axis=0)])
+    t = np.clip(np.atleast_1d(np.asarray(t, np.float64)), 0.0, height)
+    k = np.clip(np.searchsorted(knots, t, side="right") - 1, 0, len(knots) - 2)
+    frac = ((t - knots[k]) / np.diff(knots)[k])[:, None]
+    at_t = vals[k] + frac * (vals[k + 1] - vals[k])
+    return scale * (cum[k] + (t - knots[k])[:, None] * (vals[k] + at_t) / 2)

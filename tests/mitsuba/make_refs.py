@@ -9,6 +9,8 @@ deviation of the seed images over sqrt(seeds)). A scene without an <integrator> 
 ``path`` (unbounded depth), which is what clrender uses for it. Saved as float32 ``mean`` and ``stderr`` (H x W x 3),
 ``spp`` (total samples per pixel), ``seeds``, ``variant``, ``mitsuba_version``.
 
+The volume grids some scenes read (scenes/volumes/) are written first by make_volumes.py.
+
 Mitsuba is a development-only tool here: ``pip install mitsuba==3.9.1``. ``llvm_ad_rgb`` (the default; it filters
 with the exact reconstruction filter, where ``scalar_rgb`` tabulates it) needs libLLVM, found through
 DRJIT_LIBLLVM_PATH (set below when Debian's libLLVM 19 is there).
@@ -51,6 +53,9 @@ def render_reference(path: Path, spp: int, seeds: int, variant: str) -> dict:
 
 
 def main(argv=None) -> int:
+    from make_volumes import write_volumes
+
+    write_volumes()   # the grids the scenes read (generated, not committed)
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("names", nargs="*", help="scene names (default: every scene in tests/mitsuba/scenes)")
     ap.add_argument("--spp", type=int, default=1024, help="samples per pixel of each seed's render")
