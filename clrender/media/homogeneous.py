@@ -14,8 +14,8 @@
 <sensor type="perspective"> ... <ref id="fog"/> </sensor>          <!-- the camera's medium -->
 ```
 `sigma_t` and `albedo` are constants: a `<volume>` (grid or constant volume) belongs in a heterogeneous medium
-(clrender/media/heterogeneous.py). `has_spectral_extinction` picks Mitsuba's estimator for colour extinction; clrender samples
-free flights the same way either way (one-sample MIS over the three channels: kernels/integrators/media.h), which
+(clrender/media/heterogeneous.py). `has_spectral_extinction` picks Mitsuba's estimator for colour extinction;
+clrender samples free flights the same way either way (one-sample MIS over the three channels: kernels/integrators/media.h), which
 converges to the same image. Kernel: kernels/media/homogeneous.h.
 """
 import numpy as np

@@ -3,13 +3,14 @@
    its MIS weight, then a phase sample), medium changes where a path crosses a shape with interior/exterior media,
    and the transmittance of shadow rays through media and pass-through surfaces.
 
-   In a homogeneous medium free flights and transmittance are closed forms. With an extinction that differs between channels, sampling every flight with one channel's exponential and weighting
-   by it alone (Mitsuba's volpath) weights the other channels by exp((s_c - s_k) t) per flight, unbounded. Here a
-   hero channel is picked uniformly per path, its extinction samples every flight, and the path is weighted by the
-   mean of the densities the whole path would have had under each channel (one-sample MIS with the balance
-   heuristic over the three channels, spectral MIS as Mitsuba's volpathmis): each channel's weight stays within 3
-   times its albedo's product. (Weighting each flight by the mixture of that flight's densities alone is not
-   enough: its ratios, up to 3 each, multiply along a path; the furnace test saw them.)
+   In a homogeneous medium free flights and transmittance are closed forms. With an extinction that differs between
+   channels, sampling every flight with one channel's exponential and weighting by it alone (Mitsuba's volpath)
+   weights the other channels by exp((s_c - s_k) t) per flight, unbounded. Here a hero channel is picked uniformly
+   per path, its extinction samples every flight, and the path is weighted by the mean of the densities the whole
+   path would have had under each channel (one-sample MIS with the balance heuristic over the three channels,
+   spectral MIS as Mitsuba's volpathmis): each channel's weight stays within 3 times its albedo's product. (Weighting
+   each flight by the mixture of that flight's densities alone is not enough: its ratios, up to 3 each, multiply
+   along a path; the furnace test saw them.)
 
    A heterogeneous medium (flag HOMOGENEOUS unset) is tracked against its majorant mu (kernels/media/tracking.h):
    tentative collisions at rate mu, each a real one with probability sigma_t/mu of the hero channel, else a null one
