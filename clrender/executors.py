@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .device import layout
 from .device.program import MIN_GENERIC_GLOBAL
 from .errors import ClrenderError
 
@@ -307,7 +308,7 @@ class SplatExecutor:
     same samples: random numbers are keyed by pixel and sample), so its sums are the one-process film's.
 
     Adaptive sampling's launches (`launch`, `launch_spans`: pixels with counts of their own) go to a store instead,
-    each pixel's splats kept apart ((2 reach + 1)^2 float4 per pixel, store_buffer_bytes), and `resolve` turns it
+    each pixel's splats kept apart (3 (2 reach + 1)^2 float4 per pixel, store_buffer_bytes), and `resolve` turns it
     into the film's sums, each pixel's splats weighed by 1 / its samples (kernels/splat.cl store_pixel, splat_resolve)."""
 
     name = "megakernel"
@@ -316,7 +317,7 @@ class SplatExecutor:
     #: launch_spans: each listed pixel with its own samples in one launch (adaptive sampling's rounds)
     spans = True
 
-    def __init__(self, ctx, queue, program, scene_bufs, camera, width, height, reach, launch_pixels, mean_square):
+    def __init__(self, ctx, queue, program, scene_bufs, camera, width, height, reach, launch_pixels):
         import pyopencl as cl
 
         from .device.kernelargs import KernelArgs
@@ -328,13 +329,10 @@ class SplatExecutor:
         self.store_range = KernelArgs(cl.Kernel(program, "store_pass")).set_scene(scene_bufs).set(cam=camera)
         self.store_list = KernelArgs(cl.Kernel(program, "store_spans")).set_scene(scene_bufs).set(cam=camera)
         self.resolver = KernelArgs(cl.Kernel(program, "splat_resolve")).set(cam=camera)
-        self._m2 = cl.Buffer(ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR,   # (KernelArgs keeps none)
-                             hostbuf=np.ascontiguousarray(mean_square, np.float32))
-        self.resolver.set(m2=self._m2)
         self.launch_pixels = launch_pixels
         self.global_size = max(MIN_GENERIC_GLOBAL, _round_up(launch_pixels))
         self._buf, self._buf_samples = None, 0
-        self._store = None         # (store, own, own2): allocated by the first adaptive render
+        self._store = None         # (store, counts): allocated by the first adaptive render
         self._stored = False       # samples went to the store since the film was bound: resolve before reading
 
     def halo(self, p0: int, p1: int) -> tuple[int, int]:
@@ -373,16 +371,16 @@ class SplatExecutor:
 
     # -- adaptive sampling's store ---------------------------------------------------------------------------
     def store_buffer_bytes(self) -> list[int]:
-        """Device bytes of the store's buffers: (2 reach + 1)^2 splats, and two sums of a pixel's own, one float4 each
-        per pixel."""
+        """Device bytes of the store's buffers: layout's SPLAT_STORE_ENTRIES float4 per splat, (2 reach + 1)^2 splats
+        per pixel; a pixel's counts (two uint)."""
         n = self.width * self.height
-        return [16 * n * (2 * self.reach + 1) ** 2, 16 * n, 16 * n]
+        return [16 * layout.ENUMS["SPLAT_STORE_ENTRIES"] * n * (2 * self.reach + 1) ** 2, 8 * n]
 
     def _clear_store(self) -> None:
         import pyopencl as cl
 
         for buf in self._store:
-            cl.enqueue_fill_buffer(self.queue, buf, np.float32(0), 0, buf.size)
+            cl.enqueue_fill_buffer(self.queue, buf, np.uint32(0), 0, buf.size)
 
     def _use_store(self) -> None:
         import pyopencl as cl
@@ -391,10 +389,9 @@ class SplatExecutor:
             mf = cl.mem_flags.READ_WRITE
             self._store = tuple(cl.Buffer(self.ctx, mf, size) for size in self.store_buffer_bytes())
             self._clear_store()
-            store, own, own2 = self._store
-            for k in (self.store_range, self.store_list):
-                k.set(store=store, own=own, own2=own2)
-            self.resolver.set(store=store, own=own, own2=own2)
+            store, counts = self._store
+            for k in (self.store_range, self.store_list, self.resolver):
+                k.set(store=store, counts=counts)
         self._stored = True
 
     def warm_list(self, pixel_list) -> None:

@@ -147,8 +147,7 @@ class Renderer:
         self.launch_pixels = min(self.n_pixels, MAX_LAUNCH_PIXELS)
         if self.splat:
             self.executor = SplatExecutor(self.ctx, self.queue, self.program, self._scene_bufs, self._camera,
-                                          self.width, self.height, splat_reach(b.camera), self.launch_pixels,
-                                          scene.camera.filter.splat_mean_square())
+                                          self.width, self.height, splat_reach(b.camera), self.launch_pixels)
         else:
             executor = WavefrontExecutor if self.driver == "wavefront" else MegakernelExecutor
             self.executor = executor(self.ctx, self.queue, self.program, self._scene_bufs, self._camera,

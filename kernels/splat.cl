@@ -65,8 +65,8 @@ __kernel void render_records(SCENE_ARGS, __global const Camera* cam, __global fl
 }
 
 /* Pixels pixel_offset .. + pixel_count: the pass's records of every neighbour within reach (the records hold
-   pixels rec_first .. rec_stop - 1, pixel p at (p - rec_base) * spp) added to the film's sums (SPLAT_FILM_ARGS, clrender/device/layout.py): acc0 (sum w L, sum w),
-   acc1 (sum (w L)^2, own samples), acc2 (sum w^2 L, sum w^2: with acc1 the variance of the ratio), bad. */
+   pixels rec_first .. rec_stop - 1, pixel p at (p - rec_base) * spp) added to the film's sums (SPLAT_FILM_ARGS,
+   clrender/device/layout.py): acc0 (sum w L, sum w), acc1 (sum (w L)^2, own samples), acc2 (sum w^2 L, sum w^2: with acc1 the variance of the ratio), bad. */
 __kernel void splat_gather(__global const Camera* cam, __global const float4* records, __global const float* weights,
                            uint rec_base, uint rec_first, uint rec_stop, SPLAT_FILM_ARGS, uint pixel_offset,
                            uint pixel_count, uint sample_offset, uint spp, uint seed) {
@@ -108,81 +108,79 @@ __kernel void splat_gather(__global const Camera* cam, __global const float4* re
 }
 
 /* Adaptive sampling's splatting film (clrender/executors.py SplatExecutor, its store). Pixels whose sample counts
-   differ cannot pour their samples into shared sums: a pixel with 16 times the samples of its neighbour would weigh
-   16 times as much in the pixels between them, and an edge there would move. So each pixel keeps its own samples'
-   splats apart, store[(2 reach + 1)^2 pix + (2 reach + 1) (ty + reach) + tx + reach] = (sum of w L, sum of w) toward
-   the pixel at offset (tx, ty), with w = f(tx + 1/2 - u.x) f(ty + 1/2 - u.y), and its own sums own = (sum of L, all
-   its samples), own2 = (sum of L^2, dropped samples); splat_resolve weighs each pixel's splats by 1 / its samples,
-   which with equal counts is the uniform splatting film's sum. A call's splats are summed in private memory and
-   added to the store once (CLR_SPLAT_K = 2 reach + 1, set by the host: 25 read-modify-writes of global memory per
-   sample cost cheap diffuse paths 40 % more time than the uniform film's records), so a pixel's sums depend only on
-   its own samples and the spans it got them in, never on which other pixels share a launch. */
+   differ cannot pour their samples into shared sums: a pixel with 16 times the samples of its neighbour would
+   weigh 16 times as much in the pixels between them, and an edge there would move. So each pixel keeps its own
+   samples' splats apart: toward the pixel at offset (tx, ty), with w = f(tx + 1/2 - u.x) f(ty + 1/2 - u.y), the
+   entries e = SPLAT_STORE_ENTRIES ((2 reach + 1)^2 pix + (2 reach + 1) (ty + reach) + tx + reach) of the store
+   hold (sum of w L, sum of w) at e, (sum of w^2 L, sum of w^2) at e + 1 and (sum of w^2 L^2, 0) at e + 2 (what
+   the film's variance takes, kept per splat: a variance made from each pixel's own spread and the filter's mean
+   squared weight was 500 times too large beside the Cornell box's light, whose bright samples lie on the far side
+   of their pixel and weigh little); counts[pix] = (its samples, dropped ones). splat_resolve weighs each pixel's
+   splats by 1 / its samples, which with equal counts is the uniform splatting film's sums. A call's splats are
+   summed in private memory and added to the store once (CLR_SPLAT_K = 2 reach + 1, set by the host), so a pixel's
+   sums depend only on its own samples and the spans it got them in, never on which other pixels share a launch. */
 #ifndef CLR_SPLAT_K
 #define CLR_SPLAT_K 5
 #endif
-INLINE void store_pixel(SceneData* sd, __global const Camera* cam, __global float4* store, __global float4* own,
-                        __global float4* own2, uint pix, uint first, uint count, uint seed) {
+INLINE void store_pixel(SceneData* sd, __global const Camera* cam, __global float4* store, __global uint2* counts,
+                        uint pix, uint first, uint count, uint seed) {
     int reach = splat_reach(cam);
     int k = 2 * reach + 1;   /* == CLR_SPLAT_K */
-    float4 acc[CLR_SPLAT_K * CLR_SPLAT_K];
-    for (int i = 0; i < k * k; ++i) acc[i] = (float4)(0.0f);
-    vec3 sl = v3s(0.0f), sl2 = v3s(0.0f);
+    float4 acc[SPLAT_STORE_ENTRIES * CLR_SPLAT_K * CLR_SPLAT_K];
+    for (int i = 0; i < SPLAT_STORE_ENTRIES * k * k; ++i) acc[i] = (float4)(0.0f);
     uint nbad = 0u;
     for (uint s = 0u; s < count; ++s) {
         float2 u;
         vec3 L;
         if (!splat_sample(sd, cam, pix, first + s, seed, &u, &L)) { nbad += 1u; continue; }
-        sl = vadd(sl, L);
-        sl2 = vadd(sl2, vmul(L, L));
+        vec3 L2 = vmul(L, L);
         float wx[CLR_SPLAT_K];
         for (int t = 0; t < k; ++t) wx[t] = filter_eval_1d(cam, (float)(t - reach) + 0.5f - u.x);
         for (int ty = 0; ty < k; ++ty) {
             float wy = filter_eval_1d(cam, (float)(ty - reach) + 0.5f - u.y);
             for (int tx = 0; tx < k; ++tx) {
-                float w = wy * wx[tx];
-                acc[ty * k + tx] += vf4(vscale(L, w), w);
+                float w = wy * wx[tx], w2 = w * w;
+                __private float4* a = acc + SPLAT_STORE_ENTRIES * (ty * k + tx);
+                a[0] += vf4(vscale(L, w), w);
+                a[1] += vf4(vscale(L, w2), w2);
+                a[2] += vf4(vscale(L2, w2), 0.0f);
             }
         }
     }
     if (count > nbad) {
-        __global float4* st = store + (size_t)pix * (size_t)(k * k);
-        for (int i = 0; i < k * k; ++i) st[i] += acc[i];
+        __global float4* st = store + (size_t)pix * (size_t)(SPLAT_STORE_ENTRIES * k * k);
+        for (int i = 0; i < SPLAT_STORE_ENTRIES * k * k; ++i) st[i] += acc[i];
     }
-    float4 o = own[pix], o2 = own2[pix];
-    own[pix] = vf4(vadd(vxyz(o), sl), o.w + (float)count);
-    own2[pix] = vf4(vadd(vxyz(o2), sl2), o2.w + (float)nbad);
+    counts[pix] += (uint2)(count, nbad);
 }
 
 /* Samples sample_offset .. + spp - 1 of pixels pixel_offset .. + pixel_count - 1 into the store. */
-__kernel void store_pass(SCENE_ARGS, __global const Camera* cam, __global float4* store, __global float4* own,
-                         __global float4* own2, uint pixel_offset, uint pixel_count, uint sample_offset, uint spp,
-                         uint seed) {
+__kernel void store_pass(SCENE_ARGS, __global const Camera* cam, __global float4* store, __global uint2* counts,
+                         uint pixel_offset, uint pixel_count, uint sample_offset, uint spp, uint seed) {
     uint gid = get_global_id(0);
     if (gid >= pixel_count) return;
     SCENE_INIT(sd);
-    store_pixel(&sd, cam, store, own, own2, pixel_offset + gid, sample_offset, spp, seed);
+    store_pixel(&sd, cam, store, counts, pixel_offset + gid, sample_offset, spp, seed);
 }
 
 /* Entry i of pixel_list[pixel_offset ..] with its own samples spans[i] = (first, count) (render.cl render_spans'
    rounds), each pixel at most once per launch. */
-__kernel void store_spans(SCENE_ARGS, __global const Camera* cam, __global float4* store, __global float4* own,
-                          __global float4* own2, __global const uint* pixel_list, __global const uint2* spans,
-                          uint pixel_offset, uint pixel_count, uint seed) {
+__kernel void store_spans(SCENE_ARGS, __global const Camera* cam, __global float4* store, __global uint2* counts,
+                          __global const uint* pixel_list, __global const uint2* spans, uint pixel_offset,
+                          uint pixel_count, uint seed) {
     uint gid = get_global_id(0);
     if (gid >= pixel_count) return;
     SCENE_INIT(sd);
     uint2 span = spans[pixel_offset + gid];
-    store_pixel(&sd, cam, store, own, own2, pixel_list[pixel_offset + gid], span.x, span.y, seed);
+    store_pixel(&sd, cam, store, counts, pixel_list[pixel_offset + gid], span.x, span.y, seed);
 }
 
-/* The film's sums (SPLAT_FILM_ARGS, overwritten) of pixels pixel_offset .. + pixel_count - 1 from the store: acc0 =
-   (sum over the pixels p within reach of p's splats toward this one over n_p, the same of the weights), so a pixel
-   weighs the same whatever its count. acc1 = (_, this pixel's finite samples) and acc2 hold the sums the film's
-   variance takes (Film._splat_variance: of w^2 L^2, w^2 L, w^2), not kept per splat but from each source's own sums
-   with the filter's mean squared weight m2[tx] m2[ty] (the weight taken independent of L within a pixel). */
-__kernel void splat_resolve(__global const Camera* cam, __global const float4* store, __global const float4* own,
-                            __global const float4* own2, __global const float* m2, SPLAT_FILM_ARGS,
-                            uint pixel_offset, uint pixel_count) {
+/* The film's sums (SPLAT_FILM_ARGS, overwritten) of pixels pixel_offset .. + pixel_count - 1 from the store: each
+   splat toward this pixel from a pixel p within reach weighed by 1 / n_p (its samples): acc0 = (sum of w L / n_p,
+   sum of w / n_p), acc1 = (sum of w^2 L^2 / n_p^2, this pixel's finite samples), acc2 = (sum of w^2 L / n_p^2, sum
+   of w^2 / n_p^2): the uniform film's sums with each sample's weight w / n_p (Film._splat_variance). */
+__kernel void splat_resolve(__global const Camera* cam, __global const float4* store, __global const uint2* counts,
+                            SPLAT_FILM_ARGS, uint pixel_offset, uint pixel_count) {
     uint gid = get_global_id(0);
     if (gid >= pixel_count) return;
     uint q = pixel_offset + gid;
@@ -190,8 +188,7 @@ __kernel void splat_resolve(__global const Camera* cam, __global const float4* s
     int qx = (int)(q % cam->width), qy = (int)(q / cam->width);
     int reach = splat_reach(cam);
     int k = 2 * reach + 1;
-    vec3 swl = v3s(0.0f), swl2 = v3s(0.0f), sw2l = v3s(0.0f);
-    float sw = 0.0f, sw2 = 0.0f;
+    float4 s0 = (float4)(0.0f), s1 = (float4)(0.0f), s2 = (float4)(0.0f);
     for (int ty = -reach; ty <= reach; ++ty) {
         int y = qy - ty;
         if (y < 0 || y >= h) continue;
@@ -199,21 +196,19 @@ __kernel void splat_resolve(__global const Camera* cam, __global const float4* s
             int x = qx - tx;
             if (x < 0 || x >= w) continue;
             size_t p = (size_t)(y * w + x);
-            float4 o = own[p];
-            if (o.w <= 0.0f) continue;
-            float inv = 1.0f / o.w;
-            float4 e = store[p * (size_t)(k * k) + (size_t)((ty + reach) * k + tx + reach)];
-            swl = vadd(swl, vscale(vxyz(e), inv));
-            sw += e.w * inv;
-            float mm = m2[tx + reach] * m2[ty + reach] * inv;
-            sw2 += mm;
-            sw2l = vadd(sw2l, vscale(vxyz(o), mm * inv));
-            swl2 = vadd(swl2, vscale(vxyz(own2[p]), mm * inv));
+            uint n = counts[p].x;
+            if (n == 0u) continue;
+            float inv = 1.0f / (float)n;
+            __global const float4* e =
+                store + SPLAT_STORE_ENTRIES * (p * (size_t)(k * k) + (size_t)((ty + reach) * k + tx + reach));
+            s0 += e[0] * inv;
+            s1 += e[1] * (inv * inv);
+            s2 += e[2] * (inv * inv);
         }
     }
-    float4 oq = own[q], o2q = own2[q];
-    acc0[q] = vf4(swl, sw);
-    acc1[q] = vf4(swl2, oq.w - o2q.w);
-    acc2[q] = vf4(sw2l, sw2);
-    bad[q] = (uint)o2q.w;
+    uint2 c = counts[q];
+    acc0[q] = s0;
+    acc1[q] = (float4)(s2.xyz, (float)(c.x - c.y));
+    acc2[q] = s1;
+    bad[q] = c.y;
 }

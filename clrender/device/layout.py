@@ -161,6 +161,8 @@ ENUMS: dict[str, int] = {
     "BVH_STACK_SIZE": 64,             # 2-wide traversal stack (the builder keeps the depth below it)
     "BVH4_STACK_SIZE": 64,            # 4-wide traversal stack (the collapse checks the tree needs no more)
     "BVH8_STACK_SIZE": 96,            # 8-wide traversal stack (likewise)
+    # float4 entries per splat in adaptive sampling's splatting store (kernels/splat.cl, executors.SplatExecutor)
+    "SPLAT_STORE_ENTRIES": 3,
     "BVH4_COUNT_SHIFT": 27,           # 4-wide leaf reference: LEAF_BIT | (count - 1) << 27 | first
     "BVH4_MAX_LEAF_COUNT": 16,
     # A triangle's leaf reference, the id word of its lane in the primitive table (so Hit.prim): its leaf-order

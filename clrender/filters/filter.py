@@ -51,13 +51,6 @@ class Filter(abc.ABC):
         # 2-D weights are products: S1 = s1x s1y, S2 = s2x s2y over independent x and y
         return float(np.mean(s1 ** 2) ** 2 / np.mean(s2) ** 2)
 
-    def splat_mean_square(self, n: int = 1024) -> np.ndarray:
-        """(2 reach + 1,) the mean squared weight f(t + 1/2 - u)^2 toward the pixel t pixels away along one axis,
-        over sample positions u uniform in the pixel (adaptive sampling's splatting film: kernels/splat.cl
-        splat_resolve)."""
-        w = self._splat_weights(n)
-        return (w * w).mean(axis=0)
-
     def _splat_weights(self, n: int) -> np.ndarray:
         """(n, 2 reach + 1) a splatted sample's weights along one axis toward the pixels within reach (offsets
         -reach .. reach), for n positions spread evenly over its pixel (the midpoint rule)."""
