@@ -199,12 +199,16 @@ def for_mitsuba(text, error):
         return re.sub(r"<(/?)lookAt\b", r"<\1lookat", text), "lookAt"
     if 'Plugin "ldrfilm" not found' in error:
         return re.sub(r'<film\s+type="ldrfilm"', '<film type="hdrfilm"', text), "ldrfilm"
-    if "unreferenced propert" in error:
+    if "unreferenced" in error:
         names = set(re.findall(r'^\s*- \w+ "([^"]+)"', error, flags=re.M))
         if {"sigma_a", "sigma_s"} & names:
             converted = media_as_v3(text)
             if converted != text:
                 return converted, "sigma_t,albedo"
+        if {"density", "method", "step_size"} & names or '"density"' in error:
+            converted = re.sub(r'<medium\s+type="heterogeneous".*?</medium>', heterogeneous, text, flags=re.S)
+            if converted != text:
+                return converted, "density as sigma_t"
         if names:
             def drop(m):
                 return "" if camel_to_snake(m.group(1)) in names else m.group(0)
@@ -249,6 +253,14 @@ def media_as_v3(text):
         return body.replace(s.group(0), "").replace(
             a.group(0), sigma_t + f'<rgb name="albedo" value="{", ".join(map(repr, albedo.tolist()))}"/>')
     return re.sub(r'<medium\s+type="homogeneous".*?</medium>', medium, text, flags=re.S)
+
+
+def heterogeneous(m):
+    """A 0.x heterogeneous medium as clrender reads it (mitsuba_legacy.py): its `density` volume as `sigma_t`, a
+    gridvolume spanning its file's bounding box, without `method` and `stepSize`."""
+    body = re.sub(r'name="density"', 'name="sigma_t"', m.group(0))
+    body = re.sub(r'\s*<(?:string|float)\s+name="(?:method|stepSize|step_size)"\s+value="[^"]*"\s*/>', "", body)
+    return re.sub(r'(<volume\s[^>]*type="gridvolume"[^>]*>)', r'\1<boolean name="use_grid_bbox" value="true"/>', body)
 
 
 def include_dirs(text, folder):

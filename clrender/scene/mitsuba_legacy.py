@@ -18,6 +18,12 @@ Beyond Mitsuba 3 (each with a log line or a located error):
   own parameters (films/ldrfilm.py, samplers/independent.py, shapes/trianglemesh.py);
 - an old bitmap's MIP-mapped filterType, per-axis wrap modes and gamma, where they mean something we have;
 - an old homogeneous medium's ``sigmaA``/``sigmaS`` (absorption and scattering) as Mitsuba 3's ``sigma_t``/``albedo``;
+- an old heterogeneous medium's ``density`` volume as Mitsuba 3's ``sigma_t`` (0.6: sigma_t = scale density), its
+  ``method`` and ``stepSize`` (delta tracking or ray marching of the same medium) ignored with a log line, and an old
+  ``gridvolume`` spanning the bounding box its file gives (0.6 had no unit cube: ``use_grid_bbox`` true);
+- a shape that bounds a medium and has no BSDF is an index-matched boundary (a ``null`` BSDF), as Mitsuba 0.6 made
+  it (its Shape::configure), where Mitsuba 3.9.1 gives every shape without one a diffuse BSDF, which turns an old
+  file's medium into an opaque grey ball (lajolla's volpath tests 3-6, its hetvol scenes);
 - the wrappers ``adaptive`` and ``irrcache`` render as the integrator they hold (:data:`WRAPPERS`);
 - an integrator that clrender does not have (:data:`INTEGRATORS`) is a located error that names what it has.
 """
@@ -29,6 +35,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import SceneError
+from .spec import PluginSpec, PropertyList
 from .transform import Transform
 
 log = logging.getLogger("clrender")
@@ -156,6 +163,31 @@ def _upgrade_homogeneous(props) -> None:
     props.add("albedo", "rgb", albedo, where)
 
 
+def _upgrade_heterogeneous(spec, shared: set[int]) -> None:
+    """Mitsuba 0.6's heterogeneous medium: its ``density`` volume is the extinction (times ``scale``, as Mitsuba 3's
+    ``sigma_t``); ``method`` (woodcock: delta tracking; simpson: ray marching) and ``step_size`` choose how the same
+    medium is sampled, which clrender's tracking does without them; ``orientation`` (the micro-flake model's fibre
+    directions) clrender does not have."""
+    props = spec.props
+    for i, child in enumerate(spec.children):
+        if child.name == "density":
+            if any(c.name == "sigma_t" for c in spec.children) or props.has("sigma_t"):
+                raise SceneError("an old heterogeneous medium's density is its sigma_t, which is given too",
+                                 child.location)
+            if i in shared:
+                spec.children[i] = replace(child, name="sigma_t")
+            else:
+                child.name = "sigma_t"
+        elif child.name == "orientation":
+            raise SceneError("an old heterogeneous medium's orientation volume belongs to the micro-flake phase "
+                             "function, which clrender does not have (isotropic and hg)", child.location)
+    for name in ("method", "step_size"):
+        if props.has(name):
+            props.mark_used(name)
+            log.info("%s: '%s' of the Mitsuba 0.x heterogeneous medium picks how it is sampled; clrender tracks "
+                     "the same medium without it", props.location(name), name)
+
+
 def srgb_to_linear(value) -> np.ndarray:
     """Mitsuba 0.x's ``<srgb>``: an sRGB-encoded colour, ``#rrggbb`` or 1 or 3 numbers in [0, 1], as linear RGB.
     A string that is not ``#rrggbb`` raises ValueError (the caller then reads it as numbers)."""
@@ -211,6 +243,14 @@ def upgrade(spec, shared: set[int]) -> None:
         _upgrade_bitmap(props)
     if spec.tag == "medium" and spec.type == "homogeneous":
         _upgrade_homogeneous(props)
+    if spec.tag == "medium" and spec.type == "heterogeneous":
+        _upgrade_heterogeneous(spec, shared)
+    if spec.tag == "volume" and spec.type == "gridvolume" and not props.has("use_grid_bbox"):
+        props.add("use_grid_bbox", "boolean", True, spec.location)
+    if spec.tag == "shape" and not any(c.tag in ("bsdf", "emitter") for c in spec.children) and \
+            any(c.tag == "medium" and c.name in ("interior", "exterior") for c in spec.children):
+        spec.children.append(PluginSpec("bsdf", "null", None, PropertyList(), location=spec.location,
+                                        dialect=spec.dialect, format=spec.format))
     for name in DROPPED.get(spec.tag, ()):
         if props.has(name):
             props.mark_used(name)
