@@ -22,14 +22,23 @@ world-space bounding box (to_world's image of the unit cube, or of the file's bo
 sampled by delta tracking against the majorant and shadow rays' transmittance estimated by ratio tracking
 (kernels/integrators/media.h), with the homogeneous medium's spectral MIS over the channels; the estimator does not
 depend on has_spectral_extinction, which converges to the same image. sigma_t must be non-negative and the albedo
-within [0, 1] (checked over every voxel). Kernel: kernels/media/heterogeneous.h.
+within [0, 1] (checked over every voxel; a grid's values up to 1 % of its range outside it are clamped with a
+warning). Kernel: kernels/media/heterogeneous.h.
 """
+import logging
+
 import numpy as np
 
 from ..errors import SceneError
 from ..scene.registry import register
 from ..volumes.constvolume import ConstVolume
+from ..volumes.gridvolume import GridVolume
 from .medium import Medium
+
+log = logging.getLogger("clrender")
+
+#: a grid's values this fraction of its range outside it are clamped (interpolation ringing), further out refused
+RINGING = 0.01
 
 
 @register("medium", "heterogeneous", fmt="mitsuba")
@@ -57,6 +66,17 @@ class Heterogeneous(Medium):
         self.scale = self._read_common(props)
         where = {n: (volumes[n].spec.location if n in volumes else
                      props.location(n) if props.has(n) else spec.location) for n in ("sigma_t", "albedo")}
+        # A grid's values a little outside their range (a density's interpolation ringing: lajolla's coloured smoke
+        # holds values down to -0.004 of its peak 1.6) are clamped with a warning, as Mitsuba renders them
+        # unchecked; further out, or a constant outside it, is an error.
+        for name, vol, hi in (("sigma_t", self.sigma_t, None), ("albedo", self.albedo, 1.0)):
+            if not isinstance(vol, GridVolume):
+                continue
+            low, high = vol.min_value(), float(vol.data.max())
+            span = max(high, 1e-30) if hi is None else hi
+            if -RINGING * span <= low and (hi is None or high <= hi * (1 + RINGING)) and vol.clamp(0.0, hi):
+                log.warning("%s: %s's grid %s holds values a little outside [0, %s] (%g to %g); clamped",
+                            where[name], name, vol.filename, "inf" if hi is None else hi, low, high)
         if self.sigma_t.min_value() < 0:
             raise SceneError(f"sigma_t must be non-negative; its volume's smallest value is "
                              f"{self.sigma_t.min_value()}", where["sigma_t"])

@@ -100,7 +100,8 @@ class GridVolume(Volume):
         if not props.has("filename"):
             raise SceneError('<volume type="gridvolume"> needs a <string name="filename"> (a Mitsuba .vol file)',
                              spec.location)
-        self.data, self.file_bbox = read_vol(props.get_string("filename"), loc)
+        self.filename = props.get_string("filename")
+        self.data, self.file_bbox = read_vol(self.filename, loc)
         self.channels = self.data.shape[-1]
         self.filter = choice(props, "filter_type", FILTERS, "trilinear")
         self.wrap = choice(props, "wrap_mode", WRAPS, "clamp")
@@ -127,6 +128,14 @@ class GridVolume(Volume):
 
     def min_value(self) -> float:
         return float(self.data.min())
+
+    def clamp(self, lo: float, hi: float | None = None) -> int:
+        """Values below `lo` (above `hi`) set to it, as a grid's interpolation ringing asks (a density a hair below
+        0); returns how many there were."""
+        out = int(np.count_nonzero(self.data < lo)) + (0 if hi is None else int(np.count_nonzero(self.data > hi)))
+        if out:
+            self.data = np.clip(self.data, lo, hi).astype(self.data.dtype)
+        return out
 
     def eval(self, points) -> np.ndarray:
         points = np.asarray(points, np.float64)

@@ -279,3 +279,20 @@ def test_shadow_rays_through_a_ramp_see_its_transmittance(tmp_path):
     film = render_xml(tmp_path, xml)
     expected = 0.5 / np.pi * RADIANCE * np.exp(-ramp_optical_depth(ramp(), RAMP_HEIGHT, [RAMP_HEIGHT])[0])
     check_every_pixel(film, expected)
+
+
+def test_a_grid_a_little_outside_its_range_is_clamped(tmp_path, caplog):
+    """Interpolation ringing (lajolla's coloured smoke: down to -0.004 of a 1.6 peak) is clamped with a warning,
+    as Mitsuba renders such grids unchecked; further out stays refused (test_refusals_are_located)."""
+    d = np.full((2, 2, 2), 1.6)
+    d[0, 0, 0] = -0.004
+    write_vol(tmp_path / "ring.vol", d)
+    a = np.full((2, 2, 2), 0.5)
+    a[1, 1, 1] = 1.004
+    write_vol(tmp_path / "alb.vol", a)
+    with caplog.at_level("WARNING", logger="clrender"):
+        m = load('<shape type="sphere"><medium type="heterogeneous" name="interior">'
+                 f'{grid_xml("sigma_t", tmp_path / "ring.vol")}{grid_xml("albedo", tmp_path / "alb.vol")}'
+                 '</medium></shape>').shapes[0].interior
+    assert m.sigma_t.min_value() == 0 and m.albedo.max_value() == 1
+    assert "ring.vol" in caplog.text and "alb.vol" in caplog.text and "clamped" in caplog.text
