@@ -330,10 +330,34 @@ def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: 
                           converged=round(float(conv.mean()), 6), **switch)
         return f
 
+    def run_uniform(target: int, flag) -> bool:
+        """A splatting film's uniform rest (after the switch): every pixel on to `target` samples by passes of the
+        uniform film (SplatExecutor.run_pass), each of about TARGET_LAUNCH_SECONDS; True when the render must
+        stop."""
+        nonlocal seconds_per_sample
+        while done[0] < target:
+            batch = min(target - int(done[0]), ex.max_spp(0, n))
+            if seconds_per_sample is not None:
+                batch = min(batch, max(1, int(TARGET_LAUNCH_SECONDS / max(seconds_per_sample * n, 1e-15))))
+            t0 = time.perf_counter()
+            stats.launches += ex.run_pass(0, n, int(done[0]), batch, seed & 0xFFFFFFFF)
+            wait_for(r.queue)
+            dt = time.perf_counter() - t0
+            seconds_per_sample = dt / max(batch * n, 1)
+            done[:] += batch
+            if flag.requested:
+                stats.interrupted = True
+                return True
+            if time_limit is not None and time.perf_counter() - t_start + dt > time_limit:
+                return True
+        return False
+
     def run_round(pixels, target, flag) -> bool:
         """Launches that take each of `pixels` from its samples so far to `target`; True when the render must
         stop (Ctrl-C, time limit) after the launch in flight."""
         nonlocal seconds_per_sample
+        if switch and hasattr(ex, "settle"):
+            return run_uniform(int(target[0]), flag)
         start = done[pixels]
         if len(pixels) == n and np.all(start == start[0]) and np.all(target == target[0]):
             segments = [(0, n)]                # all pixels, one span: range launches, no list to upload
@@ -428,6 +452,8 @@ def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: 
                             bar.refresh()
                         if not uniform_marks:
                             break
+                        if hasattr(ex, "settle"):   # a splatting film: on as a uniform render (run_uniform)
+                            ex.settle()
                         target = np.full(n, uniform_marks.pop(0), np.int64)
                         continue
                 # the test, of the pixels this round added to (the others met the target in earlier rounds)

@@ -421,7 +421,7 @@ class SplatExecutor:
                             pixel_count=np.uint32(count), seed=np.uint32(seed))
         cl.enqueue_nd_range_kernel(self.queue, self.store_list.kernel, (self.global_size,), (LOCAL_SIZE,))
 
-    def resolve(self) -> None:
+    def resolve(self, normalise: bool = True) -> None:
         """The film's sums from the store, if samples went there since the film was bound (before reading it)."""
         import pyopencl as cl
 
@@ -429,8 +429,16 @@ class SplatExecutor:
             return
         n = self.width * self.height
         for off in range(0, max(n, 1), self.launch_pixels):
-            self.resolver.set(pixel_offset=np.uint32(off), pixel_count=np.uint32(min(self.launch_pixels, n - off)))
+            self.resolver.set(pixel_offset=np.uint32(off), pixel_count=np.uint32(min(self.launch_pixels, n - off)),
+                              normalise=np.uint32(normalise))
             cl.enqueue_nd_range_kernel(self.queue, self.resolver.kernel, (self.global_size,), (LOCAL_SIZE,))
+
+    def settle(self) -> None:
+        """When every pixel holds the same count: the store's splats become the film's sums as a uniform render's
+        (unweighted), so that run_pass's records and gathers add the rest (adaptive sampling's switch to a uniform
+        render, at the uniform film's cost per sample); the store is not read again until the film is bound."""
+        self.resolve(normalise=False)
+        self._stored = False
 
     def warm(self) -> None:
         self._buffer(1)

@@ -178,9 +178,11 @@ __kernel void store_spans(SCENE_ARGS, __global const Camera* cam, __global float
 /* The film's sums (SPLAT_FILM_ARGS, overwritten) of pixels pixel_offset .. + pixel_count - 1 from the store: each
    splat toward this pixel from a pixel p within reach weighed by 1 / n_p (its samples): acc0 = (sum of w L / n_p,
    sum of w / n_p), acc1 = (sum of w^2 L^2 / n_p^2, this pixel's finite samples), acc2 = (sum of w^2 L / n_p^2, sum
-   of w^2 / n_p^2): the uniform film's sums with each sample's weight w / n_p (Film._splat_variance). */
+   of w^2 / n_p^2): the uniform film's sums with each sample's weight w / n_p (Film._splat_variance). Without
+   `normalise` (every pixel has the same count: adaptive sampling's switch to a uniform render) the uniform film's
+   very sums, to which render_records and splat_gather can add. */
 __kernel void splat_resolve(__global const Camera* cam, __global const float4* store, __global const uint2* counts,
-                            SPLAT_FILM_ARGS, uint pixel_offset, uint pixel_count) {
+                            SPLAT_FILM_ARGS, uint pixel_offset, uint pixel_count, uint normalise) {
     uint gid = get_global_id(0);
     if (gid >= pixel_count) return;
     uint q = pixel_offset + gid;
@@ -198,7 +200,7 @@ __kernel void splat_resolve(__global const Camera* cam, __global const float4* s
             size_t p = (size_t)(y * w + x);
             uint n = counts[p].x;
             if (n == 0u) continue;
-            float inv = 1.0f / (float)n;
+            float inv = normalise ? 1.0f / (float)n : 1.0f;
             __global const float4* e =
                 store + SPLAT_STORE_ENTRIES * (p * (size_t)(k * k) + (size_t)((ty + reach) * k + tx + reach));
             s0 += e[0] * inv;

@@ -178,3 +178,16 @@ def test_a_store_too_large_for_the_device(scene, monkeypatch):
     assert "film" not in film.metadata and film.count.min() >= 4   # auto: the filter-sampling film
     with pytest.raises(DriverError, match="--reconstruction sampling"):
         Renderer(scene, reconstruction="splat").render_adaptive(target_error=0.2, max_spp=8)
+
+
+def test_even_noise_finishes_as_the_uniform_splatting_film(tmp_path):
+    """The switch to uniform sampling (a closed furnace's even noise): the first round's store becomes the film's
+    sums and passes of the uniform film add the rest, so the image, counts and variances are a uniform render's."""
+    (tmp_path / "f.xml").write_text(furnace_scene(tmp_path, "path_mis").replace('value="4"', 'value="16"'))
+    r = Renderer(clrender.load_scene(tmp_path / "f.xml"), reconstruction="splat")
+    film = r.render_adaptive(target_error=0.02, max_spp=256, seed=4)
+    assert film.metadata["uniform_after"] == 16 and film.metadata["film"] == "splat"
+    uniform = r.render(spp=film.metadata["uniform_spp"], seed=4)
+    np.testing.assert_array_equal(film.count, uniform.count)
+    np.testing.assert_allclose(film.image, uniform.image, rtol=2e-5)
+    np.testing.assert_allclose(film.variance(), uniform.variance(), rtol=1e-3, atol=1e-7 * film.image.max() ** 2)
