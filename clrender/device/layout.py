@@ -94,7 +94,7 @@ ROWS: dict[str, Row] = {
         union_bytes=32),
     # a participating medium (clrender/media/), with the row of its phase function in `phases`
     "Medium": Row(header=(("type", "uint"), ("flags", "uint"), ("phase", "uint"), ("pad", "uint")),
-                  union_bytes=32),
+                  union_bytes=48),
     "Phase": Row(header=(("type", "uint"), ("pad", "uint", 3)), union_bytes=16),
     # a volume (clrender/volumes/) that a heterogeneous medium reads sigma_t or albedo from: its world-space bounding
     # box (Mitsuba's Volume::bbox, the box of to_world's image of the unit cube), which bounds the medium's extinction

@@ -25,20 +25,12 @@ depend on has_spectral_extinction, which converges to the same image. sigma_t mu
 within [0, 1] (checked over every voxel; a grid's values up to 1 % of its range outside it are clamped with a
 warning). Kernel: kernels/media/heterogeneous.h.
 """
-import logging
-
 import numpy as np
 
 from ..errors import SceneError
 from ..scene.registry import register
 from ..volumes.constvolume import ConstVolume
-from ..volumes.gridvolume import GridVolume
 from .medium import Medium
-
-log = logging.getLogger("clrender")
-
-#: a grid's values this fraction of its range outside it are clamped (interpolation ringing), further out refused
-RINGING = 0.01
 
 
 @register("medium", "heterogeneous", fmt="mitsuba")
@@ -50,33 +42,14 @@ class Heterogeneous(Medium):
 
     def __init__(self, props, children, spec):
         self._read_phase(children, spec)
-        volumes = {}
-        for c in children:
-            if c.spec.tag != "volume":
-                continue
-            name = c.spec.name
-            if name not in ("sigma_t", "albedo"):
-                raise SceneError(f'a <volume> in a heterogeneous medium needs name="sigma_t" or name="albedo", got '
-                                 f'{"no name" if name is None else repr(name)}', c.spec.location)
-            if name in volumes or props.has(name):
-                raise SceneError(f"{spec.describe()} is given '{name}' twice", c.spec.location)
-            volumes[name] = c
+        volumes = self._volume_children(props, children, spec, ("sigma_t", "albedo"))
         self.sigma_t = volumes.get("sigma_t") or self._constant(props, "sigma_t", 1.0)
         self.albedo = volumes.get("albedo") or self._constant(props, "albedo", 0.75)
         self.scale = self._read_common(props)
         where = {n: (volumes[n].spec.location if n in volumes else
                      props.location(n) if props.has(n) else spec.location) for n in ("sigma_t", "albedo")}
-        # A grid's values a little outside their range (a density's interpolation ringing: lajolla's coloured smoke
-        # holds values down to -0.004 of its peak 1.6) are clamped with a warning, as Mitsuba renders them
-        # unchecked; further out, or a constant outside it, is an error.
-        for name, vol, hi in (("sigma_t", self.sigma_t, None), ("albedo", self.albedo, 1.0)):
-            if not isinstance(vol, GridVolume):
-                continue
-            low, high = vol.min_value(), float(vol.data.max())
-            span = max(high, 1e-30) if hi is None else hi
-            if -RINGING * span <= low and (hi is None or high <= hi * (1 + RINGING)) and vol.clamp(0.0, hi):
-                log.warning("%s: %s's grid %s holds values a little outside [0, %s] (%g to %g); clamped",
-                            where[name], name, vol.filename, "inf" if hi is None else hi, low, high)
+        self._clamp_ringing("sigma_t", self.sigma_t, None, where["sigma_t"])
+        self._clamp_ringing("albedo", self.albedo, 1.0, where["albedo"])
         if self.sigma_t.min_value() < 0:
             raise SceneError(f"sigma_t must be non-negative; its volume's smallest value is "
                              f"{self.sigma_t.min_value()}", where["sigma_t"])

@@ -13,13 +13,15 @@
 <shape type="obj"> ... <ref id="fog" name="interior"/> </shape>   <!-- or a nested <medium name="interior"> -->
 <sensor type="perspective"> ... <ref id="fog"/> </sensor>          <!-- the camera's medium -->
 ```
-`sigma_t` and `albedo` are constants: a `<volume>` (grid or constant volume) belongs in a heterogeneous medium
-(clrender/media/heterogeneous.py). `has_spectral_extinction` picks Mitsuba's estimator for colour extinction;
+`sigma_t` is one value everywhere: a `<volume>` of it belongs in a heterogeneous medium
+(clrender/media/heterogeneous.py); `albedo` may be a nested `<volume name="albedo">` (a `gridvolume` or
+`constvolume`, looked up at each scattering point, as Mitsuba 3.9.1 allows). `has_spectral_extinction` picks Mitsuba's estimator for colour extinction;
 clrender samples free flights the same way either way (one-sample MIS over the three channels: kernels/integrators/media.h), which
 converges to the same image. Kernel: kernels/media/homogeneous.h.
 """
 import numpy as np
 
+from ..device import layout
 from ..errors import SceneError
 from ..scene.registry import register
 from .medium import Medium
@@ -28,14 +30,27 @@ from .medium import Medium
 @register("medium", "homogeneous", fmt="mitsuba")
 class Homogeneous(Medium):
     kernel = "media/homogeneous.h"
-    PARAMS = [("sigma_t", "float4"), ("albedo", "float4")]
+    PARAMS = [("sigma_t", "float4"), ("albedo", "float4"), ("albedo_volume", "uint")]
     FLAGS = ("HOMOGENEOUS",)
     METHODS = ("sigma_t", "albedo")   # free flights in closed form: no majorant, no clip
+    children = ("phase", "volume")
 
     def __init__(self, props, children, spec):
         self._read_phase(children, spec)
         scale = self._read_common(props)
         sigma_t = np.asarray(props.get_color("sigma_t", np.ones(3), unbounded=True), np.float64)
+        volumes = self._volume_children(props, children, spec, ("sigma_t", "albedo"))
+        if "sigma_t" in volumes:
+            raise SceneError("a homogeneous medium's sigma_t is one value everywhere; a <volume> of it belongs in a "
+                             '<medium type="heterogeneous">', volumes["sigma_t"].spec.location)
+        #: Mitsuba's homogeneous albedo may vary in space (a volume: its docs' textured subsurface scene)
+        self.albedo_volume = volumes.get("albedo")
+        if self.albedo_volume is not None:
+            where = self.albedo_volume.spec.location
+            self._clamp_ringing("albedo", self.albedo_volume, 1.0, where)
+            lo, hi = self.albedo_volume.min_value(), self.albedo_volume.max_value()
+            if lo < 0 or hi > 1:
+                raise SceneError(f"albedo must lie in [0, 1]; its volume's values span [{lo}, {hi}]", where)
         self.albedo = np.asarray(props.get_color("albedo", np.full(3, 0.75)), np.float64)
         if np.any(sigma_t < 0) or not np.all(np.isfinite(sigma_t)):
             raise SceneError(f"sigma_t must be non-negative and finite, got {sigma_t.tolist()}",
@@ -50,3 +65,5 @@ class Homogeneous(Medium):
     def fill(self, row, ctx=None) -> None:
         row["homogeneous"]["sigma_t"][:3] = self.sigma_t
         row["homogeneous"]["albedo"][:3] = self.albedo
+        row["homogeneous"]["albedo_volume"] = layout.NONE if self.albedo_volume is None else \
+            self.albedo_volume.pack(ctx)

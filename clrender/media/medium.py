@@ -11,8 +11,15 @@ from __future__ import annotations
 
 import numpy as np
 
+import logging
+
 from ..device import dispatch, layout
 from ..errors import SceneError
+
+log = logging.getLogger("clrender")
+
+#: a grid's values this fraction of its range outside it are clamped (interpolation ringing), further out refused
+RINGING = 0.01
 
 
 class Medium:
@@ -28,6 +35,37 @@ class Medium:
         if len(phases) > 1:
             raise SceneError(f"{spec.describe()} takes one <phase>; this is a second one", phases[1].spec.location)
         self.phase = phases[0] if phases else Isotropic()
+
+    @staticmethod
+    def _volume_children(props, children, spec, names) -> dict:
+        """{name: volume} of the nested <volume>s, each named one of `names` and given once."""
+        volumes = {}
+        for c in children:
+            if c.spec.tag != "volume":
+                continue
+            name = c.spec.name
+            if name not in names:
+                raise SceneError(f"a <volume> in {spec.describe()} needs " + " or ".join(f'name="{n}"' for n in names)
+                                 + f', got {"no name" if name is None else repr(name)}', c.spec.location)
+            if name in volumes or props.has(name):
+                raise SceneError(f"{spec.describe()} is given '{name}' twice", c.spec.location)
+            volumes[name] = c
+        return volumes
+
+    @staticmethod
+    def _clamp_ringing(name, vol, hi, where) -> None:
+        """A grid's values a little outside [0, hi] (a density's interpolation ringing: lajolla's coloured smoke holds
+        values down to -0.004 of its peak 1.6) clamped with a warning, as Mitsuba renders them unchecked; further
+        out, or a constant outside the range, is left for the caller's located error."""
+        from ..volumes.gridvolume import GridVolume
+
+        if not isinstance(vol, GridVolume):
+            return
+        low, high = vol.min_value(), float(vol.data.max())
+        span = max(high, 1e-30) if hi is None else hi
+        if -RINGING * span <= low and (hi is None or high <= hi * (1 + RINGING)) and vol.clamp(0.0, hi):
+            log.warning("%s: %s's grid %s holds values a little outside [0, %s] (%g to %g); clamped",
+                        where, name, vol.filename, "inf" if hi is None else hi, low, high)
 
     def _read_common(self, props) -> float:
         """Mitsuba's parameters every medium has: sample_emitters and has_spectral_extinction (both default true);

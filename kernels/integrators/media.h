@@ -173,11 +173,12 @@ INLINE bool medium_flight(const SceneData* sd, PathState* ps, float tmax, Sample
     bool scatter = t < tmax;
     vec3 tr = medium_transmittance(sigma, (scatter ? t : tmax) - t0);
     vec3 density = scatter ? vmul(sigma, tr) : tr;   /* each channel's density of this event */
-    vec3 value = scatter ? vmul(tr, vmul(sigma, medium_albedo(sd, m, ps->ray.o))) : tr;
+    vec3 p = vmad(ps->ray.d, scatter ? t : t0, ps->ray.o);
+    vec3 value = scatter ? vmul(tr, vmul(sigma, medium_albedo(sd, m, p))) : tr;   /* (an albedo volume: at p) */
     if (!medium_weigh(ps, density, value)) return true;
     if (!scatter) return false;
     if (is_black(ps->beta)) { ps->alive = 0u; return true; }
-    medium_scatter(sd, ps, m, vmad(ps->ray.d, t, ps->ray.o), smp);
+    medium_scatter(sd, ps, m, p, smp);
     return true;
 }
 

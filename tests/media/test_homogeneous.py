@@ -86,8 +86,12 @@ def test_a_scene_without_media_packs_none():
 
 
 def test_refusals_are_located():
-    err('<shape type="sphere"><medium type="homogeneous">\n<volume type="gridvolume" name="sigma_t"/>'
-        '</medium></shape>', 2, "<volume", "cannot be nested", 'type="heterogeneous"')
+    err('<shape type="sphere"><medium type="homogeneous">\n<volume type="constvolume" name="sigma_t"/>'
+        '</medium></shape>', 2, "sigma_t is one value everywhere", 'type="heterogeneous"')
+    err('<shape type="sphere"><medium type="homogeneous">\n<volume type="constvolume" name="density"/>'
+        '</medium></shape>', 2, 'name="albedo"', "'density'")
+    err('<shape type="sphere"><medium type="homogeneous">\n<volume type="constvolume" name="albedo">'
+        '<float name="value" value="2"/></volume></medium></shape>', 2, "albedo must lie in [0, 1]")
     err('<shape type="sphere">\n<medium type="homogeneous"/></shape>', 2, 'name="interior"')
     err('<shape type="sphere">\n<medium type="homogeneous" name="inside"/></shape>', 2, 'name="interior"', "'inside'")
     err('<bsdf type="diffuse">\n<medium type="homogeneous"/></bsdf>', 2, "cannot be nested", "<shape>")
