@@ -330,6 +330,13 @@ def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: 
                           converged=round(float(conv.mean()), 6), **switch)
         return f
 
+    def must_stop(flag, dt: float) -> bool:
+        """After a launch that took `dt` seconds: Ctrl-C, or a time limit the next such launch would pass."""
+        if flag.requested:
+            stats.interrupted = True
+            return True
+        return time_limit is not None and time.perf_counter() - t_start + dt > time_limit
+
     def run_uniform(target: int, flag) -> bool:
         """A splatting film's uniform rest (after the switch): every pixel on to `target` samples by passes of the
         uniform film (SplatExecutor.run_pass), each of about TARGET_LAUNCH_SECONDS; True when the render must
@@ -345,10 +352,7 @@ def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: 
             dt = time.perf_counter() - t0
             seconds_per_sample = dt / max(batch * n, 1)
             done[:] += batch
-            if flag.requested:
-                stats.interrupted = True
-                return True
-            if time_limit is not None and time.perf_counter() - t_start + dt > time_limit:
+            if must_stop(flag, dt):
                 return True
         return False
 
@@ -402,10 +406,7 @@ def render_adaptive(renderer, opts: AdaptiveOptions, seed: int = 0, time_limit: 
                 stats.launches += 1
                 done[pixels[off:off + cnt]] = target[off:off + cnt]
                 off += cnt
-                if flag.requested:
-                    stats.interrupted = True
-                    return True
-                if time_limit is not None and time.perf_counter() - t_start + dt > time_limit:
+                if must_stop(flag, dt):
                     return True
         return False
 
