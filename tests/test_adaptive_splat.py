@@ -191,3 +191,16 @@ def test_even_noise_finishes_as_the_uniform_splatting_film(tmp_path):
     np.testing.assert_array_equal(film.count, uniform.count)
     np.testing.assert_allclose(film.image, uniform.image, rtol=2e-5)
     np.testing.assert_allclose(film.variance(), uniform.variance(), rtol=1e-3, atol=1e-7 * film.image.max() ** 2)
+
+
+def test_a_time_limit_keeps_true_counts(renderer, tmp_path):
+    """A time limit stops an adaptive splatting render between launches, in its rounds and in its uniform rest after
+    the switch, with each pixel's true count (the uniform rest: one count for all)."""
+    film = renderer.render_adaptive(target_error=0.001, max_spp=4096, seed=1, time_limit=0.3, uniform_below=0)
+    assert film.metadata["film"] == "splat" and film.count.max() < 4096
+    assert film.metadata["spp_mean"] == pytest.approx(film.count.mean(), abs=1e-3)
+    (tmp_path / "f.xml").write_text(furnace_scene(tmp_path, "path_mis").replace('value="4"', 'value="16"'))
+    r = Renderer(clrender.load_scene(tmp_path / "f.xml"), reconstruction="splat")
+    film = r.render_adaptive(target_error=0.0005, max_spp=1 << 20, seed=1, time_limit=0.5)
+    assert film.metadata["uniform_after"] == 16
+    assert len(np.unique(film.count)) == 1 and 16 < film.count.max() < film.metadata["uniform_spp"]
