@@ -309,7 +309,8 @@ class SplatExecutor:
 
     Adaptive sampling's launches (`launch`, `launch_spans`: pixels with counts of their own) go to a store instead,
     each pixel's splats kept apart (3 (2 reach + 1)^2 float4 per pixel, store_buffer_bytes), and `resolve` turns it
-    into the film's sums, each pixel's splats weighed by 1 / its samples (kernels/splat.cl store_pixel, splat_resolve)."""
+    into the film's sums, each pixel's splats weighed by 1 / its samples (kernels/splat.cl store_pixel,
+    splat_resolve)."""
 
     name = "megakernel"
     #: the record buffer of a pass stays below this (its samples per pixel are cut to fit)
@@ -342,8 +343,9 @@ class SplatExecutor:
 
     @property
     def device_bytes(self) -> int:
-        """The record buffers' bytes as allocated now (they grow to the largest pass, at most MAX_RECORD_BYTES)."""
-        return self._buf_samples * self.record_bytes()
+        """The record buffers' bytes as allocated now (they grow to the largest pass, at most MAX_RECORD_BYTES), and
+        the store's once an adaptive render made it."""
+        return self._buf_samples * self.record_bytes() + (0 if self._store is None else sum(self.store_buffer_bytes()))
 
     def record_bytes(self) -> int:
         """Bytes a sample's record takes: its radiance and its 2 (2 reach + 1) filter weights."""

@@ -204,3 +204,10 @@ def test_a_time_limit_keeps_true_counts(renderer, tmp_path):
     film = r.render_adaptive(target_error=0.0005, max_spp=1 << 20, seed=1, time_limit=0.5)
     assert film.metadata["uniform_after"] == 16
     assert len(np.unique(film.count)) == 1 and 16 < film.count.max() < film.metadata["uniform_spp"]
+
+
+def test_the_store_counts_in_the_device_memory(scene):
+    r = Renderer(scene)
+    before = r.device_memory_bytes()
+    r.render_adaptive(target_error=0.2, min_spp=4, max_spp=8, seed=1)
+    assert r.device_memory_bytes() - before >= sum(r.executor.store_buffer_bytes())
