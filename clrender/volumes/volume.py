@@ -3,11 +3,14 @@ world), the world-space bounding box of that cube's image (Mitsuba's Volume::bbo
 extinction only inside its sigma_t volume's box), the largest value (a heterogeneous medium's majorant), and its
 row of the scene's `volumes` table (layout.ROWS "Volume"), packed once however many media read it.
 
-A volume is the sigma_t or albedo of a `<medium type="heterogeneous">` (clrender/media/heterogeneous.py). The kernel
+A volume is the sigma_t or albedo of a `<medium type="heterogeneous">` (clrender/media/heterogeneous.py), or the albedo
+of a homogeneous one. The kernel
 half is `kernels/volumes/<name>.h`: `<name>_eval`, the value at a world-space point (kind VOLUME in
 clrender/device/dispatch.py).
 """
 from __future__ import annotations
+
+from abc import ABC, abstractmethod
 
 import numpy as np
 
@@ -15,7 +18,7 @@ from ..device import dispatch, layout
 from ..errors import SceneError
 
 
-class Volume:
+class Volume(ABC):
     kernel: str = ""
     PARAMS: list = []
     FLAGS: tuple = ()
@@ -40,16 +43,17 @@ class Volume:
         w = corners @ self.to_world.T
         return w[:, :3].min(axis=0), w[:, :3].max(axis=0)
 
+    @abstractmethod
     def max_value(self) -> float:
         """The largest value over every channel (Mitsuba's Volume::max)."""
-        raise NotImplementedError
 
+    @abstractmethod
     def min_value(self) -> float:
-        raise NotImplementedError
+        """The smallest value over every channel."""
 
+    @abstractmethod
     def eval(self, points) -> np.ndarray:
         """The value (..., 3) at world-space points (..., 3), as the kernel computes it (host reference)."""
-        raise NotImplementedError
 
     def pack(self, ctx) -> int:
         """This volume's row of the `volumes` table (added on the first call, the same row after)."""
