@@ -8,15 +8,17 @@
 INLINE float blendbsdf_weight(__global const Bsdf* b, const BsdfQuery* q) {
     return clamp(PARAM_FLOAT(q, b->p.blendbsdf, weight), 0.0f, 1.0f);
 }
+/* The body of a method whose value is the children's, blended: (1 - w) first's + w second's (a child of weight 0
+   not called: a zero times its inf or NaN would poison the blend). */
+#define BLENDBSDF_BLEND(method) \
+    float w = blendbsdf_weight(b, q); \
+    vec3 v = v3s(0.0f); \
+    if (w < 1.0f) v = vmad(CHILD_FN(method)(b + b->p.blendbsdf.first, q), 1.0f - w, v); \
+    if (w > 0.0f) v = vmad(CHILD_FN(method)(b + b->p.blendbsdf.second, q), w, v); \
+    return v;
 #endif
 
-INLINE vec3 COMPOSITE_FN(blendbsdf_eval)(__global const Bsdf* b, const BsdfQuery* q) {
-    float w = blendbsdf_weight(b, q);
-    vec3 f = v3s(0.0f);
-    if (w < 1.0f) f = vmad(CHILD_FN(eval)(b + b->p.blendbsdf.first, q), 1.0f - w, f);
-    if (w > 0.0f) f = vmad(CHILD_FN(eval)(b + b->p.blendbsdf.second, q), w, f);
-    return f;
-}
+INLINE vec3 COMPOSITE_FN(blendbsdf_eval)(__global const Bsdf* b, const BsdfQuery* q) { BLENDBSDF_BLEND(eval) }
 
 INLINE float COMPOSITE_FN(blendbsdf_pdf)(__global const Bsdf* b, const BsdfQuery* q) {
     float w = blendbsdf_weight(b, q);
@@ -41,11 +43,7 @@ INLINE vec3 COMPOSITE_FN(blendbsdf_sample)(__global const Bsdf* b, BsdfQuery* q,
 
 /* Mitsuba's eval_null_transmission of a blend: its children's, blended. */
 INLINE vec3 COMPOSITE_FN(blendbsdf_null_transmission)(__global const Bsdf* b, const BsdfQuery* q) {
-    float w = blendbsdf_weight(b, q);
-    vec3 t = v3s(0.0f);
-    if (w < 1.0f) t = vmad(CHILD_FN(null_transmission)(b + b->p.blendbsdf.first, q), 1.0f - w, t);
-    if (w > 0.0f) t = vmad(CHILD_FN(null_transmission)(b + b->p.blendbsdf.second, q), w, t);
-    return t;
+    BLENDBSDF_BLEND(null_transmission)
 }
 
 INLINE vec3 COMPOSITE_FN(blendbsdf_albedo)(__global const Bsdf* b, const BsdfQuery* q) {
