@@ -3,7 +3,7 @@
 This is where Python objects become device data. Shapes are numbered in document order and pack their own
 geometry (clrender/shapes/); BSDFs are shared by identity; area emitters point at their shape, which samples its
 own surface; plugins append rows to the scene's tables through PackContext.add_table; the BVH is built over all
-triangles and spheres together.
+triangles, spheres and SDF grids' voxels together.
 """
 from __future__ import annotations
 
@@ -15,8 +15,8 @@ import numpy as np
 
 from .accel.bvh import build_bvh
 from .accel.bvh4 import Bvh4Unsupported, collapse_bvh4
-from .accel.primitives import (BUILD_OPTIONS, BUILD_OPTIONS_BY_WIDTH, bvh_leaves, leaf_refs, pack_leaf_blocks,
-                               primitive_bounds)
+from .accel.primitives import (BUILD_OPTIONS, BUILD_OPTIONS_BY_WIDTH, SdfVoxels, bvh_leaves, leaf_refs,
+                               pack_leaf_blocks, primitive_bounds)
 from .bsdfs.composite import composite_depth
 from .device import dispatch, layout
 from .device.layout import ENUMS, NONE
@@ -89,6 +89,7 @@ class PackContext:
         self._sizes = dict.fromkeys(self._chunks, 0)
         self._meshes, self._positions, self._faces = [], [], []
         self._n_vertices = self._n_triangles = 0
+        self._sdf_voxels: list[SdfVoxels] = []
         self.textures = TextureTable()
         self.camera_medium = NONE   # the camera's row of the media table (_pack_media)
         self.volumes: dict[int, int] = {}   # rows of the volumes table, by the volume's identity (Volume.pack)
@@ -121,6 +122,14 @@ class PackContext:
         self._n_vertices += len(self._positions[-1])
         self._n_triangles += len(faces)
         return base
+
+    def add_sdf_voxels(self, voxels: SdfVoxels) -> None:
+        """Add an SDF grid's voxels that hold its surface: pack_scene puts them into the BVH and the primitive
+        table."""
+        self._sdf_voxels.append(voxels)
+
+    def sdf_voxels(self) -> SdfVoxels:
+        return SdfVoxels.concatenate(self._sdf_voxels)
 
     def meshes(self) -> list[tuple[int, int, int, int]]:
         """(shape index, first vertex, first triangle, triangle count) of each mesh, in the order added."""
@@ -343,14 +352,15 @@ class _Geometry:
 
 
 def _pack_geometry(ctx: PackContext, shape_rows, bvh_width: int, bvh_options: dict | None) -> _Geometry:
-    """The BVH over every triangle (numbered as the meshes added them) and every sphere; the primitive table, and
-    the tri_index, mesh_vertices and tri_refs tables in its leaf order."""
+    """The BVH over every triangle (numbered as the meshes added them), every sphere and every SDF voxel; the
+    primitive table, and the tri_index, mesh_vertices and tri_refs tables in its leaf order."""
     tris = ctx.triangles()
     sph = ctx.array("spheres")[:ctx.size("spheres")]
+    vox = ctx.sdf_voxels()
 
     t_bvh = time.perf_counter()
     with np.errstate(over="ignore", invalid="ignore"):
-        lo, hi = primitive_bounds(tris[:, 0], tris[:, 1], tris[:, 2], sph)
+        lo, hi = primitive_bounds(tris[:, 0], tris[:, 1], tris[:, 2], sph, vox)
     if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
         # The shapes check their own extent; this guards the build (an infinite box makes its binning allocate
         # without bound) against any that does not.
@@ -367,7 +377,8 @@ def _pack_geometry(ctx: PackContext, shape_rows, bvh_width: int, bvh_options: di
     on_tri = bvh.order < len(tris)
     tri_ref = np.empty(len(tris), np.uint32)
     tri_ref[bvh.order[on_tri]] = refs[on_tri]
-    prims = pack_leaf_blocks(tris[:, 0], tris[:, 1], tris[:, 2], sph, bvh.order, *leaves, tri_ids=tri_ref)
+    prims = pack_leaf_blocks(tris[:, 0], tris[:, 1], tris[:, 2], sph, bvh.order, *leaves, tri_ids=tri_ref,
+                             voxels=vox)
     tri_index = np.full((len(lo), 3), NONE, np.uint32)
     tri_index[on_tri] = ctx.triangle_vertex_indices()[bvh.order[on_tri]]
     ctx.add_table("tri_index", "uint", tri_index)

@@ -1,7 +1,7 @@
 """Importing this module registers every plugin with the scene registry."""
 # One import per plugin file: the registry is keyed by the XML (tag, type) each one declares.
 from .scene import scene  # noqa: F401
-from .shapes import cube, cylinder, disk, instance, obj, ply, rectangle, serialized, sphere  # noqa: F401
+from .shapes import cube, cylinder, disk, instance, obj, ply, rectangle, sdfgrid, serialized, sphere  # noqa: F401
 from .cameras import perspective  # noqa: F401
 from .filters import box, gaussian, lanczos, mitchell, tent  # noqa: F401
 from .films import hdrfilm, ldrfilm  # noqa: F401

@@ -7,6 +7,8 @@
                    clrender/accel/primitives.py leaf_refs; kernels/shapes/mesh.h finds its vertices from it:
                    this table is their only copy) or, in tables that the tests pack, its triangle number
        sphere j:   centre.xyz, radius, 0 x 5, id = j | 0x80000000
+       SDF voxel:  its 8 corner values (corner x + 2y + 4z), the word offset of its record (the 3 x 4 map from
+                   the world to the voxel's unit cube, after the blocks), id = shape | 0x80000000 | 0x40000000
 
    Hits count for tmin < t < tmax, both sides of triangles. Ray directions need not be normalised.
    Plain arithmetic instead of fmin/fmax/dot/cross: on PoCL 3.0 the builtins were 1.2-2.4x slower here. */
@@ -24,7 +26,8 @@ typedef struct {
     float t;
     float u;      /* barycentric weight of v1 (triangles; 0 for spheres) */
     float v;      /* barycentric weight of v2 */
-    uint prim;    /* the primitive's id word: a triangle's leaf reference, or sphere id | 0x80000000 */
+    uint prim;    /* the primitive's id word: a triangle's leaf reference, sphere id | 0x80000000, or an SDF voxel's
+                     shape | 0x80000000 | 0x40000000 */
 #ifdef BVH_COUNT_VISITS
     uint nodes, leaves, blocks;   /* benchmarks/profile_pass.py --visits: what one query visited (8-wide only) */
 #endif
@@ -166,11 +169,92 @@ BVH_INLINE bool bvh_isect_sphere(float4 c, float r, vec3 o, vec3 d, float tmin, 
     return false;
 }
 
+/* A voxel of an SDF grid (clrender/shapes/sdfgrid.py): the first root along the ray of its corner values'
+   trilinear interpolation, as Mitsuba 3's sdfgrid (Hansson-Söderlund et al., JCGT 11(3) 2022). q: the voxel's
+   lane l of a block of c; words: the primitive table (its record). In the voxel's unit cube the value along
+   o + s d is a cubic in s; the roots of its derivative cut the span inside the cube into pieces where it is
+   monotonic, and the first piece whose ends differ in sign holds the root, found by bisection to float
+   precision. The cube is widened by SDF_VOXEL_PAD so that no ray slips between two voxels through rounding (the
+   interpolation is continuous across their shared face). */
+#define SDF_VOXEL_PAD 1e-5f
+BVH_INLINE float bvh_cubic(float4 k, float s) { return ((k.w * s + k.z) * s + k.y) * s + k.x; }
+
+BVH_INLINE bool bvh_isect_voxel(__global const float* words, __global const float* q, uint c, uint l,
+                                const BvhRay* r, float tmin, float* t) {
+    __global const float* m = words + as_uint(q[8u * c + l]);
+    vec3 o = r->o, d = r->d;
+    float ox = m[0] * o.x + m[1] * o.y + m[2] * o.z + m[3];
+    float oy = m[4] * o.x + m[5] * o.y + m[6] * o.z + m[7];
+    float oz = m[8] * o.x + m[9] * o.y + m[10] * o.z + m[11];
+    float dx = m[0] * d.x + m[1] * d.y + m[2] * d.z;
+    float dy = m[4] * d.x + m[5] * d.y + m[6] * d.z;
+    float dz = m[8] * d.x + m[9] * d.y + m[10] * d.z;
+    float ix = bvh_safe_rcp(dx), iy = bvh_safe_rcp(dy), iz = bvh_safe_rcp(dz);
+    const float lo = -SDF_VOXEL_PAD, hi = 1.0f + SDF_VOXEL_PAD;
+    float x0 = (lo - ox) * ix, x1 = (hi - ox) * ix, y0 = (lo - oy) * iy, y1 = (hi - oy) * iy;
+    float z0 = (lo - oz) * iz, z1 = (hi - oz) * iz;
+    float t0 = bvh_max(bvh_max(bvh_min(x0, x1), bvh_min(y0, y1)), bvh_max(bvh_min(z0, z1), tmin));
+    float t1 = bvh_min(bvh_min(bvh_max(x0, x1), bvh_max(y0, y1)), bvh_min(bvh_max(z0, z1), *t));
+    if (!(t0 < t1)) return false;
+    float s0 = q[l], s1 = q[c + l], s2 = q[2u * c + l], s3 = q[3u * c + l];
+    float s4 = q[4u * c + l], s5 = q[5u * c + l], s6 = q[6u * c + l], s7 = q[7u * c + l];
+    /* f = a + b x + cy y + dz_ z + e xy + g xz + h yz + k xyz about the point where the span starts */
+    float b = s1 - s0, cy = s2 - s0, cz = s4 - s0;
+    float e = s3 - s1 - s2 + s0, g = s5 - s1 - s4 + s0, h = s6 - s2 - s4 + s0;
+    float k = s7 - s3 - s5 - s6 + s1 + s2 + s4 - s0;
+    float px = ox + t0 * dx, py = oy + t0 * dy, pz = oz + t0 * dz;
+    float4 f;   /* the cubic's coefficients, constant term first */
+    f.x = s0 + b * px + cy * py + cz * pz + e * px * py + g * px * pz + h * py * pz + k * px * py * pz;
+    f.y = b * dx + cy * dy + cz * dz + e * (px * dy + py * dx) + g * (px * dz + pz * dx) + h * (py * dz + pz * dy)
+          + k * (px * py * dz + px * pz * dy + py * pz * dx);
+    f.z = e * dx * dy + g * dx * dz + h * dy * dz + k * (px * dy * dz + py * dx * dz + pz * dx * dy);
+    f.w = k * dx * dy * dz;
+    float len = t1 - t0;
+    /* the derivative's roots inside (0, len): 3 f.w s^2 + 2 f.z s + f.y = 0 */
+    float ends[4];
+    int n = 0;
+    ends[n++] = 0.0f;
+    float qa = 3.0f * f.w, qb = 2.0f * f.z, qc = f.y;
+    float ra = INFINITY, rb = INFINITY;
+    if (qa != 0.0f) {
+        float disc = qb * qb - 4.0f * qa * qc;
+        if (disc > 0.0f) {
+            float sq = sqrt(disc);
+            float qq = -0.5f * (qb + (qb < 0.0f ? -sq : sq));
+            ra = qq / qa;
+            rb = qq != 0.0f ? qc / qq : INFINITY;
+        }
+    } else if (qb != 0.0f) {
+        ra = -qc / qb;
+    }
+    if (ra > rb) { float tmp = ra; ra = rb; rb = tmp; }
+    if (ra > 0.0f && ra < len) ends[n++] = ra;
+    if (rb > 0.0f && rb < len) ends[n++] = rb;
+    ends[n++] = len;
+    float sa = ends[0], fa = bvh_cubic(f, sa);
+    for (int i = 1; i < n; ++i) {
+        float sb = ends[i], fb = bvh_cubic(f, sb);
+        if (fa == 0.0f || fa * fb <= 0.0f) {
+            /* a bracket [a, z] with f(a) on fa's side and f(z) on the other or 0 */
+            float a = sa, z = fa == 0.0f ? sa : sb;
+            for (int it = 0; it < 24 && a < z; ++it) {
+                float mid = 0.5f * (a + z), fm = bvh_cubic(f, mid);
+                if (fm != 0.0f && (fm < 0.0f) == (fa < 0.0f)) a = mid; else z = mid;
+            }
+            float th = t0 + 0.5f * (a + z);
+            if (th > tmin && th < *t) { *t = th; return true; }
+        }
+        sa = sb;
+        fa = fb;
+    }
+    return false;
+}
+
 /* Intersects one leaf, up to BVH_BLOCK_LANES primitives at a time, one per float4 lane (the block layout of
    clrender/accel/primitives.py pack_leaf_blocks: row r of lane l of the block at leaf-order position b, of
    c primitives, is word 10 b + r c + l); with any_hit it stops at the first hit. Each lane runs the same
    watertight test as bvh_isect_triangle, in the same order of operations, so the guarantee holds per lane;
-   sphere lanes (rare) are tested one by one afterwards. */
+   sphere and SDF voxel lanes (rare) are tested one by one afterwards. */
 BVH_INLINE bool bvh_isect_leaf(__global const float4* prims, uint first, uint count, const BvhRay* r,
                                float tmin, Hit* hit, bool any_hit) {
 #pragma OPENCL FP_CONTRACT OFF
@@ -190,7 +274,10 @@ BVH_INLINE bool bvh_isect_leaf(__global const float4* prims, uint first, uint co
             uint sid = as_uint(q[9u * c + l]);
             float4 p0 = (float4)(q[l], q[c + l], q[2u * c + l], 0.0f);
             bool h;
-            if (sid & BVH_SPHERE_BIT) {
+            if ((sid & BVH_SPHERE_BIT) && (sid & BVH_SDF_BIT)) {
+                h = bvh_isect_voxel(words, q, c, l, r, tmin, &hit->t);
+                if (h) { hit->u = 0.0f; hit->v = 0.0f; }
+            } else if (sid & BVH_SPHERE_BIT) {
                 h = bvh_isect_sphere(p0, q[3u * c + l], r->o, r->d, tmin, &hit->t);
                 if (h) { hit->u = 0.0f; hit->v = 0.0f; }
             } else {
@@ -246,7 +333,8 @@ BVH_INLINE bool bvh_isect_leaf(__global const float4* prims, uint first, uint co
                 uint sid = l == 0u ? id.x : (l == 1u ? id.y : (l == 2u ? id.z : id.w));
                 if (!(sid & BVH_SPHERE_BIT)) continue;
                 float4 centre = (float4)(q[l], q[c + l], q[2u * c + l], 0.0f);
-                if (bvh_isect_sphere(centre, q[c3 + l], r->o, r->d, tmin, &hit->t)) {
+                if ((sid & BVH_SDF_BIT) ? bvh_isect_voxel(words, q, c, l, r, tmin, &hit->t)
+                                        : bvh_isect_sphere(centre, q[c3 + l], r->o, r->d, tmin, &hit->t)) {
                     hit->u = 0.0f; hit->v = 0.0f; hit->prim = sid;
                     found = true;
                     if (any_hit) return true;

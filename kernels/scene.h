@@ -103,8 +103,10 @@ INLINE bool scene_trace(const SceneData* sd, const Ray* r, Hit* h) {
 
 INLINE bool scene_surface(const SceneData* sd, const Ray* r, const Hit* h, Intersection* its) {
     its->t = h->t;
-    uint shape = (h->prim & BVH_SPHERE_BIT) ? sd->sphere_shape[h->prim & ~BVH_SPHERE_BIT]
-                                            : scene_triangle_shape(sd, h->prim >> PRIM_REF_POS_SHIFT);
+    uint shape = (h->prim & BVH_SPHERE_BIT)
+                     ? ((h->prim & BVH_SDF_BIT) ? (h->prim & ~(BVH_SPHERE_BIT | BVH_SDF_BIT))
+                                                : sd->sphere_shape[h->prim & ~BVH_SPHERE_BIT])
+                     : scene_triangle_shape(sd, h->prim >> PRIM_REF_POS_SHIFT);
     its->shape = shape;
     return shape_surface(sd, &sd->shapes[shape], r, h, its);
 }

@@ -101,16 +101,28 @@ def _smoke_denser(scene):
     smoke.majorant *= 1.1
 
 
+def _sdf_normals_analytic(scene):
+    from clrender.shapes.instance import Instance
+    from clrender.shapes.sdfgrid import SDFGrid
+
+    grids = [g for s in scene.shapes for g in (s.group.shapes if isinstance(s, Instance) else [s])
+             if isinstance(g, SDFGrid) and g.smooth]
+    assert grids
+    for g in grids:
+        g.smooth = False                   # the geometric normal shades: Mitsuba's `analytic`, not its default
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name, mutate", [
     ("cornell_meshes", _mirror), ("filter_lanczos_crop", _crop_off_by_one), ("thinlens", _pinhole),
     ("gaussian_sample_border", _border_ignored), ("filter_gaussian_fov_y", _fov_one_percent_wider),
     ("integrator_volpath_depth2", _path_rules), ("integrator_volpath_hide", _path_rules),
     ("orthographic", _mirror), ("principled", _principled_glass_eta), ("projector", _projector_square_image),
-    ("media_smoke", _smoke_denser),
+    ("media_smoke", _smoke_denser), ("sdfgrid", _sdf_normals_analytic), ("sdfgrid_normals", _sdf_normals_analytic),
 ], ids=["mirrored camera", "crop window 1 px off", "pinhole for thin lens", "sample_border ignored", "fov 1% wider",
         "volpath depth as path's", "volpath hide_emitters as path's", "mirrored orthographic sensor",
-        "principled glass eta 1.33 for 1.5", "projector's image taken as square", "smoke 10% denser"])
+        "principled glass eta 1.33 for 1.5", "projector's image taken as square", "smoke 10% denser",
+        "SDF grid shaded by its analytic normals", "SDF grid's analytic normals for smooth"])
 def test_twin_test_fails_when_clrender_is_wrong(name, mutate):
     """The harness can fail: each twin, rendered with one thing it verifies done wrong, must not pass."""
     import clrender

@@ -36,6 +36,8 @@ NEEDS = {"bsdfs": ("sampling", "render"), "emitters": ("sampling", "render"), "s
 #: (folder, plugin, aspect) -> why it is missing today
 GAPS = {
     ("shapes", "instance", "sampling"): "an instance holds no emitter (refused, as in Mitsuba): nothing of it is sampled",
+    ("shapes", "sdfgrid", "sampling"): "an SDF grid has no area and cannot emit (refused, as in Mitsuba): nothing of "
+                                       "it is sampled",
 }
 
 _SLOW_BUILD = "its program alone takes 15-25 s to build on 2 cores; its sampling test is in the default run"

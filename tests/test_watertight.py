@@ -217,8 +217,9 @@ def mesh_scene(tmp_path, verts, tris, name="mesh", body=""):
     return xml
 
 
-def run_spawn(ctx, queue, kernel, buffers, org, dirs, local):
-    n = len(org)
+def run_rays(ctx, queue, kernel, buffers, *inputs):
+    """Run a kernel of (SCENE_ARGS, uint n, the inputs as float4 xyz, three float4 outputs) over n rays; the outputs."""
+    n = len(inputs[0])
     g = max(LOCAL, -(-n // LOCAL) * LOCAL)
     ro = cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR
     scene = [cl.Buffer(ctx, ro, hostbuf=np.ascontiguousarray(a)) for a in buffers.scene_arrays()]
@@ -229,7 +230,7 @@ def run_spawn(ctx, queue, kernel, buffers, org, dirs, local):
         return cl.Buffer(ctx, ro, hostbuf=b)
 
     outs = [cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, g * 16) for _ in range(3)]
-    kernel(queue, (g,), (LOCAL,), *scene, np.uint32(n), f4(org), f4(dirs), f4(local), *outs)
+    kernel(queue, (g,), (LOCAL,), *scene, np.uint32(n), *(f4(a) for a in inputs), *outs)
     res = []
     for b in outs:
         a = np.empty((g, 4), np.float32)
@@ -276,7 +277,7 @@ def test_spawned_rays_neither_rehit_nor_tunnel(tmp_path, ctx, queue, spawn_kerne
     local = grazing_directions(rng, m)
     outward = rng.random(m) < 0.25
     local[outward, 2] *= -1
-    p, h, d = run_spawn(ctx, queue, kernel, bufs, org, target - centre, local)
+    p, h, d = run_rays(ctx, queue, kernel, bufs, org, target - centre, local)
     first, second = p[:, 3].view(np.uint32), h[:, 3].view(np.uint32)
     assert (first != 0xFFFFFFFF).all(), "a ray from inside a closed mesh found nothing"
     hit = second != 0xFFFFFFFF

@@ -1,7 +1,8 @@
 """Primitive bounds and the packed primitive table the traversal kernels read.
 
-Two primitive kinds share one index space: triangles first (ids 0..T-1), then analytic spheres (ids 0..S-1,
-told apart by bit 31 of the id word). The BVH is built over the boxes from :func:`primitive_bounds`; the
+Three primitive kinds share one index space: triangles first (ids 0..T-1), then analytic spheres (ids 0..S-1,
+told apart by bit 31 of the id word), then the voxels of SDF grids that hold a piece of their surface
+(:class:`SdfVoxels`; bit 31 and bit 30 of the id word, whose other bits name the voxel's shape). The BVH is built over the boxes from :func:`primitive_bounds`; the
 kernels read the primitives in BVH leaf order from :func:`pack_leaf_blocks` (the same words, 40 bytes each,
 blocked by leaf so that four are tested at once). :func:`pack_primitives` gives them one per row, three
 ``float4`` rows each (what the tests' reference tracer reads):
@@ -13,7 +14,7 @@ triangle ``v0.xyz, as_float(i)``          ``v1.xyz, 0``      ``v2.xyz, 0``
 sphere   ``center.xyz, as_float(j|2^31)`` ``radius, 0, 0, 0`` ``0, 0, 0, 0``
 ======== ================================ ================== ==============
 
-in float32 (pack_scene gives triangles their :func:`leaf_refs` as id words instead of their numbers, so that a
+(an SDF voxel has no row there: only the device's table below knows them) in float32 (pack_scene gives triangles their :func:`leaf_refs` as id words instead of their numbers, so that a
 hit says where the vertices are: the device keeps no other copy of them). The vertices themselves, not edges,
 so that a vertex shared by several triangles is the same float in each: the watertight test
 (kernels/bvh_common.h) relies on it. An empty table has shape
@@ -21,11 +22,14 @@ so that a vertex shared by several triangles is the same float in each: the wate
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..device.layout import ENUMS
 
 SPHERE_FLAG = np.uint32(ENUMS["BVH_SPHERE_BIT"])
+SDF_FLAG = np.uint32(ENUMS["BVH_SDF_BIT"])      # with SPHERE_FLAG: an SDF grid's voxel (kernels/bvh_common.h)
 LEAF_FLAG = np.uint32(ENUMS["BVH_LEAF_BIT"])   # a node's reference to a leaf (clrender.accel.bvh writes them)
 
 
@@ -43,8 +47,39 @@ def _spheres(spheres):
     return s
 
 
-def primitive_bounds(tri_v0, tri_v1, tri_v2, spheres):
-    """Axis-aligned boxes of all primitives, triangles first: ``(lo, hi)`` float32 arrays of shape (T+S, 3)."""
+@dataclass
+class SdfVoxels:
+    """The voxels of SDF grids that the BVH holds (clrender/shapes/sdfgrid.py adds them), V of them:
+
+    ``lo``, ``hi``: (V, 3) world-space boxes; ``corners``: (V, 8) the grid's values at the voxel's corners, corner
+    x + 2 y + 4 z; ``to_voxel``: (V, 3, 4) the affine map from the world to the voxel's own unit cube; ``shape``:
+    (V,) the shape each belongs to."""
+    lo: np.ndarray
+    hi: np.ndarray
+    corners: np.ndarray
+    to_voxel: np.ndarray
+    shape: np.ndarray
+
+    @staticmethod
+    def empty() -> "SdfVoxels":
+        return SdfVoxels(np.zeros((0, 3), np.float32), np.zeros((0, 3), np.float32), np.zeros((0, 8), np.float32),
+                         np.zeros((0, 3, 4), np.float32), np.zeros(0, np.uint32))
+
+    @staticmethod
+    def concatenate(parts) -> "SdfVoxels":
+        parts = list(parts)
+        if not parts:
+            return SdfVoxels.empty()
+        return SdfVoxels(*(np.concatenate([getattr(p, f) for p in parts]) for f in
+                           ("lo", "hi", "corners", "to_voxel", "shape")))
+
+    def __len__(self) -> int:
+        return len(self.shape)
+
+
+def primitive_bounds(tri_v0, tri_v1, tri_v2, spheres, voxels: SdfVoxels | None = None):
+    """Axis-aligned boxes of all primitives, triangles first, then spheres, then SDF voxels: ``(lo, hi)`` float32
+    arrays of shape (T+S+V, 3)."""
     v0, v1, v2 = _as3(tri_v0, "tri_v0"), _as3(tri_v1, "tri_v1"), _as3(tri_v2, "tri_v2")
     if not (len(v0) == len(v1) == len(v2)):
         raise ValueError("tri_v0, tri_v1 and tri_v2 must have the same length")
@@ -58,8 +93,9 @@ def primitive_bounds(tri_v0, tri_v1, tri_v2, spheres):
     # Rounding c ± r to float32 may land inside the sphere; step one ulp outward so the box stays conservative.
     slo = np.nextafter((c - r).astype(np.float32), np.float32(-np.inf))
     shi = np.nextafter((c + r).astype(np.float32), np.float32(np.inf))
-    lo = np.concatenate([tlo, slo]).astype(np.float32, copy=False)
-    hi = np.concatenate([thi, shi]).astype(np.float32, copy=False)
+    vox = voxels if voxels is not None else SdfVoxels.empty()
+    lo = np.concatenate([tlo, slo, np.asarray(vox.lo, np.float32)]).astype(np.float32, copy=False)
+    hi = np.concatenate([thi, shi, np.asarray(vox.hi, np.float32)]).astype(np.float32, copy=False)
     return np.ascontiguousarray(lo), np.ascontiguousarray(hi)
 
 
@@ -72,20 +108,25 @@ def pack_primitives(tri_v0, tri_v1, tri_v2, spheres, order):
     return out.view(np.float32).reshape(-1, 4)
 
 
-def _leaf_order_words(tri_v0, tri_v1, tri_v2, spheres, order, tri_ids=None):
+def _leaf_order_words(tri_v0, tri_v1, tri_v2, spheres, order, tri_ids=None, voxels=None, voxel_records=0):
     """Ten uint32 words per primitive, in leaf ``order`` (float bits and ids alike: ids are not floats)::
 
         triangle: v0.xyz, v1.xyz, v2.xyz, id (its number, or tri_ids[number])
         sphere j: centre.xyz, |radius|, 0 x 5, j | SPHERE_FLAG
+        voxel v:  its 8 corner values, the word offset of its to_voxel map (voxel_records + 12 v),
+                  shape | SPHERE_FLAG | SDF_FLAG
 
     built in id order and moved into leaf order by one gather of whole rows."""
     v0, v1, v2 = _as3(tri_v0, "tri_v0"), _as3(tri_v1, "tri_v1"), _as3(tri_v2, "tri_v2")
     sph = _spheres(spheres)
-    T, S = len(v0), len(sph)
+    vox = voxels if voxels is not None else SdfVoxels.empty()
+    T, S, V = len(v0), len(sph), len(vox)
     order = np.asarray(order, dtype=np.int64)
-    if order.shape != (T + S,):
-        raise ValueError(f"order must list all {T + S} primitives, got shape {order.shape}")
-    prim = np.zeros((T + S, BLOCK_WORDS), np.uint32)
+    if order.shape != (T + S + V,):
+        raise ValueError(f"order must list all {T + S + V} primitives, got shape {order.shape}")
+    if np.any(np.asarray(vox.shape, np.uint32) >= SDF_FLAG):
+        raise ValueError("an SDF voxel's shape number must be below 2^30")
+    prim = np.zeros((T + S + V, BLOCK_WORDS), np.uint32)
     f = prim.view(np.float32)
     f[:T, 0:3], f[:T, 3:6], f[:T, 6:9] = v0, v1, v2
     if tri_ids is None:
@@ -95,9 +136,12 @@ def _leaf_order_words(tri_v0, tri_v1, tri_v2, spheres, order, tri_ids=None):
         if tri_ids.shape != (T,):
             raise ValueError(f"tri_ids must have one word per triangle ({T}), got shape {tri_ids.shape}")
         prim[:T, 9] = tri_ids
-    f[T:, 0:3] = sph[:, :3]
-    f[T:, 3] = np.abs(sph[:, 3])
-    prim[T:, 9] = np.arange(S, dtype=np.uint32) | SPHERE_FLAG
+    f[T:T + S, 0:3] = sph[:, :3]
+    f[T:T + S, 3] = np.abs(sph[:, 3])
+    prim[T:T + S, 9] = np.arange(S, dtype=np.uint32) | SPHERE_FLAG
+    f[T + S:, 0:8] = vox.corners
+    prim[T + S:, 8] = voxel_records + VOXEL_RECORD_WORDS * np.arange(V, dtype=np.uint32)
+    prim[T + S:, 9] = np.asarray(vox.shape, np.uint32) | SPHERE_FLAG | SDF_FLAG
     return prim[order]
 
 
@@ -113,6 +157,7 @@ BUILD_OPTIONS = {"traversal_cost": 2.5}
 # blob: 28.9 -> 23.4 device bytes per triangle of nodes).
 BUILD_OPTIONS_BY_WIDTH = {8: {"max_leaf_size": 6}}
 BLOCK_WORDS = 10       # words per primitive: v0.xyz, v1.xyz, v2.xyz, id
+VOXEL_RECORD_WORDS = 12   # an SDF voxel's to_voxel map, after the blocks (kernels/bvh_common.h bvh_isect_voxel)
 
 
 def bvh_leaves(bvh):
@@ -156,7 +201,7 @@ def leaf_refs(leaf_first, leaf_count):
     return (pos << ENUMS["PRIM_REF_POS_SHIFT"] | lane << 2 | (c - 1)).astype(np.uint32)
 
 
-def pack_leaf_blocks(tri_v0, tri_v1, tri_v2, spheres, order, leaf_first, leaf_count, tri_ids=None):
+def pack_leaf_blocks(tri_v0, tri_v1, tri_v2, spheres, order, leaf_first, leaf_count, tri_ids=None, voxels=None):
     """The primitive table the traversal kernels read: ``BLOCK_WORDS`` (40 bytes) per primitive, in leaf
     ``order``, as float32 rows of 4 (padded so that a 4-float load at any row start stays inside).
 
@@ -173,11 +218,17 @@ def pack_leaf_blocks(tri_v0, tri_v1, tri_v2, spheres, order, leaf_first, leaf_co
     one ``float4`` per primitive fewer.
 
     ``tri_ids`` (uint32, one per triangle id) replaces the triangles' id words; pack_scene gives the triangles'
-    :func:`leaf_refs`. Spheres keep theirs."""
-    words = _leaf_order_words(tri_v0, tri_v1, tri_v2, spheres, order, tri_ids)
-    n = len(words)
+    :func:`leaf_refs`. Spheres keep theirs.
+
+    ``voxels`` (:class:`SdfVoxels`): each voxel's row holds its corner values in rows 0..7 and in row 8 the word
+    offset of its record, ``VOXEL_RECORD_WORDS`` words after the blocks: the rows of its to_voxel map."""
+    vox = voxels if voxels is not None else SdfVoxels.empty()
+    n = len(np.asarray(order))
+    blocks = ((BLOCK_WORDS * n + BLOCK_LANES) // 4 + 1) * 4
+    words = _leaf_order_words(tri_v0, tri_v1, tri_v2, spheres, order, tri_ids, vox, blocks)
     s, c, lane = _block_of(n, leaf_first, leaf_count)
-    out = np.zeros(((BLOCK_WORDS * n + BLOCK_LANES) // 4 + 1) * 4, np.uint32)
+    out = np.zeros(blocks + VOXEL_RECORD_WORDS * len(vox), np.uint32)
     at = BLOCK_WORDS * s[:, None] + np.arange(BLOCK_WORDS)[None, :] * c[:, None] + lane[:, None]
     out[at] = words
+    out[blocks:].view(np.float32)[:] = np.asarray(vox.to_voxel, np.float32).reshape(-1)
     return out.view(np.float32).reshape(-1, 4)

@@ -67,13 +67,14 @@ ROWS: dict[str, Row] = {
         ("bsdf", "uint"),
         ("emitter", "uint"),     # NONE if the shape does not emit
         ("first", "uint"),       # emitting meshes: offset of their triangles' leaf references in the `tri_refs`
-                                 # table (NONE when not emitting); spheres: row of the spheres table
+                                 # table (NONE when not emitting); spheres: row of the spheres table;
+                                 # SDF grids: offset of their values in `grid_data`
         ("count", "uint"),       # meshes: triangle count; spheres: 1
         ("cdf", "uint"),         # emitting meshes: offset of their triangle-area CDF in the `cdf` table
         ("area", "float"),       # emitting shapes: total surface area
         ("interior", "uint"),    # the medium inside (a row of `media`; NONE: vacuum), Mitsuba's interior
         ("exterior", "uint")),   # the medium outside (on the side the normal points to)
-        union_bytes=16),
+        union_bytes=80),         # sdfgrid's map and resolution
     "Bsdf": Row(header=(("type", "uint"), ("flags", "uint"), ("pad", "uint", 2)), union_bytes=128),
     "Emitter": Row(header=(
         ("type", "uint"), ("flags", "uint"),
@@ -128,8 +129,8 @@ SCENE_TABLES: list[tuple[str, str, str]] = [
     ("media", "Medium", "one row per participating medium (shapes' interior/exterior, the camera's)"),
     ("phases", "Phase", "the media's phase functions (Medium.phase)"),
     ("volumes", "Volume", "the volumes heterogeneous media read sigma_t and albedo from"),
-    ("grid_data", "float", "gridvolumes' voxels, back to back: ((z yres + y) xres + x) channels + c from each "
-                           "volume's offset (p.gridvolume.offset)"),
+    ("grid_data", "float", "gridvolumes' voxels and SDF grids' values, back to back: ((z yres + y) xres + x) "
+                           "channels + c from each volume's offset (p.gridvolume.offset) or SDF grid's (Shape.first)"),
     ("info", "SceneInfo", "scene-wide numbers and the integrator's parameters"),
 ]
 
@@ -158,6 +159,7 @@ ENUMS: dict[str, int] = {
     # BVH encodings shared by the builders (clrender/accel) and the traversals (kernels/bvh*.h)
     "BVH_LEAF_BIT": 0x80000000,       # a node reference to a leaf
     "BVH_SPHERE_BIT": 0x80000000,     # a primitive id of an analytic sphere
+    "BVH_SDF_BIT": 0x40000000,        # with BVH_SPHERE_BIT: a voxel of an SDF grid (the other bits: its shape)
     "BVH_STACK_SIZE": 64,             # 2-wide traversal stack (the builder keeps the depth below it)
     "BVH4_STACK_SIZE": 64,            # 4-wide traversal stack (the collapse checks the tree needs no more)
     "BVH8_STACK_SIZE": 96,            # 8-wide traversal stack (likewise)

@@ -13,7 +13,7 @@ them again under its own ``to_world``.
 ```
 clrender flattens instances when the scene is read: every instance adds world-space copies of its group's shapes
 (a mesh's vertices mapped by the instance's to_world, normals by its inverse transpose; an analytic sphere's
-centre, radius and frame), sharing their BSDFs. Memory grows with the copies: a scene of many instances of a large
+centre, radius and frame; an SDF grid's to_world), sharing their BSDFs. Memory grows with the copies: a scene of many instances of a large
 group costs what the same scene written out would. As in Mitsuba, the instance maps a surface's normal as a
 covector, so a mirroring to_world keeps each surface's sides (a flattened mesh's winding is reversed to keep it);
 a group may not hold emitters, groups or instances (Mitsuba refuses them too), and a sphere's copy needs a
@@ -27,6 +27,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..scene.registry import register
+from .sdfgrid import SDFGrid
 from .shape import TRIANGLE_COORD_MAX
 from .sphere import Sphere
 from .trianglemesh import TriangleMesh
@@ -102,6 +103,10 @@ def _transformed(shape, m: np.ndarray, where):
         out.radius = shape.radius * s
         out.frame = (lin / s) @ shape.frame
         out._check_extent(shape.spec)
+        return out
+    if isinstance(shape, SDFGrid):
+        out.to_world = m @ shape.to_world
+        SDFGrid.check_to_world(out.to_world, where)
         return out
     raise SceneError(f'clrender cannot instance a <shape type="{shape.spec.type}">', where)
 
