@@ -114,11 +114,11 @@ def fixed_normals(normals) -> np.ndarray:
     """Vertex normals (V, 3) as 16-bit signed fixed point (x 32767, two's complement bits), the normals table's
     element (kernels/shapes/mesh.h decodes them): 6 bytes a vertex instead of 12, for issue 11's memory target.
     The normals are unit vectors (MeshData.transformed normalises every mesh's) or zero; a component is rounded
-    to 1/65534, so a normal turns by at most sqrt(3) / 65534 = 2.7e-5 rad. Half floats, stored here before, turned one by up to
-    4e-4 rad: the same on every vertex of a flat surface, which biased its shading by up to 1e-3 (a cosine's
-    relative error is the turn times the tangent of its angle; issue 24, Mitsuba's instanced rectangles 7e-5 off).
-    A row longer than 1 is scaled to unit length; non-finite ones become 0, which the kernel treats as no normal
-    (the face's own)."""
+    to 1/65534, so a normal turns by at most sqrt(3) / 65534 = 2.7e-5 rad. Half floats, stored here before,
+    turned one by up to 4e-4 rad: the same on every vertex of a flat surface, which biased its shading by up to
+    1e-3 (a cosine's relative error is the turn times the tangent of its angle; issue 24: Mitsuba's instanced
+    rectangles 7e-5 off). A row longer than 1 is scaled to unit length; non-finite ones become 0, which the
+    kernel treats as no normal (the face's own)."""
     n = np.asarray(normals, np.float64).reshape(-1, 3)
     n = np.where(np.isfinite(n).all(axis=1, keepdims=True), n, 0.0)
     length = np.linalg.norm(n, axis=1, keepdims=True)

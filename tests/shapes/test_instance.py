@@ -1,8 +1,8 @@
 """Mitsuba 3's instance of a shapegroup (clrender/shapes/instance.py: flattened into world-space copies when the scene
 is read): a rendered furnace of an instanced cube (shared set-up: shape_common.py), and an instanced flat rectangle
-whose shading matches its analytic value to 1e-4 (issue 24: the precision of stored vertex normals). An instance holds no emitter
-(refused, as in Mitsuba), so nothing of it is sampled: the coverage test lists that as its gap. Instancing's copies
-and errors are tested in tests/test_mitsuba_shapes.py."""
+whose shading matches its analytic value to 1e-4 (issue 24: the precision of stored vertex normals). An instance
+holds no emitter (refused, as in Mitsuba), so nothing of it is sampled: the coverage test lists that as its gap.
+Instancing's copies and errors are tested in tests/test_mitsuba_shapes.py."""
 import numpy as np
 import pytest
 
