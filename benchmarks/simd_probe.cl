@@ -84,12 +84,10 @@ static inline float8 g8(__global const float* p, uint8 i) {
 static inline uint8 g8u(__global const uint* p, uint8 i) {
     return (uint8)(p[i.s0], p[i.s1], p[i.s2], p[i.s3], p[i.s4], p[i.s5], p[i.s6], p[i.s7]);
 }
-/* half floats (mesh_half) in lanes */
+/* the normals table's 16-bit fixed point (mesh_snorm16) in lanes */
 static inline float8 h8(__global const ushort* p, uint8 i) {
-    uint8 h = (uint8)(p[i.s0], p[i.s1], p[i.s2], p[i.s3], p[i.s4], p[i.s5], p[i.s6], p[i.s7]);
-    uint8 e = (h >> 10) & 31u, m = h & 1023u;
-    float8 mag = e != 0u ? as_float8(((e + 112u) << 23) | (m << 13)) : convert_float8(m) * 5.9604644775390625e-8f;
-    return (h & 0x8000u) != 0u ? -mag : mag;
+    int8 h = convert_int8((uint8)(p[i.s0], p[i.s1], p[i.s2], p[i.s3], p[i.s4], p[i.s5], p[i.s6], p[i.s7]));
+    return convert_float8(h - ((h & 0x8000) << 1)) * (1.0f / 32767.0f);
 }
 
 #define LANE_SET3(V, l, f3) do { (V##x).a[l] = (f3).x; (V##y).a[l] = (f3).y; (V##z).a[l] = (f3).z; } while (0)

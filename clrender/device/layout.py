@@ -109,8 +109,8 @@ SCENE_TABLES: list[tuple[str, str, str]] = [
     ("nodes", "float4", "BVH nodes (2-, 4- or 8-wide layout, see BVH_WIDTH)"),
     ("prims", "float4", "primitives in BVH leaf order, 10 words each in blocks of up to 4 (triangles' vertices, "
                         "spheres), clrender/accel/primitives.py pack_leaf_blocks; the only copy of the vertices"),
-    ("normals", "ushort", "per vertex, x y z as IEEE half floats (meshes with SHAPE_HAS_NORMALS; "
-                          "clrender/shapes/trianglemesh.py half_normals)"),
+    ("normals", "ushort", "per vertex, x y z as 16-bit signed fixed point over 32767 (meshes with "
+                          "SHAPE_HAS_NORMALS; clrender/shapes/trianglemesh.py fixed_normals)"),
     ("uvs", "float2", "per vertex (meshes with SHAPE_HAS_UVS)"),
     ("tri_index", "uint", "per leaf-order position (Hit.prim >> PRIM_REF_POS_SHIFT): the triangle's three vertex "
                           "indices (NONE at a sphere's position)"),

@@ -36,7 +36,7 @@ class TriangleMesh(Shape):
             flags |= dispatch.flag_defines()["SHAPE_HAS_NORMALS"]
             normals = m.normals
         # one row per vertex either way: a triangle's vertex indices address both
-        if ctx.add_table("normals", "ushort", half_normals(normals)) != 3 * base:
+        if ctx.add_table("normals", "ushort", fixed_normals(normals)) != 3 * base:
             raise AssertionError("the normals table is out of step with the mesh vertices")
         if m.uvs is not None:
             flags |= dispatch.flag_defines()["SHAPE_HAS_UVS"]
@@ -110,17 +110,20 @@ class TriangleMesh(Shape):
             self.mesh, self.bsdf = bake(self.mesh, self.bsdf, filename or name)
 
 
-def half_normals(normals) -> np.ndarray:
-    """Vertex normals (V, 3) as the bits of IEEE half floats, the normals table's element (kernels/shapes/mesh.h
-    decodes them): 6 bytes a vertex instead of 12, for issue 11's memory target. A half keeps 11 significant bits,
-    so the interpolated shading normal turns by at most about 5e-4 rad, and a normal's length (which weights it in
-    the interpolation, as in Nori and Mitsuba) is kept to 1e-3. A normal too long for a half (> 65504) is scaled
-    down as a whole; non-finite ones become 0, which the kernel treats as no normal (the face's own)."""
-    n = np.asarray(normals, np.float32).reshape(-1, 3)
-    n = np.where(np.isfinite(n).all(axis=1, keepdims=True), n, np.float32(0))
-    big = np.abs(n).max(axis=1, keepdims=True)
-    n = np.where(big > 60000.0, n * (np.float32(60000.0) / np.maximum(big, np.float32(1))), n)
-    return n.astype(np.float16).view(np.uint16)
+def fixed_normals(normals) -> np.ndarray:
+    """Vertex normals (V, 3) as 16-bit signed fixed point (x 32767, two's complement bits), the normals table's
+    element (kernels/shapes/mesh.h decodes them): 6 bytes a vertex instead of 12, for issue 11's memory target.
+    The normals are unit vectors (MeshData.transformed normalises every mesh's) or zero; a component is rounded
+    to 1/65534, so a normal turns by at most sqrt(3) / 65534 = 2.7e-5 rad. Half floats, stored here before,
+    turned one by up to 4e-4 rad: the same on every vertex of a flat surface, which biased its shading by up to
+    1e-3 (a cosine's relative error is the turn times the tangent of its angle; issue 24: Mitsuba's instanced
+    rectangles 7e-5 off). A row longer than 1 is scaled to unit length; non-finite ones become 0, which the
+    kernel treats as no normal (the face's own)."""
+    n = np.asarray(normals, np.float64).reshape(-1, 3)
+    n = np.where(np.isfinite(n).all(axis=1, keepdims=True), n, 0.0)
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    n = np.where(length > 1.0, n / np.maximum(length, 1.0), n)
+    return np.rint(np.clip(n, -1.0, 1.0) * 32767.0).astype(np.int16).view(np.uint16)
 
 
 def _corner_terms(p: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

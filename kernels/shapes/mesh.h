@@ -34,12 +34,10 @@ INLINE MeshTriangle mesh_triangle(const SceneData* sd, uint ref) {
     return t;
 }
 
-/* An IEEE half float (bits h) as a float, without vload_half (a call on PoCL): normal numbers, subnormals and
-   zeros, which is all half_normals writes. */
-INLINE float mesh_half(uint h) {
-    uint e = (h >> 10) & 31u, m = h & 1023u;
-    float mag = e != 0u ? as_float(((e + 112u) << 23) | (m << 13)) : (float)m * 5.9604644775390625e-8f;
-    return (h & 0x8000u) ? -mag : mag;
+/* A component of a stored normal: 16-bit signed fixed point (bits h, two's complement) over 32767 (trianglemesh.py
+   fixed_normals), decoded with integer arithmetic only (no short conversion of out-of-range values). */
+INLINE float mesh_snorm16(uint h) {
+    return (float)((int)h - (int)((h & 0x8000u) << 1)) * (1.0f / 32767.0f);
 }
 
 /* p0 w0 + p1 w1 + p2 w2: vertex values interpolated with barycentric weights, rounded as that expression in float3
@@ -48,10 +46,10 @@ INLINE vec3 mesh_bary(vec3 p0, vec3 p1, vec3 p2, float w0, float w1, float w2) {
     return vmad(p2, w2, vmad(p0, w0, vscale(p1, w1)));
 }
 
-/* Per-vertex normal i (3 halves a row: the table has no padding). */
+/* Per-vertex normal i (3 16-bit components a row: the table has no padding). */
 INLINE vec3 mesh_normal(const SceneData* sd, uint i) {
     __global const ushort* n = sd->normals + 3u * i;
-    return v3(mesh_half(n[0]), mesh_half(n[1]), mesh_half(n[2]));
+    return v3(mesh_snorm16(n[0]), mesh_snorm16(n[1]), mesh_snorm16(n[2]));
 }
 
 /* The shading normal at barycentrics (b0, b1, b2) of triangle t: interpolated vertex normals, or ng. */
