@@ -189,7 +189,11 @@ BVH_INLINE bool bvh_isect_voxel(__global const float* words, __global const floa
     float dx = m[0] * d.x + m[1] * d.y + m[2] * d.z;
     float dy = m[4] * d.x + m[5] * d.y + m[6] * d.z;
     float dz = m[8] * d.x + m[9] * d.y + m[10] * d.z;
-    float ix = bvh_safe_rcp(dx), iy = bvh_safe_rcp(dy), iz = bvh_safe_rcp(dz);
+    /* an axis the ray does not move along: any huge factor (its sign does not matter, both planes' products
+       then share the sign of their distance) */
+    float ix = (dx > 1e-30f || dx < -1e-30f) ? 1.0f / dx : 1e30f;
+    float iy = (dy > 1e-30f || dy < -1e-30f) ? 1.0f / dy : 1e30f;
+    float iz = (dz > 1e-30f || dz < -1e-30f) ? 1.0f / dz : 1e30f;
     const float lo = -SDF_VOXEL_PAD, hi = 1.0f + SDF_VOXEL_PAD;
     float x0 = (lo - ox) * ix, x1 = (hi - ox) * ix, y0 = (lo - oy) * iy, y1 = (hi - oy) * iy;
     float z0 = (lo - oz) * iz, z1 = (hi - oz) * iz;
@@ -220,7 +224,7 @@ BVH_INLINE bool bvh_isect_voxel(__global const float* words, __global const floa
         float disc = qb * qb - 4.0f * qa * qc;
         if (disc > 0.0f) {
             float sq = sqrt(disc);
-            float qq = -0.5f * (qb + (qb < 0.0f ? -sq : sq));
+            float qq = qb >= 0.0f ? -0.5f * (qb + sq) : -0.5f * (qb - sq);
             ra = qq / qa;
             rb = qq != 0.0f ? qc / qq : INFINITY;
         }

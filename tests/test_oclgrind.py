@@ -27,6 +27,20 @@ SIMPLE = """<scene>
 </scene>
 """ % (SCENES / "largemesh" / "meshes" / "ground.obj")
 
+SDFGRID = """<scene version="3.0.0">
+  <integrator type="path"><integer name="max_depth" value="3"/></integrator>
+  <sensor type="perspective"><transform name="to_world"><lookat origin="0.5, -2, 1.5" target="0.5, 0.5, 0.5"
+    up="0, 0, 1"/></transform><film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/>
+    </film></sensor>
+  <emitter type="constant"/>
+  <shape type="sdfgrid"><string name="filename" value="g.vol"/></shape>
+  <shape type="shapegroup" id="g"><shape type="sdfgrid"><string name="filename" value="g.vol"/>
+    <string name="normals" value="analytic"/></shape></shape>
+  <shape type="instance"><ref id="g"/><transform name="to_world"><rotate z="1" angle="40"/><translate x="0.7"/>
+    </transform></shape>
+</scene>
+"""
+
 slow = pytest.mark.slow
 CASES = [
     ("cornell/cornell_normals.xml", None),
@@ -45,6 +59,7 @@ CASES = [
     pytest.param("sun/sun_path_mis.xml", None, marks=slow),            # distant disk
     pytest.param("furnace/furnace_env_path_mis.xml", None, marks=slow),  # constant environment
     pytest.param("grid", None, marks=slow),  # a deep BVH
+    pytest.param("sdfgrid", None, marks=slow),  # SDF voxels in the BVH, their normals from the grid
     ("simple", None),
 ]
 
@@ -92,6 +107,14 @@ def test_kernels_are_clean_under_oclgrind(tmp_path, scene, integrator):
         path.write_text(SIMPLE.replace('type="simple"', 'type="normals"').replace(
             str(SCENES / "largemesh" / "meshes" / "ground.obj"), "grid.ply").replace('type="obj"', 'type="ply"')
             .replace('<point name="position" value="0, 0.5, 2"/><color name="energy" value="50"/>', ""))
+    elif scene == "sdfgrid":
+        from shapes.test_sdfgrid import ball_and_bar
+
+        from clrender.volumes.gridvolume import write_vol
+
+        write_vol(tmp_path / "g.vol", ball_and_bar())
+        path = tmp_path / "sdf.xml"
+        path.write_text(SDFGRID)
     proc, report = _run_under_oclgrind(tmp_path, [str(path), integrator or ""])
     assert proc.returncode == 0, proc.stderr
     assert "rendered 2" in proc.stdout
