@@ -223,7 +223,8 @@ def pack_scene(scene, bvh_width: int = DEFAULT_BVH_WIDTH, bvh_options: dict | No
     filter_cdf = with_guide(filter_cdf)     # + the guide that render.cl's filter_sample_guided reads
     emitters = _rows_array("Emitter", emitter_rows)
     stats = {
-        "triangles": geo.n_tris, "spheres": geo.n_spheres, "shapes": len(shapes),
+        "triangles": geo.n_tris, "spheres": geo.n_spheres, "sdf_voxels": len(geo.lo) - geo.n_tris - geo.n_spheres,
+        "shapes": len(shapes),
         "emitters": len(emitter_rows), "bvh_nodes": int(geo.node_count), "bvh_depth": int(geo.depth),
         "bvh_width": geo.width,
         "bvh_build_seconds": float(geo.seconds), "pack_seconds": float(time.perf_counter() - t0),

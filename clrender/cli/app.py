@@ -53,7 +53,8 @@ def cmd_render(args) -> int:
         return 2
     args.ctrl_c.check()
     st = renderer.buffers.stats
-    print(f"clrender: {args.scene}: {st['triangles']} triangles, {st['spheres']} spheres, "
+    voxels = f"{st['sdf_voxels']} SDF voxels, " if st.get("sdf_voxels") else ""
+    print(f"clrender: {args.scene}: {st['triangles']} triangles, {st['spheres']} spheres, {voxels}"
           f"{st['emitters']} emitters; BVH {st['bvh_build_seconds']:.2f} s; load {time.perf_counter() - t0:.2f} s; "
           f"device {renderer.device_name}", file=sys.stderr)
     progress = not args.quiet and (args.progress or sys.stderr.isatty())
