@@ -49,7 +49,9 @@ Per scene it reports:
   `max_smooth_angle`, ...; clrender uses or ignores them with a warning, see README's "Older files"),
   `(Mitsuba: ldrfilm)` (0.x's ldrfilm as an hdrfilm: both compare linear images), `(Mitsuba: sigma_t,albedo)` (a 0.x
   homogeneous medium's `sigmaA`/`sigmaS` as the same medium's `sigma_t`/`albedo`, as clrender reads them; dropped,
-  Mitsuba would render its default medium). Where both refuse a property
+  Mitsuba would render its default medium), `(Mitsuba: +path)` (a scene without an `<integrator>`: Mitsuba 3.9.1
+  reads it but will not render it, clrender renders Mitsuba's documented default `path`; e.g. mitsuba-blender's
+  tests/res/scenes). Where Mitsuba still cannot render a scene, `agrees` says why. Where both refuse a property
   (a 3.x file with 0.x's `high_quality_edges`: Bitterli's Cornell boxes), `--drop NAME` leaves it out of both
   copies, marked `(both: -N)`;
 - clrender's warnings (a ptracer rendered by path, 0.x properties ignored, degenerate triangles dropped): the first
@@ -154,6 +156,9 @@ def resized(text, res, keep_sampler, spp=16, outer=None):
     w, h = w or 768, h or 576       # Mitsuba's hdrfilm defaults
     s = res / max(w, h)
     nw, nh = max(1, round(w * s)), max(1, round(h * s))
+    if "<film" not in text:     # Mitsuba's default film (768 x 576), scaled like any other
+        text = re.sub(r"(<sensor\b[^>]*?)(/?)>", lambda m: m.group(1) + '><film type="hdrfilm"/>' +
+                      ("</sensor>" if m.group(2) else ""), text, count=1)
     for name, val in (("width", nw), ("height", nh)):
         pat = rf'(<integer\s+name="{name}"\s+value=")[^"]+("\s*/>)'
         if re.search(pat, text):
@@ -161,7 +166,19 @@ def resized(text, res, keep_sampler, spp=16, outer=None):
         else:
             text = re.sub(r"(<film\b[^>]*?)(/?)>", lambda m: m.group(1) + ">" +
                           f'<integer name="{name}" value="{val}"/>' + ("</film>" if m.group(2) else ""), text, count=1)
+    # a crop window scaled with the film, kept inside it (mitsuba-blender's film_hdrfilm_crop)
+    crop = {k: size(f"crop_{k}") for k in ("offset_x", "offset_y", "width", "height")}
+    ox, oy = (min(round((crop[f"offset_{a}"] or 0) * s), n - 1) for a, n in (("x", nw), ("y", nh)))
+    cw, ch = (max(1, min(round((crop[k] or 0) * s), n - o)) for k, n, o in (("width", nw, ox), ("height", nh, oy)))
+    for name, val in (("offset_x", ox), ("offset_y", oy), ("width", cw), ("height", ch)):
+        if crop[name] is not None:
+            text = re.sub(rf'(<integer\s+name="crop_{name}"\s+value=")[^"]+("\s*/>)', rf"\g<1>{val}\g<2>", text)
     if not keep_sampler:
+        # the independent sampler takes only sample_count and seed: another sampler's own properties (`jitter`,
+        # `scramble_seed`, ...) go with it
+        def independent(m):
+            return re.sub(r'\s*<\w+\s+name="(?!sample_count"|seed")[^"]+"\s+value="[^"]*"\s*/>', "", m.group(0))
+        text = re.sub(r'<sampler\b[^>]*?/>|<sampler\b.*?</sampler>', independent, text, flags=re.S)
         text = re.sub(r'<sampler\s+type="[^"]+"', '<sampler type="independent"', text)
     # a sample count given by the caller (Mitsuba's documentation scenes leave $spp to their render script)
     text = re.sub(r'(<integer\s+name="sample_count"\s+value=")\$\w+(")', rf"\g<1>{spp}\g<2>", text)
@@ -396,6 +413,13 @@ def _run_scene(path, args, mi):
                 mtext, what = fixed
                 needed.append(what)
                 tmp_mi.write_text(mtext)
+        if msc is not None and msc.integrator() is None:
+            # Mitsuba 3.9.1 reads a scene without an <integrator> but refuses to render it; clrender renders its
+            # default, Mitsuba's documented one: Mitsuba's copy gets that `path`
+            mtext = re.sub(r"(<scene\b[^>]*>)", r'\1<integrator type="path"/>', mtext, count=1)
+            tmp_mi.write_text(mtext)
+            msc = mi.load_file(str(tmp_mi))
+            needed.append("+path")
         row["mitsuba_needed"] = needed
         c, tc = None, None
         if scene is not None:
@@ -412,7 +436,11 @@ def _run_scene(path, args, mi):
                 row["rendered"] = "no: " + first_line(e)
         if msc is not None and c is not None:     # (nothing to compare with where clrender stopped)
             t0 = time.perf_counter()
-            m = [np.array(mi.render(msc, spp=args.spp, seed=s), np.float64) for s in range(1, 2 * args.pairs + 1)]
+            try:
+                m = [np.array(mi.render(msc, spp=args.spp, seed=s), np.float64) for s in range(1, 2 * args.pairs + 1)]
+            except Exception as e:      # the harness reports, never stops
+                row["agrees"] = "no: Mitsuba did not render it: " + first_line(e)
+                return row
             tm = time.perf_counter() - t0
             row["mitsuba_seconds"] = tm
             if m[0].ndim == 2:
