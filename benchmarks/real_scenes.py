@@ -229,9 +229,9 @@ def for_mitsuba(text, error):
         if names:
             def drop(m):
                 return "" if camel_to_snake(m.group(1)) in names else m.group(0)
-            text, n = re.subn(r'<\w+\s+name="([^"]+)"\s+value="[^"]*"\s*/>', drop, text)
-            if n:
-                return text, "-" + ",".join(sorted(names))
+            dropped = re.sub(r'<\w+\s+name="([^"]+)"\s+value="[^"]*"\s*/>', drop, text)
+            if dropped != text:     # (subn counts every match, the ones kept too)
+                return dropped, "-" + ",".join(sorted(names))
     return None
 
 
