@@ -133,7 +133,8 @@ def test_absorbing_slab_is_beer_lambert(tmp_path, kind, camera_inside):
 @pytest.mark.parametrize("phase,camera_inside,sample_emitters", [
     ('<phase type="isotropic"/>', False, True), ('<phase type="hg"><float name="g" value="0.7"/></phase>', True, True),
     ('<phase type="hg"><float name="g" value="-0.5"/></phase>', False, True),
-    ('<phase type="isotropic"/>', False, False), ('<phase type="hg"><float name="g" value="0.7"/></phase>', True, False)])
+    ('<phase type="isotropic"/>', False, False),
+    ('<phase type="hg"><float name="g" value="0.7"/></phase>', True, False)])
 def test_furnace_radiance_is_the_emission(tmp_path, phase, camera_inside, sample_emitters):
     """A non-absorbing medium (albedo 1, colour extinction) in a constant environment of radiance 1 behind a null
     boundary: every pixel is 1, whatever the phase function (per-pixel z-test), seen from outside or inside. Also
