@@ -285,9 +285,14 @@ def include_dirs(text, folder):
     return [folder / m for m in re.findall(r'<path\s+value="([^"]+)"\s*/>', text)]
 
 
-def first_line(e):
+def first_line(e, names=()):
+    """The error's first line, shortened to 160 characters after each (long, short) of `names` is replaced (the
+    harness's copies by the scene's name, the scene's folder left out: the reason, not the path, must fit)."""
     s = str(e).strip().splitlines()
-    return (s[0] if s else type(e).__name__)[:160]
+    s = s[0] if s else type(e).__name__
+    for long, short in names:
+        s = s.replace(long, short)
+    return s[:160]
 
 
 def block_stats(a, b):
@@ -385,6 +390,8 @@ def _run_scene(path, args, mi):
     row["size"] = [w, h]
     tmp = path.parent / f"{PREFIX}{path.stem}.xml"
     tmp_mi = path.parent / f"{PREFIX}{path.stem}_mitsuba.xml"
+    names = [(str(tmp_mi), path.name), (str(tmp), path.name), (tmp_mi.name, path.name), (tmp.name, path.name),
+             (str(path.parent) + os.sep, "")]
     tmp.write_text(text)
     try:
         try:
@@ -394,7 +401,7 @@ def _run_scene(path, args, mi):
         except BaseException as e:     # SceneError and anything else: the harness reports, never stops
             if isinstance(e, KeyboardInterrupt):
                 raise
-            row["read"] = "no: " + first_line(e).replace(str(tmp), path.name).replace(tmp.name, path.name)
+            row["read"] = "no: " + first_line(e, names)
             scene = None
         # Mitsuba reads clrender's copy where it can, else a copy changed as little as it takes (for_mitsuba),
         # and the row says what it needed
@@ -405,8 +412,7 @@ def _run_scene(path, args, mi):
                 row["mitsuba_read"] = "yes"
                 break
             except Exception as e:
-                row["mitsuba_read"] = "no: " + first_line(e).replace(str(tmp_mi), path.name).replace(
-                    str(tmp), path.name)
+                row["mitsuba_read"] = "no: " + first_line(e, names)
                 fixed = for_mitsuba(mtext, str(e))
                 if fixed is None:
                     break
@@ -433,13 +439,13 @@ def _run_scene(path, args, mi):
             except BaseException as e:
                 if isinstance(e, KeyboardInterrupt):
                     raise
-                row["rendered"] = "no: " + first_line(e)
+                row["rendered"] = "no: " + first_line(e, names)
         if msc is not None and c is not None:     # (nothing to compare with where clrender stopped)
             t0 = time.perf_counter()
             try:
                 m = [np.array(mi.render(msc, spp=args.spp, seed=s), np.float64) for s in range(1, 2 * args.pairs + 1)]
             except Exception as e:      # the harness reports, never stops
-                row["agrees"] = "no: Mitsuba did not render it: " + first_line(e)
+                row["agrees"] = "no: Mitsuba did not render it: " + first_line(e, names)
                 return row
             tm = time.perf_counter() - t0
             row["mitsuba_seconds"] = tm
