@@ -19,6 +19,11 @@ outside the work tree and name their folders. Every `*.xml` under a folder whose
   files: area, point and environment lights over planes and a room; they look for their meshes in
   scenes/evaluation/meshes and mitsuba/meshes and for their maps in scenes/evaluation/textures, while the
   repository keeps some in scenes/meshes and scenes/textures: put them there).
+- Mitsuba's tutorials and exporter tests: mitsuba-renderer/mitsuba-tutorials (scenes/), mitsuba-renderer/mitsuba-blender
+  (tests/: scenes without an integrator, see below).
+- Users' own scenes: sapo17/BachelorThesis (scenes/: Mitsuba 3 files of a material-optimisation thesis; some give
+  Windows paths from the repository's root, which neither renderer finds on Linux), poloclub/revamp (scenes/: files
+  whose purchased meshes the repository does not hold: located errors only).
 - Research scenes, e.g. VElysianP/mitsuba_scenes (Mitsuba 0.5 files from BSDF and luminaire papers; the ones that
   ask for `path`: layered_kitchen, layered_shoes, leaves_status, shelf_conductor; the others ask for `bdpt` or
   `photonmapper`, which neither Mitsuba 3 nor clrender has).
