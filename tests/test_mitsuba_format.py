@@ -128,23 +128,29 @@ def test_reference_to_an_object_declared_later():
 def test_an_unused_declaration_of_a_type_clrender_lacks_is_left_out(tmp_path, caplog):
     """Mitsuba 3 builds every top-level declaration and renders a scene as if an unused one were not there (the
     Mitsuba tutorials' lego scene declares a diffuse BSDF with a `volume` texture that no shape uses): clrender
-    leaves such a one out with a warning at its line; referenced, the type it lacks is the located error."""
+    leaves such a one out with a warning at its line; referenced, the type it lacks is the located error, and so is
+    a type that Mitsuba does not have either, used or not."""
     from clrender import load_scene
 
     unused = ('<bsdf type="diffuse" id="grid">\n<texture type="volume" name="reflectance">'
               '<volume type="constvolume" name="volume"><rgb name="value" value="0.2"/></volume></texture></bsdf>\n'
-              '<texture type="no_such_texture" id="t"/>\n')
+              '<phase type="rayleigh" id="t"/>\n')
     (tmp_path / "s.xml").write_text(f'{HEAD}{SENSOR}\n{unused}<bsdf type="diffuse" id="w"/>'
                                     f'<shape type="cube"><ref id="w"/></shape></scene>')
     with caplog.at_level(logging.WARNING, logger="clrender"):
         scene = load_scene(tmp_path / "s.xml")
     assert len(scene.shapes) == 1 and scene.shapes[0].bsdf.albedo.tolist() == [0.5] * 3
     assert 's.xml:2:1: <bsdf type="diffuse"> holds <texture type="volume">' in caplog.text
-    assert 's.xml:4:1: <texture type="no_such_texture"> is a type clrender lacks' in caplog.text
+    assert 's.xml:4:1: <phase type="rayleigh"> is a type clrender lacks' in caplog.text
     (tmp_path / "s.xml").write_text(f'{HEAD}{SENSOR}\n{unused}<shape type="cube"><ref id="grid"/></shape></scene>')
     with pytest.raises(SceneError) as e:
         load_scene(tmp_path / "s.xml")
     assert "unknown texture type 'volume'" in str(e.value) and e.value.location.line == 3
+    (tmp_path / "s.xml").write_text(f'{HEAD}{SENSOR}\n<texture type="no_such_texture" id="t"/>'
+                                    f'<shape type="cube"/></scene>')
+    with pytest.raises(SceneError, match="unknown texture type 'no_such_texture'") as e:
+        load_scene(tmp_path / "s.xml")
+    assert e.value.location.line == 2
 
 
 @pytest.mark.parametrize("refs, expected", [('<ref id="s"/><ref id="f"/>', (7, 5, 3, "box")),

@@ -509,14 +509,26 @@ def _resolve_forward(state: _State, root: PluginSpec) -> None:
 
 #: what a scene declares at its top level only for refs to use: referenced nowhere, it cannot change the image
 _DECLARATIONS = ("bsdf", "texture", "medium", "volume", "phase")
+#: Mitsuba 3.9.1's plugins of those kinds (each checked with its PluginManager.plugin_type): a type outside these is
+#: an error in Mitsuba too, used or not
+_MITSUBA_TYPES = {
+    "bsdf": ("blendbsdf", "bumpmap", "circular", "conductor", "dielectric", "diffuse", "hair", "mask", "measured",
+             "measured_polarized", "normalmap", "null", "plastic", "polarizer", "pplastic", "principled",
+             "principledthin", "retarder", "roughconductor", "roughdielectric", "roughplastic", "thindielectric",
+             "twosided"),
+    "texture": ("bitmap", "checkerboard", "mesh_attribute", "volume"),
+    "volume": ("constvolume", "gridvolume"),
+    "phase": ("blendphase", "hg", "isotropic", "rayleigh", "sggx", "tabphase"),
+    "medium": ("heterogeneous", "homogeneous"),
+}
 
 
 def leave_out_unbuildable_unused(root: PluginSpec) -> None:
     """Leave out, with a warning, each object declared at the scene's top level (a bsdf, texture, medium, volume or
-    phase), referenced nowhere, that holds a plugin type clrender lacks: Mitsuba 3 builds it and renders the scene
-    as if it were not there (the Mitsuba tutorials' lego scene declares a `diffuse` with a `volume` texture that no
-    shape uses). One that is referenced, and any other error in an unused one, stays an error. Called by the loader
-    once every plugin is registered."""
+    phase), referenced nowhere, that holds a Mitsuba 3 plugin type clrender lacks: Mitsuba builds it and renders the
+    scene as if it were not there (the Mitsuba tutorials' lego scene declares a `diffuse` with a `volume` texture
+    that no shape uses). One that is referenced, a type Mitsuba does not have either (a typo), and any other error
+    in an unused one stay errors. Called by the loader once every plugin is registered."""
     from .registry import registered
 
     used = {id(c.children) for s in root.walk() for i, c in enumerate(s.children) if i in s.refs}
@@ -525,6 +537,8 @@ def leave_out_unbuildable_unused(root: PluginSpec) -> None:
         lacking = None
         if c.tag in _DECLARATIONS and i not in root.refs and id(c.children) not in used:
             lacking = next((d for d in c.walk() if d.type not in registered(d.tag, "mitsuba")), None)
+        if lacking is not None and lacking.type not in _MITSUBA_TYPES.get(lacking.tag, ()):
+            lacking = None      # Mitsuba refuses it too: the error below says so
         if lacking is None:
             if i in root.refs:
                 refs[len(keep)] = root.refs[i]
