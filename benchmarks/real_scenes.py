@@ -19,6 +19,11 @@ outside the work tree and name their folders. Every `*.xml` under a folder whose
   files: area, point and environment lights over planes and a room; they look for their meshes in
   scenes/evaluation/meshes and mitsuba/meshes and for their maps in scenes/evaluation/textures, while the
   repository keeps some in scenes/meshes and scenes/textures: put them there).
+- Mitsuba's tutorials and exporter tests: mitsuba-renderer/mitsuba-tutorials (scenes/), mitsuba-renderer/mitsuba-blender
+  (tests/: scenes without an integrator, see below).
+- Users' own scenes: sapo17/BachelorThesis (scenes/: Mitsuba 3 files of a material-optimisation thesis; some give
+  Windows paths from the repository's root, which neither renderer finds on Linux), poloclub/revamp (scenes/: files
+  whose purchased meshes the repository does not hold: located errors only).
 - Research scenes, e.g. VElysianP/mitsuba_scenes (Mitsuba 0.5 files from BSDF and luminaire papers; the ones that
   ask for `path`: layered_kitchen, layered_shoes, leaves_status, shelf_conductor; the others ask for `bdpt` or
   `photonmapper`, which neither Mitsuba 3 nor clrender has).
@@ -49,7 +54,9 @@ Per scene it reports:
   `max_smooth_angle`, ...; clrender uses or ignores them with a warning, see README's "Older files"),
   `(Mitsuba: ldrfilm)` (0.x's ldrfilm as an hdrfilm: both compare linear images), `(Mitsuba: sigma_t,albedo)` (a 0.x
   homogeneous medium's `sigmaA`/`sigmaS` as the same medium's `sigma_t`/`albedo`, as clrender reads them; dropped,
-  Mitsuba would render its default medium). Where both refuse a property
+  Mitsuba would render its default medium), `(Mitsuba: +path)` (a scene without an `<integrator>`: Mitsuba 3.9.1
+  reads it but will not render it, clrender renders Mitsuba's documented default `path`; e.g. mitsuba-blender's
+  tests/res/scenes). Where Mitsuba still cannot render a scene, `agrees` says why. Where both refuse a property
   (a 3.x file with 0.x's `high_quality_edges`: Bitterli's Cornell boxes), `--drop NAME` leaves it out of both
   copies, marked `(both: -N)`;
 - clrender's warnings (a ptracer rendered by path, 0.x properties ignored, degenerate triangles dropped): the first
@@ -154,6 +161,9 @@ def resized(text, res, keep_sampler, spp=16, outer=None):
     w, h = w or 768, h or 576       # Mitsuba's hdrfilm defaults
     s = res / max(w, h)
     nw, nh = max(1, round(w * s)), max(1, round(h * s))
+    if "<film" not in text:     # Mitsuba's default film (768 x 576), scaled like any other
+        text = re.sub(r"(<sensor\b[^>]*?)(/?)>", lambda m: m.group(1) + '><film type="hdrfilm"/>' +
+                      ("</sensor>" if m.group(2) else ""), text, count=1)
     for name, val in (("width", nw), ("height", nh)):
         pat = rf'(<integer\s+name="{name}"\s+value=")[^"]+("\s*/>)'
         if re.search(pat, text):
@@ -161,7 +171,19 @@ def resized(text, res, keep_sampler, spp=16, outer=None):
         else:
             text = re.sub(r"(<film\b[^>]*?)(/?)>", lambda m: m.group(1) + ">" +
                           f'<integer name="{name}" value="{val}"/>' + ("</film>" if m.group(2) else ""), text, count=1)
+    # a crop window scaled with the film, kept inside it (mitsuba-blender's film_hdrfilm_crop)
+    crop = {k: size(f"crop_{k}") for k in ("offset_x", "offset_y", "width", "height")}
+    ox, oy = (min(round((crop[f"offset_{a}"] or 0) * s), n - 1) for a, n in (("x", nw), ("y", nh)))
+    cw, ch = (max(1, min(round((crop[k] or 0) * s), n - o)) for k, n, o in (("width", nw, ox), ("height", nh, oy)))
+    for name, val in (("offset_x", ox), ("offset_y", oy), ("width", cw), ("height", ch)):
+        if crop[name] is not None:
+            text = re.sub(rf'(<integer\s+name="crop_{name}"\s+value=")[^"]+("\s*/>)', rf"\g<1>{val}\g<2>", text)
     if not keep_sampler:
+        # the independent sampler takes only sample_count and seed: another sampler's own properties (`jitter`,
+        # `scramble_seed`, ...) go with it
+        def independent(m):
+            return re.sub(r'\s*<\w+\s+name="(?!sample_count"|seed")[^"]+"\s+value="[^"]*"\s*/>', "", m.group(0))
+        text = re.sub(r'<sampler\b[^>]*?/>|<sampler\b.*?</sampler>', independent, text, flags=re.S)
         text = re.sub(r'<sampler\s+type="[^"]+"', '<sampler type="independent"', text)
     # a sample count given by the caller (Mitsuba's documentation scenes leave $spp to their render script)
     text = re.sub(r'(<integer\s+name="sample_count"\s+value=")\$\w+(")', rf"\g<1>{spp}\g<2>", text)
@@ -212,9 +234,9 @@ def for_mitsuba(text, error):
         if names:
             def drop(m):
                 return "" if camel_to_snake(m.group(1)) in names else m.group(0)
-            text, n = re.subn(r'<\w+\s+name="([^"]+)"\s+value="[^"]*"\s*/>', drop, text)
-            if n:
-                return text, "-" + ",".join(sorted(names))
+            dropped = re.sub(r'<\w+\s+name="([^"]+)"\s+value="[^"]*"\s*/>', drop, text)
+            if dropped != text:     # (subn counts every match, the ones kept too)
+                return dropped, "-" + ",".join(sorted(names))
     return None
 
 
@@ -268,9 +290,14 @@ def include_dirs(text, folder):
     return [folder / m for m in re.findall(r'<path\s+value="([^"]+)"\s*/>', text)]
 
 
-def first_line(e):
+def first_line(e, names=()):
+    """The error's first line, shortened to 160 characters after each (long, short) of `names` is replaced (the
+    harness's copies by the scene's name, the scene's folder left out: the reason, not the path, must fit)."""
     s = str(e).strip().splitlines()
-    return (s[0] if s else type(e).__name__)[:160]
+    s = s[0] if s else type(e).__name__
+    for long, short in names:
+        s = s.replace(long, short)
+    return s[:160]
 
 
 def block_stats(a, b):
@@ -368,6 +395,8 @@ def _run_scene(path, args, mi):
     row["size"] = [w, h]
     tmp = path.parent / f"{PREFIX}{path.stem}.xml"
     tmp_mi = path.parent / f"{PREFIX}{path.stem}_mitsuba.xml"
+    names = [(str(tmp_mi), path.name), (str(tmp), path.name), (tmp_mi.name, path.name), (tmp.name, path.name),
+             (str(path.parent) + os.sep, "")]
     tmp.write_text(text)
     try:
         try:
@@ -377,7 +406,7 @@ def _run_scene(path, args, mi):
         except BaseException as e:     # SceneError and anything else: the harness reports, never stops
             if isinstance(e, KeyboardInterrupt):
                 raise
-            row["read"] = "no: " + first_line(e).replace(str(tmp), path.name).replace(tmp.name, path.name)
+            row["read"] = "no: " + first_line(e, names)
             scene = None
         # Mitsuba reads clrender's copy where it can, else a copy changed as little as it takes (for_mitsuba),
         # and the row says what it needed
@@ -388,14 +417,20 @@ def _run_scene(path, args, mi):
                 row["mitsuba_read"] = "yes"
                 break
             except Exception as e:
-                row["mitsuba_read"] = "no: " + first_line(e).replace(str(tmp_mi), path.name).replace(
-                    str(tmp), path.name)
+                row["mitsuba_read"] = "no: " + first_line(e, names)
                 fixed = for_mitsuba(mtext, str(e))
                 if fixed is None:
                     break
                 mtext, what = fixed
                 needed.append(what)
                 tmp_mi.write_text(mtext)
+        if msc is not None and msc.integrator() is None:
+            # Mitsuba 3.9.1 reads a scene without an <integrator> but refuses to render it; clrender renders its
+            # default, Mitsuba's documented one: Mitsuba's copy gets that `path`
+            mtext = re.sub(r"(<scene\b[^>]*>)", r'\1<integrator type="path"/>', mtext, count=1)
+            tmp_mi.write_text(mtext)
+            msc = mi.load_file(str(tmp_mi))
+            needed.append("+path")
         row["mitsuba_needed"] = needed
         c, tc = None, None
         if scene is not None:
@@ -409,10 +444,14 @@ def _run_scene(path, args, mi):
             except BaseException as e:
                 if isinstance(e, KeyboardInterrupt):
                     raise
-                row["rendered"] = "no: " + first_line(e)
+                row["rendered"] = "no: " + first_line(e, names)
         if msc is not None and c is not None:     # (nothing to compare with where clrender stopped)
             t0 = time.perf_counter()
-            m = [np.array(mi.render(msc, spp=args.spp, seed=s), np.float64) for s in range(1, 2 * args.pairs + 1)]
+            try:
+                m = [np.array(mi.render(msc, spp=args.spp, seed=s), np.float64) for s in range(1, 2 * args.pairs + 1)]
+            except Exception as e:      # the harness reports, never stops
+                row["agrees"] = "no: Mitsuba did not render it: " + first_line(e, names)
+                return row
             tm = time.perf_counter() - t0
             row["mitsuba_seconds"] = tm
             if m[0].ndim == 2:

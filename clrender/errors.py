@@ -33,5 +33,13 @@ class SceneError(ClrenderError):
         super().__init__(f"{location}: {message}" if location else message)
 
 
+def git_lfs_hint(data: bytes) -> str:
+    """A clause for a bad-header error on a file that is a Git LFS pointer (a clone or archive of a repository that
+    keeps the file in Git LFS holds a three-line text in its place), else ''."""
+    if not data.startswith(b"version https://git-lfs."):
+        return ""
+    return "; this is a Git LFS pointer, not the file: fetch the file itself (e.g. `git lfs pull` in that clone)"
+
+
 class DeviceError(ClrenderError):
     """No usable OpenCL device, or a kernel failed to build or run."""

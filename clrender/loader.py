@@ -20,6 +20,10 @@ def load_scene(path, nori_dialect: str | None = None, **defines):
         raise SceneError(f"expected a <scene> file, found <{spec.tag}> (use `clrender test` for test files)",
                          SourceLocation(str(path), spec.location.line, spec.location.col))
     try:
+        if spec.format == "mitsuba":
+            from .scene.mitsuba_xml import leave_out_unbuildable_unused
+
+            leave_out_unbuildable_unused(spec)
         check_mesh_files(spec)
         scene = create(spec)
     except SceneError as e:

@@ -315,6 +315,9 @@ def test_ply_errors(tmp_path):
     bad.write_bytes(b"not a ply\n")
     with pytest.raises(SceneError):
         load_ply(bad)
+    bad.write_bytes(b"version https://git-lfs.github.com/spec/v1\noid sha256:0\nsize 9\n")   # a repository's LFS file
+    with pytest.raises(SceneError, match="not a PLY file .*; this is a Git LFS pointer, not the file"):
+        load_ply(bad)
     with pytest.raises(SceneError, match="out of range"):
         load_ply(write_ply(tmp_path / "r.ply", [[0, 1, 9]], True))
 

@@ -125,6 +125,34 @@ def test_reference_to_an_object_declared_later():
     assert c.texture is not None and c.texture.spec.type == "checkerboard" and c.texture.spec.name == "reflectance"
 
 
+def test_an_unused_declaration_of_a_type_clrender_lacks_is_left_out(tmp_path, caplog):
+    """Mitsuba 3 builds every top-level declaration and renders a scene as if an unused one were not there (the
+    Mitsuba tutorials' lego scene declares a diffuse BSDF with a `volume` texture that no shape uses): clrender
+    leaves such a one out with a warning at its line; referenced, the type it lacks is the located error, and so is
+    a type that Mitsuba does not have either, used or not."""
+    from clrender import load_scene
+
+    unused = ('<bsdf type="diffuse" id="grid">\n<texture type="volume" name="reflectance">'
+              '<volume type="constvolume" name="volume"><rgb name="value" value="0.2"/></volume></texture></bsdf>\n'
+              '<phase type="rayleigh" id="t"/>\n')
+    (tmp_path / "s.xml").write_text(f'{HEAD}{SENSOR}\n{unused}<bsdf type="diffuse" id="w"/>'
+                                    f'<shape type="cube"><ref id="w"/></shape></scene>')
+    with caplog.at_level(logging.WARNING, logger="clrender"):
+        scene = load_scene(tmp_path / "s.xml")
+    assert len(scene.shapes) == 1 and scene.shapes[0].bsdf.albedo.tolist() == [0.5] * 3
+    assert 's.xml:2:1: <bsdf type="diffuse"> holds <texture type="volume">' in caplog.text
+    assert 's.xml:4:1: <phase type="rayleigh"> is a type clrender lacks' in caplog.text
+    (tmp_path / "s.xml").write_text(f'{HEAD}{SENSOR}\n{unused}<shape type="cube"><ref id="grid"/></shape></scene>')
+    with pytest.raises(SceneError) as e:
+        load_scene(tmp_path / "s.xml")
+    assert "unknown texture type 'volume'" in str(e.value) and e.value.location.line == 3
+    (tmp_path / "s.xml").write_text(f'{HEAD}{SENSOR}\n<texture type="no_such_texture" id="t"/>'
+                                    f'<shape type="cube"/></scene>')
+    with pytest.raises(SceneError, match="unknown texture type 'no_such_texture'") as e:
+        load_scene(tmp_path / "s.xml")
+    assert e.value.location.line == 2
+
+
 @pytest.mark.parametrize("refs, expected", [('<ref id="s"/><ref id="f"/>', (7, 5, 3, "box")),
                                              ("", (4, 768, 576, "gaussian"))])
 def test_sampler_film_and_rfilter_declared_at_the_top_level(refs, expected):
@@ -531,8 +559,10 @@ def test_serialized_errors_are_located(tmp_path):
     write_serialized(tmp_path / "one.serialized", [cube_mesh()])
     (tmp_path / "bad.serialized").write_bytes(struct.pack("<HH", 0x1234, 4) + zlib.compress(b"x"))
     (tmp_path / "cut.serialized").write_bytes((tmp_path / "one.serialized").read_bytes()[:40])
+    (tmp_path / "lfs.serialized").write_bytes(b"version https://git-lfs.github.com/spec/v1\noid sha256:0\nsize 9\n")
     for name, index, message in [("one", 1, "shape_index 1 is out of range: the file holds 1 mesh"),
                                  ("bad", 0, "not the serialized format's 0x041C"),
+                                 ("lfs", 0, "not the serialized format's 0x041C; this is a Git LFS pointer"),
                                  ("cut", 0, "corrupt|ends inside")]:
         write(tmp_path / "s.xml", f'{HEAD}{SENSOR}<shape type="serialized">\n<string name="filename" value="{name}.serialized"/>'
                                   f'<integer name="shape_index" value="{index}"/></shape></scene>')

@@ -1,5 +1,8 @@
 """The root <scene> of either format: where its children go, and the located errors for a misplaced area emitter
-or a second single object (camera, integrator, sampler; Mitsuba: sensor, integrator)."""
+or a second single object (camera, integrator, sampler; Mitsuba: integrator; of several Mitsuba sensors the first is
+rendered)."""
+import logging
+
 import pytest
 
 import clrender.plugins  # noqa: F401
@@ -51,11 +54,21 @@ def test_mitsuba_children_sorted():
     assert scene.integrator is not None and scene.sampler is scene.camera.sampler
 
 
-@pytest.mark.parametrize("second", ['<integrator type="path"/>', MI_SENSOR])
-def test_mitsuba_second_single_object(second):
-    tag = second[1:second.index(" ")]
-    e = scene_error(f'<scene version="3.0.0"><integrator type="path"/>{MI_SENSOR}\n{second}</scene>')
-    assert str(e) == f"s.xml:2:1: clrender renders one <{tag}> per scene; this is a second one"
+def test_mitsuba_second_integrator():
+    e = scene_error(f'<scene version="3.0.0"><integrator type="path"/>{MI_SENSOR}\n<integrator type="path"/></scene>')
+    assert str(e) == "s.xml:2:1: clrender renders one <integrator> per scene; this is a second one"
+
+
+def test_mitsuba_several_sensors_render_the_first(caplog):
+    """A multi-view file (inverse rendering's sensors around an object; sapo17/BachelorThesis has one of 60): Mitsuba
+    3.9.1 reads it and its render() renders sensor 0; clrender renders the first and warns that the others are not."""
+    other = MI_SENSOR.replace('"4"', '"6"').replace('"3"', '"5"')
+    with caplog.at_level(logging.WARNING, logger="clrender"):
+        scene = create(parse_string(f'<scene version="3.0.0">\n{MI_SENSOR}{MI_POINT}\n{other}\n{other}</scene>',
+                                    "s.xml"))
+    assert (scene.width, scene.height) == (4, 3) and len(scene.cameras) == 3 and scene.camera is scene.cameras[0]
+    assert ("s.xml:2:1: the scene has 3 sensors: clrender renders this first one, as Mitsuba's render() does unless "
+            "told another (the others, from s.xml:3:1 on, are not rendered)") in caplog.text
 
 
 def test_mitsuba_area_emitter_at_top_level():

@@ -22,6 +22,7 @@ It shares pass one (bytes -> located element tree) and the value parsing with th
 """
 from __future__ import annotations
 
+import logging
 import os
 import re
 import stat
@@ -42,6 +43,7 @@ _ID = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*")
 #: and a file at this depth is refused, so the same chains load in both
 MAX_INCLUDE_DEPTH = 15
 READER = "Mitsuba 3 reader"
+log = logging.getLogger("clrender")
 
 
 def is_mitsuba_root(el) -> bool:
@@ -503,6 +505,50 @@ def _resolve_forward(state: _State, root: PluginSpec) -> None:
         done.add(id(spec.children))
 
     visit(root, [root])
+
+
+#: what a scene declares at its top level only for refs to use: referenced nowhere, it cannot change the image
+_DECLARATIONS = ("bsdf", "texture", "medium", "volume", "phase")
+#: Mitsuba 3.9.1's plugins of those kinds (each checked with its PluginManager.plugin_type): a type outside these is
+#: an error in Mitsuba too, used or not
+_MITSUBA_TYPES = {
+    "bsdf": ("blendbsdf", "bumpmap", "circular", "conductor", "dielectric", "diffuse", "hair", "mask", "measured",
+             "measured_polarized", "normalmap", "null", "plastic", "polarizer", "pplastic", "principled",
+             "principledthin", "retarder", "roughconductor", "roughdielectric", "roughplastic", "thindielectric",
+             "twosided"),
+    "texture": ("bitmap", "checkerboard", "mesh_attribute", "volume"),
+    "volume": ("constvolume", "gridvolume"),
+    "phase": ("blendphase", "hg", "isotropic", "rayleigh", "sggx", "tabphase"),
+    "medium": ("heterogeneous", "homogeneous"),
+}
+
+
+def leave_out_unbuildable_unused(root: PluginSpec) -> None:
+    """Leave out, with a warning, each object declared at the scene's top level (a bsdf, texture, medium, volume or
+    phase), referenced nowhere, that holds a Mitsuba 3 plugin type clrender lacks: Mitsuba builds it and renders the
+    scene as if it were not there (the Mitsuba tutorials' lego scene declares a `diffuse` with a `volume` texture
+    that no shape uses). One that is referenced, a type Mitsuba does not have either (a typo), and any other error
+    in an unused one stay errors. Called by the loader once every plugin is registered."""
+    from .registry import registered
+
+    used = {id(c.children) for s in root.walk() for i, c in enumerate(s.children) if i in s.refs}
+    keep, refs = [], {}
+    for i, c in enumerate(root.children):
+        lacking = None
+        if c.tag in _DECLARATIONS and i not in root.refs and id(c.children) not in used:
+            lacking = next((d for d in c.walk() if d.type not in registered(d.tag, "mitsuba")), None)
+        if lacking is not None and lacking.type not in _MITSUBA_TYPES.get(lacking.tag, ()):
+            lacking = None      # Mitsuba refuses it too: the error below says so
+        if lacking is None:
+            if i in root.refs:
+                refs[len(keep)] = root.refs[i]
+            keep.append(c)
+            continue
+        held = "" if lacking is c else f" holds {lacking.describe()} (at {lacking.location}), a type clrender lacks,"
+        lacks = "" if held else " is a type clrender lacks and"
+        log.warning("%s: %s%s%s is referenced nowhere: left out (Mitsuba 3 builds it; the image is the same without "
+                    "it)", c.location, c.describe(), held, lacks)
+    root.children[:], root.refs = keep, refs
 
 
 def _frame_vector(n: np.ndarray) -> np.ndarray:

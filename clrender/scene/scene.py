@@ -14,8 +14,12 @@
 """
 from __future__ import annotations
 
+import logging
+
 from ..errors import SceneError
 from .registry import register
+
+log = logging.getLogger("clrender")
 
 
 @register("scene", "scene")
@@ -66,9 +70,10 @@ class Scene:
 
 @register("scene", "scene", fmt="mitsuba")
 class MitsubaScene(Scene):
-    """The root of a Mitsuba 3 file: shapes, scene-level emitters, one sensor (holding film and sampler), one
+    """The root of a Mitsuba 3 file: shapes, scene-level emitters, sensors (each holding film and sampler), one
     integrator; objects declared at the top level only to be referenced (bsdfs, textures, samplers, films, rfilters)
-    are allowed.
+    are allowed. Of several sensors (a multi-view file for inverse rendering) the first is rendered, as Mitsuba's
+    `render()` renders sensor 0 unless given another; a warning says so (``cameras`` holds them all).
 
     ```xml
     <scene version="3.0.0">
@@ -102,7 +107,15 @@ class MitsubaScene(Scene):
         # no shape holds stays an error (Mitsuba ignores it silently: the light the file meant is missing).
         attached = {id(c.emitter) for c in children if c.spec.tag == "shape" and getattr(c, "emitter", None)}
         children = [c for c in children if id(c) not in attached]
-        self._take_children(children, "shape", {"sensor": "camera", "integrator": "integrator"},
+        #: every sensor, in file order; the first is the one rendered
+        self.cameras = [c for c in children if c.spec.tag == "sensor"]
+        if len(self.cameras) > 1:
+            log.warning("%s: the scene has %d sensors: clrender renders this first one, as Mitsuba's render() does "
+                        "unless told another (the others, from %s on, are not rendered)", self.cameras[0].spec.location,
+                        len(self.cameras), self.cameras[1].spec.location)
+        children = [c for c in children if c.spec.tag != "sensor"]
+        self.camera = self.cameras[0] if self.cameras else None
+        self._take_children(children, "shape", {"integrator": "integrator"},
                             "clrender renders one <{tag}> per scene; this is a second one")
         from ..shapes.instance import flatten
 

@@ -17,7 +17,7 @@ import re
 
 import numpy as np
 
-from clrender.errors import SceneError, SourceLocation
+from clrender.errors import SceneError, SourceLocation, git_lfs_hint
 from clrender.shapes.meshdata import MeshData
 from clrender.shapes.meshfile import numpy_text_errors, read_mesh_bytes
 
@@ -33,7 +33,7 @@ def load_ply(path, location: SourceLocation | None = None) -> MeshData:
     data = read_mesh_bytes(path, "PLY", location)
     here = SourceLocation(path)
     if not data.startswith(b"ply"):
-        raise SceneError("not a PLY file (expected 'ply' on the first line)", here)
+        raise SceneError(f"not a PLY file (expected 'ply' on the first line){git_lfs_hint(data)}", here)
     _check_header(data, path)
 
     try:

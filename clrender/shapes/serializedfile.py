@@ -18,7 +18,7 @@ import zlib
 
 import numpy as np
 
-from ..errors import SceneError, SourceLocation
+from ..errors import SceneError, SourceLocation, git_lfs_hint
 from .meshdata import MeshData
 from .meshfile import read_mesh_bytes
 
@@ -49,7 +49,8 @@ def load_serialized(path, location: SourceLocation | None = None, shape_index: i
         raise _fail(path, "shorter than its 4-byte header", location)
     magic, version = struct.unpack_from("<HH", data, 0)
     if magic != MAGIC:
-        raise _fail(path, f"it starts with 0x{magic:04X}, not the serialized format's 0x{MAGIC:04X}", location)
+        raise _fail(path, f"it starts with 0x{magic:04X}, not the serialized format's 0x{MAGIC:04X}"
+                    f"{git_lfs_hint(data)}", location)
     if version not in (3, 4):
         raise _fail(path, f"format version {version}; Mitsuba's readers (and clrender) take 3 and 4", location)
     offset = 0

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import SceneError
+from ..errors import SceneError, git_lfs_hint
 
 #: the bitmap texture's `format`s (Mitsuba 3.9.1's; "fp16", its old name for float16, is read as float16)
 STORAGE = ("auto", "variant", "float16", "uint8")
@@ -110,8 +110,10 @@ def _read_pillow(path: Path, raw: bool, half: bool, location, storage: str = "au
     try:
         im = Image.open(path, formats=PILLOW_FORMATS)
     except UnidentifiedImageError:
+        with open(path, "rb") as f:
+            lfs = git_lfs_hint(f.read(64))
         raise SceneError(f"cannot read image '{path}': unsupported image format (its content is none of "
-                         f"{FORMATS_SAID})", location) from None
+                         f"{FORMATS_SAID}){lfs}", location) from None
     with im:
         if im.mode == "F":   # greyscale PFM (Pillow gives its scale's magnitude), float TIFF: linear already
             a = np.asarray(im, np.float64) * im.info.get("scale", 1.0)

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import SceneError
+from ..errors import SceneError, git_lfs_hint
 from ..scene.registry import register
 from ..textures.bitmap import WRAPS, choice, wrap_index   # the same wrap modes, numbered alike
 from .volume import Volume
@@ -68,7 +68,7 @@ def read_vol(path, location=None) -> tuple[np.ndarray, np.ndarray]:
     if len(raw) < HEADER_BYTES:
         raise bad(f"{len(raw)} bytes, shorter than the {HEADER_BYTES}-byte header of a Mitsuba .vol file")
     if raw[:3] != b"VOL":
-        raise bad(f"starts with {raw[:3]!r}; expected b'VOL' (a Mitsuba .vol grid)")
+        raise bad(f"starts with {raw[:3]!r}; expected b'VOL' (a Mitsuba .vol grid){git_lfs_hint(raw)}")
     if raw[3] != 3:
         raise bad(f"version {raw[3]}; expected 3 (the only one Mitsuba 3 reads)")
     encoding, x, y, z, c = struct.unpack_from("<5i", raw, 4)

@@ -112,7 +112,9 @@ INLINE void medium_scatter(const SceneData* sd, PathState* ps, __global const Me
     float weight = phase_sample(ph, &pq, next2d(smp));
     if (!(pq.pdf > 0.0f) || !(weight > 0.0f)) { ps->alive = 0u; return; }
     ps->beta = vscale(ps->beta, weight);
-    ps->after_delta = 0u;
+    /* a medium that samples no emitters leaves the phase sample the only way to its light: what it finds counts
+       whole, as after a delta BSDF (Mitsuba's volpath puts such a vertex into its specular chain) */
+    ps->after_delta = (m->flags & MEDIUM_SAMPLE_EMITTERS) == 0u;
     ps->prev_pdf = pq.pdf;
     ps->prev_p = p;
     ps->ray.o = p;

@@ -89,11 +89,14 @@ def absorbing_slab_length(depth: float, camera_inside: bool) -> float:
     return depth - 0.25 if camera_inside else depth
 
 
-def furnace(sigma_t, phase: str, spp: int = 256, camera_inside: bool = False, max_depth: int = -1) -> str:
+def furnace(sigma_t, phase: str, spp: int = 256, camera_inside: bool = False, max_depth: int = -1,
+            sample_emitters: bool = True) -> str:
     """A cube of a non-absorbing medium (albedo 1) behind a null boundary, in a constant environment of radiance 1:
     every path ends in the environment, so every pixel is 1 (for any phase function and extinction). The camera
-    looks at the cube from outside, or sits inside it (its medium then the cube's)."""
-    med = medium_xml(sigma_t, 1.0, phase, mid="fog")
+    looks at the cube from outside, or sits inside it (its medium then the cube's). Without `sample_emitters` the
+    medium's scattering vertices sample no light: only the phase samples reach the environment."""
+    extra = "" if sample_emitters else '<boolean name="sample_emitters" value="false"/>'
+    med = medium_xml(sigma_t, 1.0, phase, mid="fog", extra=extra)
     origin = (0.2, 0.1, 0.3) if camera_inside else (0, 0, 4)
     cam_medium = '<ref id="fog"/>' if camera_inside else ""
     return (f'{HEAD}{integrator("volpath", max_depth)}{med}'

@@ -349,6 +349,9 @@ def test_unsupported_images(tmp_path):
     Image.fromarray(np.zeros((2, 2), np.uint8)).save(tmp_path / "a.gif")
     with pytest.raises(SceneError, match=r"unsupported image format \(its content is none of OpenEXR"):
         bitmap(tmp_path / "a.gif")
+    (tmp_path / "lfs.exr").write_bytes(b"version https://git-lfs.github.com/spec/v1\noid sha256:0\nsize 9\n")
+    with pytest.raises(SceneError, match=r"none of OpenEXR.*\); this is a Git LFS pointer, not the file"):
+        bitmap(tmp_path / "lfs.exr")
     (tmp_path / "short.pfm").write_bytes(b"PF\n4 4\n-1\n" + bytes(20))
     with pytest.raises(SceneError, match="ends before its 4 x 4 pixels"):
         bitmap(tmp_path / "short.pfm")

@@ -35,6 +35,10 @@ def test_a_written_file_reads_back_exactly(tmp_path, channels):
     assert vol.resolution() == (4, 5, 3) and vol.channels == channels and vol.max_value() == data.max()
 
 
+#: what a repository that keeps a file in Git LFS holds in its place (a clone without LFS, a `git archive`)
+LFS_POINTER = (b"version https://git-lfs.github.com/spec/v1\noid sha256:" + b"0" * 64 + b"\nsize 78780\n")
+
+
 def _header(*, magic=b"VOL", version=3, encoding=1, res=(2, 2, 2), channels=1, values=None) -> bytes:
     n = int(np.prod(res)) * channels if values is None else values
     return (magic + bytes([version]) + struct.pack("<5i", encoding, *res, channels) + struct.pack("<6f", 0, 0, 0, 1,
@@ -47,8 +51,8 @@ def _header(*, magic=b"VOL", version=3, encoding=1, res=(2, 2, 2), channels=1, v
     (_header(res=(2, 0, 2)), "at least 1 voxel"), (_header(values=7), "truncated: 2 x 2 x 2 x 1"),
     (b"VOL\x03\x01\x00", "shorter than the 48-byte header"),
     (_header()[:48] + np.array([1, 1, np.nan, 1, 1, 1, 1, 1], "<f4").tobytes(), "NaN"),
-    (None, "not found")], ids=["magic", "version", "encoding", "channels", "resolution", "truncated", "header",
-                               "nan", "missing"])
+    (None, "not found"), (LFS_POINTER, "a Git LFS pointer, not the file")],
+    ids=["magic", "version", "encoding", "channels", "resolution", "truncated", "header", "nan", "missing", "lfs"])
 def test_bad_files_are_located(tmp_path, content, fragment):
     path = tmp_path / "bad.vol"
     if content is not None:
