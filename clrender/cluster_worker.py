@@ -42,7 +42,8 @@ class ShippedScene:
     width: int
     height: int
     sample_count: int
-    #: the film's sample_border (Mitsuba): the Renderer's film then samples the filter (renderer.samples_border)
+    #: the film's sample_border (Mitsuba): the Renderer's film then draws samples around the window too
+    #: (renderer.samples_border)
     sample_border: bool = False
 
     def scene(self):

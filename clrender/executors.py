@@ -58,28 +58,28 @@ RECONSTRUCTIONS = ("auto", "splat", "sampling")
 
 
 def choose_reconstruction(reconstruction: str, driver: str, count_rays: bool, reach: int,
-                          feature_aovs: bool = False, sample_border: bool = False) -> bool:
+                          feature_aovs: bool = False) -> bool:
     """Whether the film splats. Both give the same expected image; splatting has less noise per pixel with a wide
     filter (about a third of the variance with Mitsuba's default Gaussian) and correlates neighbouring pixels.
     ``auto`` splats where the filter reaches past its pixel (`reach` > 0: not a box), with the megakernel,
     without ray counting and without feature AOVs: those are for denoising, and Open Image Denoise takes each
     pixel's noise to be its own (a 4-spp splatted Cornell box came out of it as noisy as it went in:
-    tests/test_denoise.py), nor for a Mitsuba film with ``sample_border`` (its border pixels also take samples
-    placed outside the window, which the splatting film does not draw); ``splat`` is refused where it cannot run."""
+    tests/test_denoise.py).
+    ``splat`` is refused where it cannot run. A Mitsuba film with ``sample_border`` splats too, its samples drawn in
+    a border of the filter's reach around the window as well (kernels/splat.cl splat_border), as Mitsuba's film
+    does: it had sampled the filter, with about 3.4 times the per-pixel variance of Mitsuba's at a default Gaussian
+    (issue 24: 1.83x the noise on BachelorThesis' texture-scanner scenes)."""
     if reconstruction not in RECONSTRUCTIONS:
         raise DriverError(f"unknown film reconstruction {reconstruction!r}: expected one of "
                           f"{', '.join(RECONSTRUCTIONS)}")
     if reconstruction == "auto":
-        return driver == "megakernel" and not count_rays and not feature_aovs and not sample_border and reach > 0
+        return driver == "megakernel" and not count_rays and not feature_aovs and reach > 0
     if reconstruction == "splat":
         if driver == "wavefront":
             raise DriverError("the wavefront driver samples the filter: a splatting film renders with "
                               "--driver megakernel")
         if count_rays:
             raise DriverError("rays are counted with a filter-sampling film (--reconstruction sampling)")
-        if sample_border:
-            raise DriverError("the film's sample_border places samples outside the window, which a splatting film "
-                              "does not draw: --reconstruction sampling or auto")
         return True
     return False
 
@@ -305,7 +305,10 @@ class SplatExecutor:
     """kernels/splat.cl: a splatting film. A pass renders every sample of the pixels within the filter's reach of
     the pass's pixels into a record buffer (render_records, in launches of `launch_pixels`), then adds each pixel's
     neighbourhood to its sums (splat_gather). A band of pixels (a cluster task) renders its halo's samples too (the
-    same samples: random numbers are keyed by pixel and sample), so its sums are the one-process film's.
+    same samples: random numbers are keyed by pixel and sample), so its sums are the one-process film's. With
+    `border` (Mitsuba's sample_border: the filter's reach) the records cover a grid of (width + 2 border) x
+    (height + 2 border) pixels around the window (kernels/splat.cl splat_border); `halo` and the record counts are
+    in that grid, the gathered pixels in the window's.
 
     Adaptive sampling's launches (`launch`, `launch_spans`: pixels with counts of their own) go to a store instead,
     each pixel's splats kept apart (3 (2 reach + 1)^2 float4 per pixel, store_buffer_bytes), and `resolve` turns it
@@ -318,13 +321,14 @@ class SplatExecutor:
     #: launch_spans: each listed pixel with its own samples in one launch (adaptive sampling's rounds)
     spans = True
 
-    def __init__(self, ctx, queue, program, scene_bufs, camera, width, height, reach, launch_pixels):
+    def __init__(self, ctx, queue, program, scene_bufs, camera, width, height, reach, launch_pixels, border=0):
         import pyopencl as cl
 
         from .device.kernelargs import KernelArgs
 
         self.ctx, self.queue = ctx, queue
-        self.width, self.height, self.reach = width, height, reach
+        self.width, self.height, self.reach, self.border = width, height, reach, border
+        self.grid_width, self.grid_height = width + 2 * border, height + 2 * border   # the records' pixels
         self.records = KernelArgs(cl.Kernel(program, "render_records")).set_scene(scene_bufs).set(cam=camera)
         self.gather = KernelArgs(cl.Kernel(program, "splat_gather")).set(cam=camera)
         self.store_range = KernelArgs(cl.Kernel(program, "store_pass")).set_scene(scene_bufs).set(cam=camera)
@@ -337,9 +341,11 @@ class SplatExecutor:
         self._stored = False       # samples went to the store since the film was bound: resolve before reading
 
     def halo(self, p0: int, p1: int) -> tuple[int, int]:
-        """The pixels whose samples reach pixels p0 .. p1 - 1: whole rows `reach` above and below."""
-        w = self.width
-        return max(0, (p0 // w - self.reach) * w), min(self.width * self.height, ((p1 - 1) // w + 1 + self.reach) * w)
+        """The record pixels whose samples reach pixels p0 .. p1 - 1: whole rows of the records' grid, `reach`
+        above and below."""
+        w, g, b = self.width, self.grid_width, self.border
+        return (max(0, (p0 // w + b - self.reach) * g),
+                min(g * self.grid_height, ((p1 - 1) // w + b + 1 + self.reach) * g))
 
     @property
     def device_bytes(self) -> int:
@@ -355,12 +361,12 @@ class SplatExecutor:
         """The most samples per pixel a pass of pixels p0 .. p1 - 1 takes: its records fit MAX_RECORD_BYTES, or
         those of one row and its halo (larger bands are then cut into chunks of rows, run_pass)."""
         h0, h1 = self.halo(p0, p1)
-        least = min(h1 - h0, self.width * (1 + 2 * self.reach))
+        least = min(h1 - h0, self.grid_width * (1 + 2 * self.reach))
         return max(1, self.MAX_RECORD_BYTES // (self.record_bytes() * least))
 
     def _chunk_pixels(self, spp: int) -> int:
         """Pixels per chunk of a pass so that a chunk's records, halo included, fit MAX_RECORD_BYTES."""
-        rows = self.MAX_RECORD_BYTES // (self.record_bytes() * spp * self.width) - 2 * self.reach
+        rows = self.MAX_RECORD_BYTES // (self.record_bytes() * spp * self.grid_width) - 2 * self.reach
         return max(1, rows) * self.width
 
     def bind(self, film: dict) -> None:

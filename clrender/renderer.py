@@ -93,7 +93,8 @@ class Renderer:
     "auto" splats wherever it can (``self.splat`` says which). The same expected image; a splatting film has
     about a third of the noise variance per pixel with Mitsuba's default Gaussian filter, and neighbouring pixels'
     noise is correlated. Adaptive sampling splats too, each pixel's samples weighed by 1 / its count
-    (SplatExecutor's store), unless the store does not fit the device (then it samples the filter).
+    (SplatExecutor's store), unless the store does not fit the device or the film has ``sample_border`` (the store
+    holds the window's pixels only): then it samples the filter.
     """
 
     def __init__(self, scene, device=None, fast_math: bool = False, buffers=None, defines=None,
@@ -125,8 +126,9 @@ class Renderer:
                                 feature_aovs=feature_aovs)
         self.reconstruction = reconstruction
         self.splat = choose_reconstruction(reconstruction, self.driver, self.count_rays,
-                                           splat_reach(self.buffers.camera), self.feature_aovs,
-                                           samples_border(scene))
+                                           splat_reach(self.buffers.camera), self.feature_aovs)
+        #: pixels around the window whose samples a splatting film draws too (Mitsuba's sample_border)
+        self.splat_border = splat_reach(self.buffers.camera) if self.splat and samples_border(scene) else 0
         self._sampling = None
         if self.splat:
             self.defines["CLR_SPLAT"] = 1
@@ -147,7 +149,8 @@ class Renderer:
         self.launch_pixels = min(self.n_pixels, MAX_LAUNCH_PIXELS)
         if self.splat:
             self.executor = SplatExecutor(self.ctx, self.queue, self.program, self._scene_bufs, self._camera,
-                                          self.width, self.height, splat_reach(b.camera), self.launch_pixels)
+                                          self.width, self.height, splat_reach(b.camera), self.launch_pixels,
+                                          self.splat_border)
         else:
             executor = WavefrontExecutor if self.driver == "wavefront" else MegakernelExecutor
             self.executor = executor(self.ctx, self.queue, self.program, self._scene_bufs, self._camera,
@@ -231,7 +234,10 @@ class Renderer:
         even it finishes as a uniform render (`uniform_below`: the potential gain below which; 0: never)."""
         from .adaptive import UNIFORM_BELOW, AdaptiveOptions, render_adaptive
 
-        if self.splat and not self.store_fits():
+        if self.splat and (self.splat_border or not self.store_fits()):
+            if self.splat_border and self.reconstruction != "auto":
+                raise DriverError("adaptive sampling's splatting film holds the window's pixels only, not the "
+                                  "samples sample_border places around it: use --reconstruction sampling or auto")
             if self.reconstruction != "auto":
                 gib = sum(self.executor.store_buffer_bytes()) / 2**30
                 raise DriverError(f"adaptive sampling's splatting film needs {gib:.1f} GiB of device memory for this "

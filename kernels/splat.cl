@@ -7,7 +7,12 @@
    sample's radiance to a buffer of the pass (one float4 per pixel and sample), and splat_gather sums, for each
    pixel, the records of its neighbours in a fixed order (rows, columns, samples), recomputing each sample's
    position from its random numbers instead of storing it. Built with -DCLR_SPLAT instead of render.cl's kernels
-   (one integrator inlined per program). */
+   (one integrator inlined per program).
+
+   With Mitsuba's sample_border (the camera's clip_window 0) samples are also placed in a border of splat_reach
+   pixels around the window, as Mitsuba's film extends its sampled block by the filter's border: the records then
+   cover that larger grid, (width + 2 border) x (height + 2 border) (splat_border), of which only the window's
+   pixels are gathered. Without it the border is 0 and the grid is the window. */
 #include "li.h"
 #include "filter.h"
 #ifdef CLR_FEATURE_AOVS
@@ -19,11 +24,18 @@ INLINE int splat_reach(__global const Camera* cam) {
     return (int)ceil(cam->filter_radius - 0.5f);
 }
 
-/* Sample `index` of pixel `pix` as a splatting film draws it: its position u inside the pixel and its radiance L;
+/* Pixels of border around the window whose samples are drawn too: splat_reach with sample_border, else 0. */
+INLINE int splat_border(__global const Camera* cam) {
+    return cam->clip_window != 0u ? 0 : splat_reach(cam);
+}
+
+/* Sample `index` of record pixel `pix` (in the grid with splat_border around the window) as a splatting film draws it: its position u inside the pixel and its radiance L;
    false for a NaN/Inf sample, which is dropped. */
 INLINE bool splat_sample(SceneData* sd, __global const Camera* cam, uint pix, uint index, uint seed, float2* u,
                          vec3* L) {
-    uint px = pix % cam->width, py = pix / cam->width;
+    int b = splat_border(cam);
+    uint gw = cam->width + 2u * (uint)b;
+    int px = (int)(pix % gw) - b, py = (int)(pix / gw) - b;
     Sampler smp;
     sampler_init(&smp, seed, pix, index);
     *u = next2d(&smp);
@@ -65,7 +77,7 @@ __kernel void render_records(SCENE_ARGS, __global const Camera* cam, __global fl
 }
 
 /* Pixels pixel_offset .. + pixel_count: the pass's records of every neighbour within reach (the records hold
-   pixels rec_first .. rec_stop - 1, pixel p at (p - rec_base) * spp) added to the film's sums (SPLAT_FILM_ARGS,
+   record pixels rec_first .. rec_stop - 1 of the grid with splat_border, record pixel p at (p - rec_base) * spp) added to the film's sums (SPLAT_FILM_ARGS,
    clrender/device/layout.py): acc0 (sum w L, sum w), acc1 (sum (w L)^2, own samples), acc2 (sum w^2 L, sum w^2: with acc1 the variance of the ratio), bad. */
 __kernel void splat_gather(__global const Camera* cam, __global const float4* records, __global const float* weights,
                            uint rec_base, uint rec_first, uint rec_stop, SPLAT_FILM_ARGS, uint pixel_offset,
@@ -75,14 +87,16 @@ __kernel void splat_gather(__global const Camera* cam, __global const float4* re
     uint q = pixel_offset + gid;
     int w = (int)cam->width, h = (int)cam->height;
     int qx = (int)(q % cam->width), qy = (int)(q / cam->width);
-    int reach = splat_reach(cam);
+    int reach = splat_reach(cam), b = splat_border(cam);
+    int gw = w + 2 * b;
+    uint rq = (uint)((qy + b) * gw + qx + b);   /* this pixel's own samples' record pixel */
     uint k = 2u * (uint)reach + 1u;
     vec3 swl = v3s(0.0f), swl2 = v3s(0.0f), sw2l = v3s(0.0f);
     float sw = 0.0f, sw2 = 0.0f;
     uint own = 0u;
-    for (int y = max(qy - reach, 0); y <= min(qy + reach, h - 1); ++y) {
-        for (int x = max(qx - reach, 0); x <= min(qx + reach, w - 1); ++x) {
-            uint p = (uint)(y * w + x);
+    for (int y = max(qy - reach, -b); y <= min(qy + reach, h - 1 + b); ++y) {
+        for (int x = max(qx - reach, -b); x <= min(qx + reach, w - 1 + b); ++x) {
+            uint p = (uint)((y + b) * gw + x + b);
             if (p < rec_first || p >= rec_stop) continue;
             size_t first = (size_t)(p - rec_base) * spp;
             uint ix = (uint)(reach + qx - x), iy = k + (uint)(reach + qy - y);
@@ -96,7 +110,7 @@ __kernel void splat_gather(__global const Camera* cam, __global const float4* re
                 sw2l = vadd(sw2l, vscale(wl, fw));
                 sw += fw;
                 sw2 += fw * fw;
-                if (p == q) own += r.w > 0.0f ? 1u : 0u;
+                if (p == rq) own += r.w > 0.0f ? 1u : 0u;
             }
         }
     }
@@ -104,7 +118,7 @@ __kernel void splat_gather(__global const Camera* cam, __global const float4* re
     acc0[q] = vf4(vadd(vxyz(a0), swl), a0.w + sw);
     acc1[q] = vf4(vadd(vxyz(a1), swl2), a1.w + (float)own);
     acc2[q] = vf4(vadd(vxyz(a2), sw2l), a2.w + sw2);
-    if (q >= rec_first && q < rec_stop) bad[q] += spp - own;
+    if (rq >= rec_first && rq < rec_stop) bad[q] += spp - own;
 }
 
 /* Adaptive sampling's splatting film (clrender/executors.py SplatExecutor, its store). Pixels whose sample counts
@@ -118,7 +132,9 @@ __kernel void splat_gather(__global const Camera* cam, __global const float4* re
    of their pixel and weigh little); counts[pix] = (its samples, dropped ones). splat_resolve weighs each pixel's
    splats by 1 / its samples, which with equal counts is the uniform splatting film's sums. A call's splats are
    summed in private memory and added to the store once (CLR_SPLAT_K = 2 reach + 1, set by the host), so a pixel's
-   sums depend only on its own samples and the spans it got them in, never on which other pixels share a launch. */
+   sums depend only on its own samples and the spans it got them in, never on which other pixels share a launch.
+   The store holds the window's pixels only (splat_border 0): a film with sample_border renders adaptively by
+   sampling the filter (clrender/renderer.py render_adaptive). */
 #ifndef CLR_SPLAT_K
 #define CLR_SPLAT_K 5
 #endif

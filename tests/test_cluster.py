@@ -79,11 +79,12 @@ def test_the_wavefront_driver_on_workers_gives_the_one_process_image(client, tmp
 
 
 def test_a_shipped_scene_keeps_its_films_reconstruction(client, tmp_path):
-    """Workers get the packed tables, not the Scene: a Mitsuba film with sample_border (which samples the filter,
-    renderer.samples_border) must still sample it there, and a splatting film splat, as in one process."""
+    """Workers get the packed tables, not the Scene: a Mitsuba film with sample_border (whose splatting film draws
+    samples around the window too, renderer.samples_border) must do so there too, and a box filter's film sample
+    the filter, as in one process."""
     from test_splat import scene_xml
 
-    for extra, splat in (('<boolean name="sample_border" value="true"/>', False), ("", True)):
+    for extra, splat in (('<boolean name="sample_border" value="true"/>', True), ('<rfilter type="box"/>', False)):
         path = tmp_path / f"s{int(splat)}.xml"
         path.write_text(scene_xml(extra, res=12))
         scene = clrender.load_scene(path)

@@ -4,7 +4,9 @@ pixel, weighted into every pixel within the filter's radius, as Mitsuba's and No
 It must converge to the filter-sampling film's image (render.cl: the same expected image), estimate its own
 variance (Film.variance from the sums of w^2 L and w^2), have less noise than filter sampling with a wide filter
 (the point of it), give the same sums whether the pixels are rendered as one film, in bands (a cluster's tasks:
-each band renders its halo's samples too) or as sample ranges merged later, and drop NaN/Inf samples.
+each band renders its halo's samples too) or as sample ranges merged later, and drop NaN/Inf samples. With a
+Mitsuba film's sample_border it draws samples in a border around the window too (kernels/splat.cl splat_border),
+and its edge pixels then agree with filter sampling's, which lets the filter reach past the window.
 """
 import numpy as np
 import pytest
@@ -54,6 +56,18 @@ def renderers(scene):
     return {m: Renderer(scene, reconstruction=m) for m in ("splat", "sampling")}
 
 
+BORDER = '<boolean name="sample_border" value="true"/>'
+
+
+@pytest.fixture(scope="module")
+def border_renderers(tmp_path_factory):
+    """The two films of the scene with Mitsuba's sample_border."""
+    path = tmp_path_factory.mktemp("splat_border") / "scene.xml"
+    path.write_text(scene_xml(BORDER))
+    scene = load_scene(path)
+    return {m: Renderer(scene, reconstruction=m) for m in ("splat", "sampling")}
+
+
 def test_auto_splats_a_wide_filter_and_not_a_box(scene, renderers, tmp_path):
     assert renderers["splat"].splat and not renderers["sampling"].splat
     assert Renderer(scene).splat   # Mitsuba's default Gaussian
@@ -63,20 +77,21 @@ def test_auto_splats_a_wide_filter_and_not_a_box(scene, renderers, tmp_path):
     with pytest.raises(DriverError, match="megakernel"):
         Renderer(scene, reconstruction="splat", driver="wavefront")
     assert not Renderer(scene, driver="wavefront").splat
-    border = tmp_path / "border.xml"   # Mitsuba's sample_border: samples outside the window too
-    border.write_text(scene_xml('<boolean name="sample_border" value="true"/>', res=4))
-    assert not Renderer(load_scene(border)).splat
-    with pytest.raises(DriverError, match="sample_border"):
-        Renderer(load_scene(border), reconstruction="splat")
+    border = tmp_path / "border.xml"   # Mitsuba's sample_border: samples outside the window too, splatted
+    border.write_text(scene_xml(BORDER, res=4))
+    r = Renderer(load_scene(border))
+    assert r.splat and r.splat_border == 2 and r.executor.grid_width == 8
+    assert Renderer(scene).splat_border == 0
 
 
-def test_same_image_as_filter_sampling(renderers):
+def _assert_same_image(splat, sampling):
     """Per pixel, the two films' means over 128 spp agree within their estimated errors: z-scores whose mean
     square is 1 and whose largest stays under the Šidák bound over the pixels. A filter-sampling pixel beside
     an edge (the horizon) may have drawn no far offset across it, and then its own variance is near 0 while its
-    error is not: it takes at least its 3 x 3 neighbourhood's mean variance (as stats.compare_to_reference)."""
-    a = renderers["splat"].render(spp=128, seed=11)
-    b = renderers["sampling"].render(spp=128, seed=12)
+    error is not: it takes at least its 3 x 3 neighbourhood's mean variance (as stats.compare_to_reference).
+    Returns the z-scores of the pixels."""
+    a = splat.render(spp=128, seed=11)
+    b = sampling.render(spp=128, seed=12)
     assert a.metadata["film"] == "splat" and "film" not in b.metadata
     diff = (a.image - b.image).astype(np.float64)
     var = a.variance() + b.variance()
@@ -90,6 +105,24 @@ def test_same_image_as_filter_sampling(renderers):
     bound = stats.norm.isf(sidak(1e-3, z.size) / 2)
     assert np.abs(z).max() < bound, (np.abs(z).max(), bound)
     assert abs(a.image.mean() / b.image.mean() - 1) < 0.01
+    out = np.zeros(diff.shape)
+    out[ok] = z
+    return out
+
+
+def test_same_image_as_filter_sampling(renderers):
+    _assert_same_image(renderers["splat"], renderers["sampling"])
+
+
+def test_sample_border_same_image_as_filter_sampling(border_renderers):
+    """With sample_border the edge pixels take the samples drawn outside the window too: the splatting film's
+    image is filter sampling's (which reaches past the window) there as well. Without the border's samples the
+    two outer rings of pixels would be the window-clipped average instead (sample_border false), here a mean
+    squared z-score over those rings far above 1."""
+    z = _assert_same_image(border_renderers["splat"], border_renderers["sampling"])
+    ring = np.ones(z.shape[:2], bool)
+    ring[2:-2, 2:-2] = False
+    assert np.mean(z[ring] ** 2) < 1.5, np.mean(z[ring] ** 2)
 
 
 def test_variance_estimate_and_less_noise(renderers):
@@ -114,19 +147,7 @@ def test_bands_and_sample_ranges_give_the_whole_films_sums(renderers, tmp_path):
     a pass cut into chunks of rows to bound its record buffer; sample ranges merged add up to the render of their
     union; parts of the two films do not merge."""
     r = renderers["splat"]
-    whole = r.render_accumulators(spp=4, seed=5)
-    n = RES * RES
-    for p0, p1 in ((0, 7 * RES), (7 * RES, 13 * RES + 5), (13 * RES + 5, n)):
-        band = r.render_accumulators(spp=4, seed=5, pixels=(p0, p1))
-        for name in ("acc0", "acc1", "acc2", "bad"):
-            np.testing.assert_allclose(band[name], whole[name][p0:p1], rtol=2e-6, atol=1e-7, err_msg=name)
-    r.executor.MAX_RECORD_BYTES = r.executor.record_bytes() * 4 * RES * 6   # chunks of 2 rows and their halos
-    try:
-        chunked = r.render_accumulators(spp=4, seed=5)
-    finally:
-        del r.executor.MAX_RECORD_BYTES
-    for name in ("acc0", "acc1", "acc2", "bad"):
-        np.testing.assert_allclose(chunked[name], whole[name], rtol=2e-6, atol=1e-7, err_msg=name)
+    _assert_bands_and_chunks_add_up(r)
     film = r.render(spp=8, seed=5)
     parts = []
     for i, start in enumerate((0, 3)):
@@ -141,6 +162,29 @@ def test_bands_and_sample_ranges_give_the_whole_films_sums(renderers, tmp_path):
     write_part(other, tmp_path / "q.exr", "hash", 5, 8, 2)
     with pytest.raises(Exception, match="film"):
         merge_parts([read_part(p) for p in parts] + [read_part(tmp_path / "q.exr")])
+
+
+def _assert_bands_and_chunks_add_up(r):
+    """Bands of rows, and a pass cut into chunks of rows (each rendering its halo), give the whole film's sums."""
+    whole = r.render_accumulators(spp=4, seed=5)
+    n = RES * RES
+    for p0, p1 in ((0, 7 * RES), (7 * RES, 13 * RES + 5), (13 * RES + 5, n)):
+        band = r.render_accumulators(spp=4, seed=5, pixels=(p0, p1))
+        for name in ("acc0", "acc1", "acc2", "bad"):
+            np.testing.assert_allclose(band[name], whole[name][p0:p1], rtol=2e-6, atol=1e-7, err_msg=name)
+    r.executor.MAX_RECORD_BYTES = r.executor.record_bytes() * 4 * RES * 6   # chunks of 2 rows and their halos
+    try:
+        chunked = r.render_accumulators(spp=4, seed=5)
+    finally:
+        del r.executor.MAX_RECORD_BYTES
+    for name in ("acc0", "acc1", "acc2", "bad"):
+        np.testing.assert_allclose(chunked[name], whole[name], rtol=2e-6, atol=1e-7, err_msg=name)
+
+
+def test_sample_border_bands_and_chunks(border_renderers):
+    """The halo of a band counts in the records' larger grid (the window and its border): bands and chunks still
+    give the whole film's sums."""
+    _assert_bands_and_chunks_add_up(border_renderers["splat"])
 
 
 def test_nan_and_inf_samples_are_dropped_and_counted(scene):
