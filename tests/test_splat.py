@@ -133,6 +133,18 @@ def test_sample_border_same_image_as_filter_sampling(border_renderers):
     assert np.mean(edge ** 2) < 1.5, np.mean(edge ** 2)
 
 
+def test_sample_border_adaptive_samples_the_filter(border_renderers):
+    """Adaptive sampling's store holds the window's pixels only: with sample_border an automatic film renders
+    adaptively by sampling the filter, and a splatting film asked for says why it cannot."""
+    r = border_renderers["splat"]
+    with pytest.raises(DriverError, match="sample_border"):
+        r.render_adaptive(target_error=0.5, min_spp=2, max_spp=4)
+    auto = Renderer(r.scene)
+    assert auto.splat and auto.splat_border
+    film = auto.render_adaptive(target_error=0.5, min_spp=2, max_spp=4)
+    assert "film" not in film.metadata and np.isfinite(film.image).all() and film.image.mean() > 0
+
+
 def test_variance_estimate_and_less_noise(renderers):
     """Eight renders of 16 spp per film: the splatting film's variance() predicts its pixels' spread over the
     renders, and that spread is well under half the filter-sampling film's (Mitsuba's Gaussian shares each sample
