@@ -66,7 +66,7 @@ def choose_reconstruction(reconstruction: str, driver: str, count_rays: bool, re
     pixel's noise to be its own (a 4-spp splatted Cornell box came out of it as noisy as it went in:
     tests/test_denoise.py).
     ``splat`` is refused where it cannot run. A Mitsuba film with ``sample_border`` splats too, its samples drawn in
-    a border of the filter's reach around the window as well (kernels/splat.cl splat_border), as Mitsuba's film
+    a border of the filter's reach around the window as well (kernels/splat.cl CLR_SPLAT_BORDER), as Mitsuba's film
     does: it had sampled the filter, with about 3.4 times the per-pixel variance of Mitsuba's at a default Gaussian
     (issue 24: 1.83x the noise on BachelorThesis' texture-scanner scenes)."""
     if reconstruction not in RECONSTRUCTIONS:
@@ -307,7 +307,7 @@ class SplatExecutor:
     neighbourhood to its sums (splat_gather). A band of pixels (a cluster task) renders its halo's samples too (the
     same samples: random numbers are keyed by pixel and sample), so its sums are the one-process film's. With
     `border` (Mitsuba's sample_border: the filter's reach) the records cover a grid of (width + 2 border) x
-    (height + 2 border) pixels around the window (kernels/splat.cl splat_border); `halo` and the record counts are
+    (height + 2 border) pixels around the window (kernels/splat.cl CLR_SPLAT_BORDER); `halo` and the record counts are
     in that grid, the gathered pixels in the window's.
 
     Adaptive sampling's launches (`launch`, `launch_spans`: pixels with counts of their own) go to a store instead,

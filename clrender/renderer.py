@@ -133,6 +133,7 @@ class Renderer:
         if self.splat:
             self.defines["CLR_SPLAT"] = 1
             self.defines["CLR_SPLAT_K"] = 2 * splat_reach(self.buffers.camera) + 1   # adaptive sampling's store
+            self.defines["CLR_SPLAT_BORDER"] = self.splat_border
         main = '#include "splat.cl"\n' if self.splat else \
             {"wavefront": '#include "wavefront.cl"\n', "megakernel": '#include "render.cl"\n'}[self.driver]
         self.program = build_program(self.ctx, main, defines=self.defines, fast_math=fast_math)

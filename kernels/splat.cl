@@ -11,7 +11,7 @@
 
    With Mitsuba's sample_border (the camera's clip_window 0) samples are also placed in a border of splat_reach
    pixels around the window, as Mitsuba's film extends its sampled block by the filter's border: the records then
-   cover that larger grid, (width + 2 border) x (height + 2 border) (splat_border), of which only the window's
+   cover that larger grid, (width + 2 border) x (height + 2 border) (CLR_SPLAT_BORDER), of which only the window's
    pixels are gathered. Without it the border is 0 and the grid is the window. */
 #include "li.h"
 #include "filter.h"
@@ -24,16 +24,18 @@ INLINE int splat_reach(__global const Camera* cam) {
     return (int)ceil(cam->filter_radius - 0.5f);
 }
 
-/* Pixels of border around the window whose samples are drawn too: splat_reach with sample_border, else 0. */
-INLINE int splat_border(__global const Camera* cam) {
-    return cam->clip_window != 0u ? 0 : splat_reach(cam);
-}
+/* Pixels of border around the window whose samples are drawn too: splat_reach with Mitsuba's sample_border, else
+   0 (Nori's film too places samples in the window only, whatever its camera's clip_window says for filter
+   sampling). The host decides it (Renderer.splat_border) and builds the program with it. */
+#ifndef CLR_SPLAT_BORDER
+#define CLR_SPLAT_BORDER 0
+#endif
 
-/* Sample `index` of record pixel `pix` (in the grid with splat_border around the window) as a splatting film draws it: its position u inside the pixel and its radiance L;
+/* Sample `index` of record pixel `pix` (in the grid with CLR_SPLAT_BORDER around the window) as a splatting film draws it: its position u inside the pixel and its radiance L;
    false for a NaN/Inf sample, which is dropped. */
 INLINE bool splat_sample(SceneData* sd, __global const Camera* cam, uint pix, uint index, uint seed, float2* u,
                          vec3* L) {
-    int b = splat_border(cam);
+    int b = CLR_SPLAT_BORDER;
     uint gw = cam->width + 2u * (uint)b;
     int px = (int)(pix % gw) - b, py = (int)(pix / gw) - b;
     Sampler smp;
@@ -77,7 +79,7 @@ __kernel void render_records(SCENE_ARGS, __global const Camera* cam, __global fl
 }
 
 /* Pixels pixel_offset .. + pixel_count: the pass's records of every neighbour within reach (the records hold
-   record pixels rec_first .. rec_stop - 1 of the grid with splat_border, record pixel p at (p - rec_base) * spp) added to the film's sums (SPLAT_FILM_ARGS,
+   record pixels rec_first .. rec_stop - 1 of the grid with CLR_SPLAT_BORDER, record pixel p at (p - rec_base) * spp) added to the film's sums (SPLAT_FILM_ARGS,
    clrender/device/layout.py): acc0 (sum w L, sum w), acc1 (sum (w L)^2, own samples), acc2 (sum w^2 L, sum w^2: with acc1 the variance of the ratio), bad. */
 __kernel void splat_gather(__global const Camera* cam, __global const float4* records, __global const float* weights,
                            uint rec_base, uint rec_first, uint rec_stop, SPLAT_FILM_ARGS, uint pixel_offset,
@@ -87,7 +89,7 @@ __kernel void splat_gather(__global const Camera* cam, __global const float4* re
     uint q = pixel_offset + gid;
     int w = (int)cam->width, h = (int)cam->height;
     int qx = (int)(q % cam->width), qy = (int)(q / cam->width);
-    int reach = splat_reach(cam), b = splat_border(cam);
+    int reach = splat_reach(cam), b = CLR_SPLAT_BORDER;
     int gw = w + 2 * b;
     uint rq = (uint)((qy + b) * gw + qx + b);   /* this pixel's own samples' record pixel */
     uint k = 2u * (uint)reach + 1u;
@@ -133,7 +135,7 @@ __kernel void splat_gather(__global const Camera* cam, __global const float4* re
    splats by 1 / its samples, which with equal counts is the uniform splatting film's sums. A call's splats are
    summed in private memory and added to the store once (CLR_SPLAT_K = 2 reach + 1, set by the host), so a pixel's
    sums depend only on its own samples and the spans it got them in, never on which other pixels share a launch.
-   The store holds the window's pixels only (splat_border 0): a film with sample_border renders adaptively by
+   The store holds the window's pixels only (CLR_SPLAT_BORDER 0): a film with sample_border renders adaptively by
    sampling the filter (clrender/renderer.py render_adaptive). */
 #ifndef CLR_SPLAT_K
 #define CLR_SPLAT_K 5

@@ -5,7 +5,7 @@ It must converge to the filter-sampling film's image (render.cl: the same expect
 variance (Film.variance from the sums of w^2 L and w^2), have less noise than filter sampling with a wide filter
 (the point of it), give the same sums whether the pixels are rendered as one film, in bands (a cluster's tasks:
 each band renders its halo's samples too) or as sample ranges merged later, and drop NaN/Inf samples. With a
-Mitsuba film's sample_border it draws samples in a border around the window too (kernels/splat.cl splat_border),
+Mitsuba film's sample_border it draws samples in a border around the window too (kernels/splat.cl CLR_SPLAT_BORDER),
 and its edge pixels then agree with filter sampling's, which lets the filter reach past the window.
 """
 import numpy as np
