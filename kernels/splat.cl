@@ -9,7 +9,7 @@
    position from its random numbers instead of storing it. Built with -DCLR_SPLAT instead of render.cl's kernels
    (one integrator inlined per program).
 
-   With Mitsuba's sample_border (the camera's clip_window 0) samples are also placed in a border of splat_reach
+   With Mitsuba's sample_border (CLR_SPLAT_BORDER, set by the host) samples are also placed in a border of splat_reach
    pixels around the window, as Mitsuba's film extends its sampled block by the filter's border: the records then
    cover that larger grid, (width + 2 border) x (height + 2 border) (CLR_SPLAT_BORDER), of which only the window's
    pixels are gathered. Without it the border is 0 and the grid is the window. */
@@ -31,8 +31,8 @@ INLINE int splat_reach(__global const Camera* cam) {
 #define CLR_SPLAT_BORDER 0
 #endif
 
-/* Sample `index` of record pixel `pix` (in the grid with CLR_SPLAT_BORDER around the window) as a splatting film draws it: its position u inside the pixel and its radiance L;
-   false for a NaN/Inf sample, which is dropped. */
+/* Sample `index` of record pixel `pix` (in the grid with CLR_SPLAT_BORDER around the window) as a splatting film
+   draws it: its position u inside the pixel and its radiance L; false for a NaN/Inf sample, which is dropped. */
 INLINE bool splat_sample(SceneData* sd, __global const Camera* cam, uint pix, uint index, uint seed, float2* u,
                          vec3* L) {
     int b = CLR_SPLAT_BORDER;
@@ -79,8 +79,8 @@ __kernel void render_records(SCENE_ARGS, __global const Camera* cam, __global fl
 }
 
 /* Pixels pixel_offset .. + pixel_count: the pass's records of every neighbour within reach (the records hold
-   record pixels rec_first .. rec_stop - 1 of the grid with CLR_SPLAT_BORDER, record pixel p at (p - rec_base) * spp) added to the film's sums (SPLAT_FILM_ARGS,
-   clrender/device/layout.py): acc0 (sum w L, sum w), acc1 (sum (w L)^2, own samples), acc2 (sum w^2 L, sum w^2: with acc1 the variance of the ratio), bad. */
+   record pixels rec_first .. rec_stop - 1 of the grid with CLR_SPLAT_BORDER, record pixel p at (p - rec_base) * spp)
+   added to the film's sums (SPLAT_FILM_ARGS, clrender/device/layout.py): acc0 (sum w L, sum w), acc1 (sum (w L)^2, own samples), acc2 (sum w^2 L, sum w^2: with acc1 the variance of the ratio), bad. */
 __kernel void splat_gather(__global const Camera* cam, __global const float4* records, __global const float* weights,
                            uint rec_base, uint rec_first, uint rec_stop, SPLAT_FILM_ARGS, uint pixel_offset,
                            uint pixel_count, uint sample_offset, uint spp, uint seed) {
