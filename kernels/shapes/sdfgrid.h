@@ -15,31 +15,13 @@
 #ifndef CLRENDER_SHAPES_SDFGRID_H
 #define CLRENDER_SHAPES_SDFGRID_H
 #include "common.h"
+#include "../grid.h"
 
 /* The grid's interpolated value at grid coordinates g (value i at g = i), indices clamped into the grid, as
    Mitsuba's linear, clamped Texture3f lookup. */
 INLINE float sdfgrid_value(const SceneData* sd, __global const Shape* s, vec3 g) {
     uint4 r = s->p.sdfgrid.res;
-    int n[3] = {(int)r.x, (int)r.y, (int)r.z};
-    float u[3] = {g.x, g.y, g.z};
-    int i0[3], i1[3];
-    float f[3];
-    for (int k = 0; k < 3; ++k) {
-        float c0 = floor(u[k]);
-        f[k] = u[k] - c0;
-        int i = floor_index(c0);
-        i0[k] = clamp(i, 0, n[k] - 1);
-        i1[k] = clamp(i + 1, 0, n[k] - 1);
-    }
-    __global const float* v = sd->grid_data + s->first;
-    float acc = 0.0f;
-    for (int c = 0; c < 8; ++c) {
-        bool bx = (c & 1) != 0, by = (c & 2) != 0, bz = (c & 4) != 0;
-        float w = (bx ? f[0] : 1.0f - f[0]) * (by ? f[1] : 1.0f - f[1]) * (bz ? f[2] : 1.0f - f[2]);
-        int x = bx ? i1[0] : i0[0], y = by ? i1[1] : i0[1], z = bz ? i1[2] : i0[2];
-        if (w > 0.0f) acc += w * v[((uint)z * r.y + (uint)y) * r.x + (uint)x];
-    }
-    return acc;
+    return grid_trilinear(sd->grid_data + s->first, (uint4)(r.x, r.y, r.z, 1u), g, 2u).x;
 }
 
 /* The gradient in the grid's unit cube of voxel (vx, vy, vz)'s interpolation at grid coordinates g: along each

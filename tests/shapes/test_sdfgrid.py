@@ -166,7 +166,6 @@ def grid_xml(tmp_path, instanced: bool, normals="smooth"):
 
 
 def world_matrix():
-    from clrender.scene.spec import PluginSpec  # noqa: F401  (the transform parser needs the scene package)
     from clrender.scene.xmlparser import parse_string
 
     spec = parse_string(f'<scene version="3.0.0"><shape type="sdfgrid"><transform name="to_world">{TO_WORLD}'
