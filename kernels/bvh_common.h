@@ -202,7 +202,8 @@ BVH_INLINE bool bvh_isect_voxel(__global const float* words, __global const floa
     if (!(t0 < t1)) return false;
     float s0 = q[l], s1 = q[c + l], s2 = q[2u * c + l], s3 = q[3u * c + l];
     float s4 = q[4u * c + l], s5 = q[5u * c + l], s6 = q[6u * c + l], s7 = q[7u * c + l];
-    /* f = a + b x + cy y + dz_ z + e xy + g xz + h yz + k xyz about the point where the span starts */
+    /* the interpolation f = s0 + b x + cy y + cz z + e xy + g xz + h yz + k xyz, taken along the ray from where its
+       span in the cube starts */
     float b = s1 - s0, cy = s2 - s0, cz = s4 - s0;
     float e = s3 - s1 - s2 + s0, g = s5 - s1 - s4 + s0, h = s6 - s2 - s4 + s0;
     float k = s7 - s3 - s5 - s6 + s1 + s2 + s4 - s0;
